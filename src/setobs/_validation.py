@@ -1,0 +1,119 @@
+"""The one validation helper for matrices and vectors (python-control ``_ssmatrix`` style).
+
+Messages say which matrix, which dimension, the expected and the actual value.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .exceptions import DimensionError
+
+__all__ = ["as_matrix", "as_vector", "readonly"]
+
+
+def readonly(a: NDArray[Any]) -> NDArray[Any]:
+    """Return ``a`` (already a private copy) marked read-only."""
+    a.flags.writeable = False
+    return a
+
+
+def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool) -> None:
+    if np.isnan(a).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isnan(a))[0])
+        raise DimensionError(f"{name} contains NaN (first at index {idx})")
+    if not allow_inf and np.isinf(a).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isinf(a))[0])
+        raise DimensionError(f"{name} contains inf (first at index {idx}); it must be finite")
+
+
+def as_matrix(
+    name: str,
+    value: ArrayLike,
+    rows: int | None = None,
+    cols: int | None = None,
+    *,
+    allow_inf: bool = False,
+) -> NDArray[np.float64]:
+    """Validate and copy a 2-D float matrix.
+
+    Parameters
+    ----------
+    name : str
+        Name used in error messages (e.g. ``"G"``).
+    value : array_like
+        The matrix. A 1-D input is accepted only when one dimension is
+        prescribed as 1 or can be inferred unambiguously; otherwise 2-D is required.
+    rows, cols : int, optional
+        Required number of rows / columns.
+    allow_inf : bool
+        Whether ``+-inf`` entries are allowed. NaN never is.
+
+    Returns
+    -------
+    ndarray
+        A new C-contiguous float64 array of shape ``(rows, cols)``.
+
+    Raises
+    ------
+    DimensionError
+        On a wrong number of dimensions, a wrong shape, NaN, or inf.
+    """
+    try:
+        a = np.array(value, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise DimensionError(f"{name} must be a real numeric matrix: {exc}") from None
+    if a.ndim == 1 and a.size == 0 and rows is not None and cols is not None:
+        a = a.reshape(rows, cols) if rows * cols == 0 else a
+    if a.ndim == 1:
+        if rows == 1 or (cols is not None and cols == a.size and rows is None):
+            a = a.reshape(1, -1)
+        elif cols == 1 or (rows is not None and rows == a.size):
+            a = a.reshape(-1, 1)
+    if a.ndim != 2:
+        raise DimensionError(
+            f"{name} must be a 2-D matrix, got an array with {a.ndim} dimension(s)"
+        )
+    if rows is not None and a.shape[0] != rows:
+        raise DimensionError(
+            f"{name} must have {rows} rows, got {a.shape[0]} (shape {a.shape})"
+        )
+    if cols is not None and a.shape[1] != cols:
+        raise DimensionError(
+            f"{name} must have {cols} columns, got {a.shape[1]} (shape {a.shape})"
+        )
+    _check_finite(name, a, allow_inf)
+    return np.ascontiguousarray(a)
+
+
+def as_vector(
+    name: str,
+    value: ArrayLike,
+    size: int | None = None,
+    *,
+    allow_inf: bool = False,
+) -> NDArray[np.float64]:
+    """Validate and copy a 1-D float vector (a column or row matrix is flattened).
+
+    Raises
+    ------
+    DimensionError
+        On a wrong size, more than one non-singleton dimension, NaN, or inf.
+    """
+    try:
+        a = np.array(value, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise DimensionError(f"{name} must be a real numeric vector: {exc}") from None
+    if a.ndim == 0:
+        a = a.reshape(1)
+    elif a.ndim == 2 and 1 in a.shape:
+        a = a.reshape(-1)
+    if a.ndim != 1:
+        raise DimensionError(f"{name} must be a vector, got an array of shape {a.shape}")
+    if size is not None and a.size != size:
+        raise DimensionError(f"{name} must have length {size}, got {a.size}")
+    _check_finite(name, a, allow_inf)
+    return a

@@ -1,0 +1,67 @@
+"""Command-line interface (a thin layer over the public API).
+
+``python -m setobs demo`` runs a short geometry demo (the main job until the
+SMFDO lands): the paper's initial disturbance range ``R^q`` becomes bounded
+once it is intersected with measurements, and the certified interval hull and
+worst-case-optimal centre are printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from . import __version__
+from .geometry import ConstrainedZonotope
+
+
+def demo() -> int:
+    """Print a short demonstration of the constrained-zonotope core."""
+    np.set_printoptions(precision=4, suppress=True)
+    print(f"setobs {__version__} — constrained-zonotope demo\n")
+    # State x in a box, disturbance d completely unknown (R^1): the paper's start.
+    X0 = ConstrainedZonotope.from_box([-1.0, -1.0], [1.0, 1.0])
+    D0 = ConstrainedZonotope.full_space(1)
+    Z = X0.cartesian(D0)
+    print("Z = [[x0]] x R^q:", Z)
+    print("  interval hull:", Z.interval_hull())
+    # One step x+ = Phi x + G d, then a measurement y = C x+.
+    Phi = np.array([[1.0, 0.1], [0.0, 1.0]])
+    G = np.array([[0.0], [0.1]])
+    M = np.block([[Phi, G], [np.zeros((1, 2)), np.eye(1)]])
+    dd = ConstrainedZonotope.from_box([0, 0, -0.01], [0, 0, 0.01])
+    Z1 = M @ Z + dd
+    y = np.array([0.3])
+    Z1 = Z1.intersect_affine([[0.0, 1.0, 0.0]], y)
+    print("\nafter one step and y = C x+ =", y, ":", Z1)
+    box = Z1.interval_hull()
+    print("  certified interval hull:", box)
+    print("  disturbance interval  :", f"[{box.lo[2]:.4f}, {box.hi[2]:.4f}]")
+    print("  worst-case-optimal estimate (centre):", f"{box.center[2]:.4f}")
+    print("  is_bounded:", Z1.is_bounded, "| empty:", Z1.is_empty())
+    red = Z1.rescale().remove_redundancy()
+    print("\nrescaled + redundancy removed:", red)
+    print("  unbounded factors made bounded:", not red.has_unbounded_factors)
+    V = Z1.project([0, 2]).vertices()
+    print("  vertices of the (x1, d) projection:\n", V)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``setobs`` command."""
+    parser = argparse.ArgumentParser(prog="setobs", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"setobs {__version__}")
+    sub = parser.add_subparsers(dest="command")
+    sub.add_parser("demo", help="run a short constrained-zonotope demo")
+    args = parser.parse_args(argv)
+    if args.command == "demo":
+        return demo()
+    parser.print_help()
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

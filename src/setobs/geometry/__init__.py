@@ -1,0 +1,22 @@
+"""Set geometry: extended constrained zonotopes, certified LP queries, reduction, conversion."""
+
+from .box import Box
+from .lp import EmptinessReport, FactorPolytope, LPOutcome
+from .polytope import HRep, cz_from_hpolytope, to_hrep, vertices
+from .reduction import reduce_order, remove_redundancy, rescale
+from .zonotope import ConstrainedZonotope
+
+__all__ = [
+    "Box",
+    "ConstrainedZonotope",
+    "EmptinessReport",
+    "FactorPolytope",
+    "HRep",
+    "LPOutcome",
+    "cz_from_hpolytope",
+    "reduce_order",
+    "remove_redundancy",
+    "rescale",
+    "to_hrep",
+    "vertices",
+]

@@ -1,0 +1,104 @@
+"""Axis-aligned boxes (interval vectors), the result type of interval hulls."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import as_vector, readonly
+from ..exceptions import DimensionError
+
+__all__ = ["Box"]
+
+
+class Box:
+    """The box ``prod_i [lo_i, hi_i]``; bounds may be infinite.
+
+    Parameters
+    ----------
+    lo, hi : array_like, shape (n,)
+        Lower and upper bounds, ``lo <= hi``; ``lo`` may be ``-inf`` and ``hi``
+        may be ``+inf``.
+
+    Notes
+    -----
+    The centre of a box is the worst-case-optimal point estimate for the
+    infinity norm over the box (it minimises ``max_{x in box} ||x - e||_inf``);
+    it is also optimal for the Euclidean norm over the box itself. Unbounded
+    coordinates have no centre and give NaN in :attr:`center`.
+
+    Examples
+    --------
+    >>> b = Box([0.0, -1.0], [2.0, 1.0])
+    >>> b.center.tolist(), b.radius.tolist()
+    ([1.0, 0.0], [1.0, 1.0])
+    """
+
+    __slots__ = ("_hi", "_lo")
+
+    def __init__(self, lo: ArrayLike, hi: ArrayLike) -> None:
+        lo_a = as_vector("lo", lo, allow_inf=True)
+        hi_a = as_vector("hi", hi, size=lo_a.size, allow_inf=True)
+        if np.isposinf(lo_a).any() or np.isneginf(hi_a).any():
+            raise DimensionError("lo must not be +inf and hi must not be -inf")
+        if (lo_a > hi_a).any():
+            i = int(np.argmax(lo_a > hi_a))
+            raise DimensionError(f"lo must not exceed hi (index {i}: lo={lo_a[i]}, hi={hi_a[i]})")
+        object.__setattr__(self, "_lo", readonly(lo_a))
+        object.__setattr__(self, "_hi", readonly(hi_a))
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("Box is immutable")
+
+    @property
+    def lo(self) -> NDArray[np.float64]:
+        """Lower bounds (read-only)."""
+        return self._lo
+
+    @property
+    def hi(self) -> NDArray[np.float64]:
+        """Upper bounds (read-only)."""
+        return self._hi
+
+    @property
+    def dim(self) -> int:
+        """Dimension ``n``."""
+        return int(self._lo.size)
+
+    @property
+    def is_bounded(self) -> bool:
+        """Whether every bound is finite."""
+        return bool(np.isfinite(self._lo).all() and np.isfinite(self._hi).all())
+
+    @property
+    def center(self) -> NDArray[np.float64]:
+        """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded."""
+        with np.errstate(invalid="ignore"):
+            mid = 0.5 * self._lo + 0.5 * self._hi
+        return np.where(np.isfinite(mid), mid, np.nan)
+
+    @property
+    def radius(self) -> NDArray[np.float64]:
+        """Half-widths ``(hi - lo) / 2`` (``inf`` where unbounded)."""
+        return 0.5 * (self._hi - self._lo)
+
+    @property
+    def width(self) -> NDArray[np.float64]:
+        """Widths ``hi - lo`` (``inf`` where unbounded)."""
+        return self._hi - self._lo
+
+    def contains(self, x: ArrayLike, tol: float = 0.0) -> bool:
+        """Whether ``lo - tol <= x <= hi + tol`` componentwise."""
+        xv = as_vector("x", x, size=self.dim)
+        return bool(((xv >= self._lo - tol) & (xv <= self._hi + tol)).all())
+
+    def __repr__(self) -> str:
+        rows = ", ".join(f"[{lo:.6g}, {hi:.6g}]" for lo, hi in zip(self._lo, self._hi, strict=True))
+        return f"Box({rows})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Box):
+            return NotImplemented
+        return bool(np.array_equal(self._lo, other._lo) and np.array_equal(self._hi, other._hi))
+
+    __hash__ = None  # type: ignore[assignment]

@@ -1,0 +1,449 @@
+"""LP layer: certified linear optimisation over a factor polytope.
+
+Every LP query on a constrained zonotope reduces to optimising a linear
+function over its *factor polytope*
+
+.. math::  F = \\{\\xi \\in \\mathbb{R}^{n_g} : A\\xi = b,\\ |\\xi_j| \\le h_j\\},
+           \\qquad h_j \\in [0, +\\infty].
+
+This module solves those LPs with HiGHS (one model per polytope, built once and
+re-solved with a new objective, warm-started from the previous basis) and turns
+the solver's answer into a **certified** bound.
+
+Certification
+-------------
+For any multiplier vector ``y`` (weak Lagrangian duality)
+
+.. math::  \\min_{\\xi\\in F} w^\\top\\xi \\;\\ge\\; L(y) = y^\\top b - \\sum_j h_j |r_j|,
+           \\qquad r = w - A^\\top y,
+
+whatever the accuracy of ``y``: the solver's dual only decides how *tight* the
+bound is, never whether it is valid. ``L(y)`` is evaluated in floating point
+with a rigorous forward error term (Higham's ``gamma_k = k u / (1 - k u)``
+bounds for dot products, doubled for the rounding of the error term itself),
+and the result is rounded one ulp further down. So the bound holds for the
+*stored* data regardless of solver tolerances; primal feasibility of the solver's
+point is never relied upon.
+
+An unbounded factor (``h_j = inf``) contributes ``-inf`` unless ``r_j = 0``.
+The solver's ``y`` is refined by a least-squares correction on the unbounded
+columns, after which ``|r_j|`` is at round-off level but rarely exactly zero.
+The bound then holds for every point of ``F`` with ``|xi_j| <= radius`` on the
+unbounded factors (the term ``radius * (|r_j| + err_j)`` is added); when the
+relative residual stays above ``UNBOUNDED_REDUCED_COST_TOL`` the objective is
+declared unbounded below (``-inf``), which is always an outer answer.
+
+Infeasibility reported by the solver is never trusted either: emptiness is
+decided by a phase-1 LP whose dual gives a certified lower bound on the
+smallest constraint violation (see :meth:`FactorPolytope.emptiness`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import highspy
+import numpy as np
+from numpy.typing import NDArray
+
+from ..exceptions import EmptySetError, SolverError
+from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
+
+__all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_bound"]
+
+_U = np.finfo(np.float64).eps / 2.0
+_TINY = np.finfo(np.float64).tiny
+_INF = highspy.kHighsInf
+
+
+def _gamma(k: int) -> float:
+    """Higham's bound ``k u / (1 - k u)`` on the relative error of a length-k dot product."""
+    return k * _U / (1.0 - k * _U)
+
+
+def _down(x: float) -> float:
+    return float(np.nextafter(x, -np.inf))
+
+
+@dataclass(frozen=True)
+class LPOutcome:
+    """Result of one certified minimisation ``min w^T xi`` over a factor polytope.
+
+    Attributes
+    ----------
+    bound : float
+        Certified lower bound of the minimum (``-inf`` if unbounded below).
+    objective : float
+        The solver's objective value at its (approximate) minimiser
+        (``-inf`` if unbounded). ``objective - bound`` is the certification gap.
+    point : ndarray or None
+        The solver's minimiser (``None`` if unbounded or no LP was needed and no
+        point is meaningful).
+    status : str
+        ``"optimal"`` or ``"unbounded"``.
+    """
+
+    bound: float
+    objective: float
+    point: NDArray[np.float64] | None
+    status: str
+
+    @property
+    def gap(self) -> float:
+        """Certification gap ``objective - bound`` (>= 0 up to round-off)."""
+        if np.isinf(self.bound):
+            return 0.0 if np.isinf(self.objective) else np.inf
+        return self.objective - self.bound
+
+
+@dataclass(frozen=True)
+class EmptinessReport:
+    """Outcome of an emptiness test.
+
+    Attributes
+    ----------
+    empty : bool
+        ``True`` only if no point satisfies every normalised equality within
+        ``tol`` (certified by ``violation_lower_bound > tol``).
+    violation_lower_bound : float
+        Certified lower bound on ``min_xi max_i |(A xi - b)_i| / s_i`` over the
+        box, with ``s_i`` the row scale (infinity norm of ``[A_i, b_i]``).
+    violation_found : float
+        Violation of the best point the solver found (an upper bound on the
+        minimum, up to the solver's accuracy).
+    tol : float
+        Tolerance used.
+    """
+
+    empty: bool
+    violation_lower_bound: float
+    violation_found: float
+    tol: float = field(default=FEASIBILITY_TOL)
+
+
+def lagrangian_lower_bound(
+    w: NDArray[np.float64],
+    A: NDArray[np.float64],
+    b: NDArray[np.float64],
+    h: NDArray[np.float64],
+    y: NDArray[np.float64],
+    *,
+    w_err: NDArray[np.float64] | None = None,
+    radius: float = UNBOUNDED_RADIUS,
+    unbounded_pinv: NDArray[np.float64] | None = None,
+) -> tuple[float, NDArray[np.float64]]:
+    """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any multiplier ``y``.
+
+    Parameters
+    ----------
+    w : ndarray, shape (n_g,)
+        Objective.
+    A, b, h :
+        The factor polytope.
+    y : ndarray, shape (n_c,)
+        Any multiplier vector (typically the solver's row duals).
+    w_err : ndarray, optional
+        Elementwise bound on the error of ``w`` itself (when ``w`` was computed
+        in floating point, e.g. ``G^T d``).
+    radius : float
+        Radius on unbounded factors (see module notes).
+    unbounded_pinv : ndarray, optional
+        ``pinv(A[:, unbounded].T)``, used to refine ``y``; computed if omitted.
+
+    Returns
+    -------
+    bound : float
+        Certified lower bound (``-inf`` if the unbounded columns' reduced costs
+        cannot be made negligible).
+    y : ndarray
+        The (refined) multiplier used.
+    """
+    n_c, n_g = A.shape
+    unb = np.isinf(h)
+    y = np.asarray(y, dtype=np.float64)
+    r = w - A.T @ y
+    if unb.any():
+        if unbounded_pinv is None:
+            unbounded_pinv = np.linalg.pinv(A[:, unb].T) if n_c else np.zeros((0, unb.sum()))
+        for _ in range(3):
+            ru = r[unb]
+            if not ru.any() or n_c == 0:
+                break
+            y = y + unbounded_pinv @ ru
+            r = w - A.T @ y
+    abs_y = np.abs(y)
+    scale_r = np.abs(w) + (np.abs(A).T @ abs_y if n_c else 0.0)
+    err_r = 2.0 * _gamma(n_c + 2) * scale_r
+    if w_err is not None:
+        err_r = err_r + w_err * (1.0 + 4.0 * _U)
+    bound_r = np.abs(r) + err_r
+    t2 = 0.0
+    if unb.any():
+        rel = np.abs(r[unb]) / np.maximum(scale_r[unb], _TINY)
+        if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
+            return -np.inf, y
+        t2 += radius * float(bound_r[unb].sum())
+    fin = ~unb
+    t2 += float(h[fin] @ bound_r[fin])
+    t1 = float(y @ b) if n_c else 0.0
+    err = 2.0 * (
+        _gamma(n_c + 1) * (float(abs_y @ np.abs(b)) if n_c else 0.0)
+        + _gamma(n_g + 3) * t2
+        + _U * (abs(t1) + t2)
+    )
+    return _down(t1 - t2 - err), y
+
+
+def _status_name(h: highspy.Highs) -> str:
+    return h.modelStatusToString(h.getModelStatus())
+
+
+class FactorPolytope:
+    """The polytope ``{xi : A xi = b, |xi_j| <= h_j}`` with one reusable HiGHS model.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n_c, n_g)
+    b : ndarray, shape (n_c,)
+    h : ndarray, shape (n_g,), entries in ``[0, inf]``
+    radius : float
+        Radius on unbounded factors used in certification.
+
+    Notes
+    -----
+    HiGHS runs with presolve off (with presolve on it returned no status on
+    some LPs with many infinite bounds) and with the primal simplex, which is the
+    fastest when only the objective changes between solves.
+    """
+
+    def __init__(
+        self,
+        A: NDArray[np.float64],
+        b: NDArray[np.float64],
+        h: NDArray[np.float64],
+        radius: float = UNBOUNDED_RADIUS,
+    ) -> None:
+        self.A = A
+        self.b = b
+        self.h = h
+        self.radius = radius
+        self.n_c, self.n_g = A.shape
+        self._unb = np.isinf(h)
+        self._unb_pinv: NDArray[np.float64] | None = None
+        self._model: highspy.Highs | None = None
+        self._phase1: highspy.Highs | None = None
+        self._emptiness: dict[float, EmptinessReport] = {}
+
+    # -- model construction ------------------------------------------------
+    @staticmethod
+    def _new_highs() -> highspy.Highs:
+        hs = highspy.Highs()
+        hs.setOptionValue("output_flag", False)
+        hs.setOptionValue("presolve", "off")
+        hs.setOptionValue("threads", 1)
+        return hs
+
+    @staticmethod
+    def _pass(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> None:
+        lp = highspy.HighsLp()
+        n_r, n_col = A.shape
+        lp.num_col_ = n_col
+        lp.num_row_ = n_r
+        lp.col_cost_ = np.ascontiguousarray(cost, dtype=np.float64)
+        lp.col_lower_ = np.ascontiguousarray(lo_c, dtype=np.float64)
+        lp.col_upper_ = np.ascontiguousarray(up_c, dtype=np.float64)
+        lp.row_lower_ = np.ascontiguousarray(lo_r, dtype=np.float64)
+        lp.row_upper_ = np.ascontiguousarray(up_r, dtype=np.float64)
+        mask = A != 0.0
+        counts = mask.sum(axis=0)
+        start = np.zeros(n_col + 1, dtype=np.int32)
+        np.cumsum(counts, out=start[1:])
+        rows, cols = np.nonzero(mask.T)  # column-major order
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = start
+        lp.a_matrix_.index_ = cols.astype(np.int32)
+        lp.a_matrix_.value_ = np.ascontiguousarray(A.T[rows, cols])
+        lp.a_matrix_.num_col_ = n_col
+        lp.a_matrix_.num_row_ = n_r
+        status = hs.passModel(lp)
+        if status == highspy.HighsStatus.kError:
+            raise SolverError("HiGHS rejected the LP model", status=str(status))
+
+    def _col_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        up = np.where(self._unb, _INF, self.h)
+        return -up, up
+
+    def _get_model(self) -> highspy.Highs:
+        if self._model is None:
+            hs = self._new_highs()
+            hs.setOptionValue("simplex_strategy", 4)  # primal simplex
+            lo, up = self._col_bounds()
+            self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
+            self._model = hs
+        return self._model
+
+    def _pinv(self) -> NDArray[np.float64]:
+        if self._unb_pinv is None:
+            Au = self.A[:, self._unb]
+            self._unb_pinv = np.linalg.pinv(Au.T) if self.n_c else np.zeros((0, Au.shape[1]))
+        return self._unb_pinv
+
+    # -- queries -----------------------------------------------------------
+    def certify(
+        self, w: NDArray[np.float64], y: NDArray[np.float64], w_err=None
+    ) -> float:
+        """Certified lower bound of ``min w^T xi`` from multiplier ``y``."""
+        bound, _ = lagrangian_lower_bound(
+            w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
+            unbounded_pinv=self._pinv() if self._unb.any() else None,
+        )
+        return bound
+
+    def minimize(
+        self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None = None
+    ) -> LPOutcome:
+        """Certified ``min w^T xi`` over the polytope.
+
+        Raises
+        ------
+        EmptySetError
+            If the polytope is certified empty (see :meth:`emptiness`).
+        SolverError
+            If HiGHS ends in any status other than optimal/unbounded/infeasible,
+            or reports infeasibility that cannot be confirmed or worked around.
+        """
+        w = np.asarray(w, dtype=np.float64)
+        if self.n_c == 0:
+            # No constraints: the minimum over the box is analytic and exact.
+            if (self._unb & (w != 0.0)).any():
+                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+            bound = self.certify(w, np.zeros(0), w_err)
+            point = -np.sign(w) * np.where(self._unb, 0.0, self.h)
+            return LPOutcome(bound, float(w @ point), point, "optimal")
+        hs = self._get_model()
+        hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w)
+        hs.run()
+        st = hs.getModelStatus()
+        if st == highspy.HighsModelStatus.kOptimal:
+            sol = hs.getSolution()
+            y = np.asarray(sol.row_dual, dtype=np.float64)
+            x = np.asarray(sol.col_value, dtype=np.float64)
+            bound = self.certify(w, y, w_err)
+            obj = float(w @ x)
+            if np.isinf(bound):
+                return LPOutcome(-np.inf, obj, x, "unbounded")
+            return LPOutcome(bound, obj, x, "optimal")
+        if st == highspy.HighsModelStatus.kUnbounded:
+            return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+        if st in (highspy.HighsModelStatus.kInfeasible,
+                  highspy.HighsModelStatus.kUnboundedOrInfeasible):
+            rep = self.emptiness()
+            if rep.empty:
+                raise EmptySetError(
+                    "the set is empty (certified: every point violates a normalised "
+                    f"constraint by at least {rep.violation_lower_bound:.3g})"
+                )
+            if st == highspy.HighsModelStatus.kUnboundedOrInfeasible:
+                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+            return self._minimize_relaxed(w, w_err, rep)
+        raise SolverError(
+            f"HiGHS did not solve the LP (status: {_status_name(hs)})", status=_status_name(hs)
+        )
+
+    def _minimize_relaxed(self, w, w_err, rep: EmptinessReport) -> LPOutcome:
+        """Nearly-feasible case: solve with rows relaxed to ``b +- delta``.
+
+        The set is not certified empty, but HiGHS found it infeasible. The LP
+        with relaxed rows contains the original feasible set, so a certified
+        bound for it is a certified bound for the original.
+        """
+        scale = self._row_scale()
+        delta = scale * max(2.0 * rep.violation_found, FEASIBILITY_TOL)
+        hs = self._new_highs()
+        lo, up = self._col_bounds()
+        self._pass(hs, self.A, lo, up, self.b - delta, self.b + delta, w)
+        hs.run()
+        if hs.getModelStatus() == highspy.HighsModelStatus.kUnbounded:
+            return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            raise SolverError(
+                "HiGHS reported infeasibility that could not be certified, and the relaxed "
+                f"LP did not solve (status: {_status_name(hs)})",
+                status=_status_name(hs),
+            )
+        sol = hs.getSolution()
+        y = np.asarray(sol.row_dual, dtype=np.float64)
+        x = np.asarray(sol.col_value, dtype=np.float64)
+        bound, y = lagrangian_lower_bound(
+            w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
+            unbounded_pinv=self._pinv() if self._unb.any() else None,
+        )
+        # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
+        relax = float(np.abs(y) @ delta) * (1.0 + _gamma(self.n_c + 1)) * 2.0
+        if np.isinf(bound):
+            return LPOutcome(-np.inf, float(w @ x), x, "unbounded")
+        return LPOutcome(_down(bound - relax), float(w @ x), x, "optimal")
+
+    def _row_scale(self) -> NDArray[np.float64]:
+        """Power-of-two row scales (so that scaling is exact in floating point)."""
+        s = np.maximum(np.abs(self.A).max(axis=1, initial=0.0), np.abs(self.b))
+        m, e = np.frexp(np.where(s > 0.0, s, 1.0))
+        return np.ldexp(1.0, np.where(m == 0.5, e - 1, e))
+
+    def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
+        """Certified emptiness test with a phase-1 LP.
+
+        Solves ``min sum(s+ + s-)`` subject to ``D(A xi - b) + s+ - s- = 0``,
+        ``|xi| <= h``, ``s+-  >= 0``, with ``D`` scaling each row to unit
+        infinity norm. For any multiplier ``y``, ``L(y) / ||y||_1`` (with
+        ``L`` the Lagrangian bound of the zero objective) is a certified lower
+        bound on the smallest infinity-norm violation of the normalised rows.
+
+        Parameters
+        ----------
+        tol : float
+            The set is reported empty only if that lower bound exceeds ``tol``.
+        """
+        if tol in self._emptiness:
+            return self._emptiness[tol]
+        if self.n_c == 0:
+            rep = EmptinessReport(False, 0.0, 0.0, tol)
+            self._emptiness[tol] = rep
+            return rep
+        scale = self._row_scale()
+        As = self.A / scale[:, None]
+        bs = self.b / scale
+        n_c, n_g = self.n_c, self.n_g
+        hs = self._new_highs()
+        hs.setOptionValue("simplex_strategy", 1)  # dual simplex
+        lo, up = self._col_bounds()
+        big = np.hstack([As, np.eye(n_c), -np.eye(n_c)])
+        lo_c = np.concatenate([lo, np.zeros(2 * n_c)])
+        up_c = np.concatenate([up, np.full(2 * n_c, _INF)])
+        cost = np.concatenate([np.zeros(n_g), np.ones(2 * n_c)])
+        self._pass(hs, big, lo_c, up_c, bs, bs, cost)
+        hs.run()
+        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            raise SolverError(
+                f"phase-1 LP did not solve (status: {_status_name(hs)})",
+                status=_status_name(hs),
+            )
+        sol = hs.getSolution()
+        y = np.asarray(sol.row_dual, dtype=np.float64)
+        x = np.asarray(sol.col_value, dtype=np.float64)[:n_g]
+        # Certified bound with the scaled data (exact: power-of-two scales); the
+        # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
+        lower, y = lagrangian_lower_bound(
+            np.zeros(n_g), As, bs, self.h, y, radius=self.radius,
+            unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
+        )
+        norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * _gamma(n_c + 1))
+        if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
+            lower_inf = _down(lower / norm1)
+        else:
+            lower_inf = 0.0  # no positive certificate
+        xc = np.clip(x, -self.h, self.h)
+        found = float(np.abs(As @ xc - bs).max())
+        rep = EmptinessReport(bool(lower_inf > tol), lower_inf, found, tol)
+        self._emptiness[tol] = rep
+        return rep

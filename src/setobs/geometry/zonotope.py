@@ -1,0 +1,527 @@
+"""Extended constrained zonotopes (Scott et al. 2016; Li-Cong-Dong, Definition 2)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import block_diag
+
+from .._validation import as_matrix, as_vector, readonly
+from ..exceptions import DimensionError, EmptySetError, UnboundedSetError
+from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
+from .box import Box
+from .lp import _U, EmptinessReport, FactorPolytope, _down, _gamma
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.patches import Patch
+
+    from .polytope import HRep
+
+__all__ = ["ConstrainedZonotope"]
+
+
+def _up(x: float) -> float:
+    return float(np.nextafter(x, np.inf))
+
+
+class ConstrainedZonotope:
+    r"""Extended constrained zonotope ``{G xi + c : A xi = b, |xi_j| <= h_j}``.
+
+    Parameters
+    ----------
+    G : array_like, shape (n, n_g)
+        Generator matrix.
+    c : array_like, shape (n,)
+        Centre.
+    A : array_like, shape (n_c, n_g), optional
+        Constraint matrix (default: no constraints).
+    b : array_like, shape (n_c,), optional
+        Constraint right-hand side (required with ``A``).
+    h : array_like, shape (n_g,), optional
+        Factor bounds in ``[0, +inf]`` (default: all ones). ``h_j = inf`` makes
+        factor ``j`` unbounded, so sets such as ``R^n`` and affine sets are
+        representable (Li-Cong-Dong, Definition 2, eq. (19)).
+
+    Raises
+    ------
+    DimensionError
+        On inconsistent shapes, NaN, inf in ``G``, ``c``, ``A``, ``b``, or
+        negative/NaN entries of ``h``.
+
+    Notes
+    -----
+    *Representable sets.* The factor set ``{xi : A xi = b, |xi_j| <= h_j}``
+    has the subspace ``{v : A v = 0, v_j = 0 for finite h_j}`` as its recession
+    cone, so every extended constrained zonotope is a polytope plus a subspace
+    (its lineality space). Half-lines, half-spaces and boxes with a one-sided
+    infinite bound are therefore *not* representable.
+
+    *Exactness.* The set operations (``+``, ``@``, products, intersections,
+    projection) are the exact formulas of Scott et al. (2016), Sec. 3; only
+    their matrix products are rounded, an ``O(eps)`` perturbation of the data.
+    Every LP query (interval hull, support function, emptiness, containment) is
+    certified for the stored data; see :mod:`setobs.geometry.lp`.
+
+    Objects are immutable; expensive predicates (interval hull, emptiness) are
+    cached on the instance.
+
+    Examples
+    --------
+    >>> Z = ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], [0.0, 0.0],
+    ...                         A=[[1.0, 1.0, 1.0]], b=[1.0])
+    >>> box = Z.interval_hull()
+    >>> bool(abs(box.hi[0] - 2.0) < 1e-9)
+    True
+    """
+
+    __slots__ = ("_A", "_G", "_b", "_c", "_cache", "_h", "radius")
+    __array_ufunc__ = None  # so that ndarray @ Z calls Z.__rmatmul__
+
+    def __init__(
+        self,
+        G: ArrayLike,
+        c: ArrayLike,
+        A: ArrayLike | None = None,
+        b: ArrayLike | None = None,
+        h: ArrayLike | None = None,
+        *,
+        radius: float = UNBOUNDED_RADIUS,
+    ) -> None:
+        c_a = as_vector("c", c)
+        n = c_a.size
+        if np.ndim(G) == 2 and np.shape(G)[0] == n:
+            G_a = as_matrix("G", G, rows=n)
+        elif np.size(G) == 0:
+            G_a = np.zeros((n, 0))
+        else:
+            G_a = as_matrix("G", G, rows=n)
+        n_g = G_a.shape[1]
+        if (A is None) != (b is None):
+            raise DimensionError("A and b must be given together (or both omitted)")
+        if A is None:
+            A_a = np.zeros((0, n_g))
+            b_a = np.zeros(0)
+        else:
+            b_a = as_vector("b", b)
+            if np.size(A) == 0 and b_a.size == 0:
+                A_a = np.zeros((0, n_g))
+            else:
+                A_a = as_matrix("A", A, rows=b_a.size, cols=n_g)
+        if h is None:
+            h_a = np.ones(n_g)
+        else:
+            h_a = as_vector("h", h, size=n_g, allow_inf=True)
+            if (h_a < 0).any():
+                j = int(np.argmax(h_a < 0))
+                raise DimensionError(f"h must be nonnegative (h[{j}] = {h_a[j]})")
+        if not radius > 0:
+            raise DimensionError(f"radius must be positive, got {radius}")
+        for name, val in (("_G", G_a), ("_c", c_a), ("_A", A_a), ("_b", b_a), ("_h", h_a)):
+            object.__setattr__(self, name, readonly(val))
+        object.__setattr__(self, "radius", float(radius))
+        object.__setattr__(self, "_cache", {})
+
+    @classmethod
+    def _trusted(cls, G, c, A, b, h, radius: float = UNBOUNDED_RADIUS) -> ConstrainedZonotope:
+        """Build from arrays already validated (internal fast path)."""
+        self = object.__new__(cls)
+        for name, val in (("_G", G), ("_c", c), ("_A", A), ("_b", b), ("_h", h)):
+            object.__setattr__(self, name, readonly(np.array(val, dtype=np.float64)))
+        object.__setattr__(self, "radius", radius)
+        object.__setattr__(self, "_cache", {})
+        return self
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("ConstrainedZonotope is immutable; operations return new objects")
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def from_box(cls, lo: ArrayLike, hi: ArrayLike) -> ConstrainedZonotope:
+        """The box ``prod [lo_i, hi_i]``; a coordinate with ``lo=-inf, hi=+inf`` is free.
+
+        Raises
+        ------
+        DimensionError
+            If a coordinate has exactly one infinite bound (not representable:
+            see the class notes), or ``lo > hi``.
+        """
+        box = Box(lo, hi)
+        lo_a, hi_a = box.lo, box.hi
+        one_sided = np.isinf(lo_a) != np.isinf(hi_a)
+        if one_sided.any():
+            i = int(np.argmax(one_sided))
+            raise DimensionError(
+                f"coordinate {i} has a one-sided infinite bound [{lo_a[i]}, {hi_a[i]}]; "
+                "an extended constrained zonotope is a polytope plus a subspace, so "
+                "a coordinate is either bounded on both sides or free (-inf, +inf)"
+            )
+        free = np.isinf(lo_a)
+        lo_f = np.where(free, 0.0, lo_a)
+        hi_f = np.where(free, 0.0, hi_a)
+        c = 0.5 * lo_f + 0.5 * hi_f
+        # Outward rounding: the radius must cover both ends from the rounded centre.
+        rad = np.maximum(hi_f - c, c - lo_f)
+        rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
+        rad = np.where(free, np.inf, rad)
+        n = lo_a.size
+        return cls._trusted(np.eye(n), c, np.zeros((0, n)), np.zeros(0), rad)
+
+    @classmethod
+    def from_zonotope(cls, G: ArrayLike, c: ArrayLike) -> ConstrainedZonotope:
+        """The zonotope ``{G xi + c : ||xi||_inf <= 1}``."""
+        return cls(G, c)
+
+    @classmethod
+    def point(cls, x: ArrayLike) -> ConstrainedZonotope:
+        """The singleton ``{x}``."""
+        xv = as_vector("x", x)
+        return cls._trusted(np.zeros((xv.size, 0)), xv, np.zeros((0, 0)), np.zeros(0),
+                            np.zeros(0))
+
+    @classmethod
+    def full_space(cls, n: int) -> ConstrainedZonotope:
+        """The whole space ``R^n`` (``n`` unbounded factors)."""
+        if int(n) != n or n < 1:
+            raise DimensionError(f"n must be a positive integer, got {n!r}")
+        n = int(n)
+        return cls._trusted(np.eye(n), np.zeros(n), np.zeros((0, n)), np.zeros(0),
+                            np.full(n, np.inf))
+
+    @classmethod
+    def affine_set(cls, C: ArrayLike, y: ArrayLike) -> ConstrainedZonotope:
+        """The affine set ``{z : C z = y}`` (``R^n`` intersected with ``C z = y``)."""
+        C_a = as_matrix("C", C)
+        return cls.full_space(C_a.shape[1]).intersect_affine(C_a, y)
+
+    @classmethod
+    def from_hpolytope(cls, H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
+        """The bounded polytope ``{x : H x <= k}`` (Scott et al. 2016, Theorem 1).
+
+        See :func:`setobs.geometry.polytope.cz_from_hpolytope`.
+        """
+        from .polytope import cz_from_hpolytope
+
+        return cz_from_hpolytope(H, k)
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def G(self) -> NDArray[np.float64]:
+        """Generator matrix, shape ``(n, n_g)`` (read-only)."""
+        return self._G
+
+    @property
+    def c(self) -> NDArray[np.float64]:
+        """Centre, shape ``(n,)`` (read-only)."""
+        return self._c
+
+    @property
+    def A(self) -> NDArray[np.float64]:
+        """Constraint matrix, shape ``(n_c, n_g)`` (read-only)."""
+        return self._A
+
+    @property
+    def b(self) -> NDArray[np.float64]:
+        """Constraint right-hand side, shape ``(n_c,)`` (read-only)."""
+        return self._b
+
+    @property
+    def h(self) -> NDArray[np.float64]:
+        """Factor bounds, shape ``(n_g,)``, entries in ``[0, inf]`` (read-only)."""
+        return self._h
+
+    @property
+    def dim(self) -> int:
+        """Dimension ``n`` of the ambient space."""
+        return int(self._c.size)
+
+    @property
+    def n_gen(self) -> int:
+        """Number of generators (factors) ``n_g``."""
+        return int(self._G.shape[1])
+
+    @property
+    def n_con(self) -> int:
+        """Number of equality constraints ``n_c``."""
+        return int(self._A.shape[0])
+
+    @property
+    def has_unbounded_factors(self) -> bool:
+        """Whether some ``h_j = inf`` (the set may still be bounded)."""
+        return bool(np.isinf(self._h).any())
+
+    @property
+    def is_bounded(self) -> bool:
+        """Whether the set is bounded (certified: decided by the interval hull).
+
+        All factors bounded implies bounded; otherwise the certified interval
+        hull decides (an infinite bound means unbounded or not certifiably
+        bounded). The empty set is bounded.
+        """
+        if not self.has_unbounded_factors:
+            return True
+        try:
+            return self.interval_hull().is_bounded
+        except EmptySetError:
+            return True
+
+    def __repr__(self) -> str:
+        unb = int(np.isinf(self._h).sum())
+        extra = f", unbounded_factors={unb}" if unb else ""
+        return (f"ConstrainedZonotope(dim={self.dim}, n_gen={self.n_gen}, "
+                f"n_con={self.n_con}{extra})")
+
+    # ------------------------------------------------------------------ exact operations
+    def _check_same_dim(self, other: ConstrainedZonotope, what: str) -> None:
+        if other.dim != self.dim:
+            raise DimensionError(
+                f"{what}: dimensions differ ({self.dim} vs {other.dim})"
+            )
+
+    def minkowski_sum(self, other: ConstrainedZonotope | ArrayLike) -> ConstrainedZonotope:
+        """Minkowski sum with a set or a vector (Scott et al. 2016, eq. (12))."""
+        if not isinstance(other, ConstrainedZonotope):
+            v = as_vector("vector", other, size=self.dim)
+            return ConstrainedZonotope._trusted(self._G, self._c + v, self._A, self._b, self._h,
+                                                self.radius)
+        self._check_same_dim(other, "Minkowski sum")
+        return ConstrainedZonotope._trusted(
+            np.hstack([self._G, other._G]),
+            self._c + other._c,
+            block_diag(self._A, other._A) if self.n_con + other.n_con else
+            np.zeros((0, self.n_gen + other.n_gen)),
+            np.concatenate([self._b, other._b]),
+            np.concatenate([self._h, other._h]),
+            min(self.radius, other.radius),
+        )
+
+    def __add__(self, other: Any) -> ConstrainedZonotope:
+        if isinstance(other, ConstrainedZonotope) or np.ndim(other) == 1:
+            return self.minkowski_sum(other)
+        return NotImplemented
+
+    __radd__ = __add__
+
+    def __sub__(self, other: Any) -> ConstrainedZonotope:
+        if isinstance(other, ConstrainedZonotope):
+            raise TypeError("Minkowski (Pontryagin) difference is not supported; "
+                            "use Z + (-1 * I) @ W for Z + (-W)")
+        if np.ndim(other) == 1:
+            return self.minkowski_sum(-as_vector("vector", other, size=self.dim))
+        return NotImplemented
+
+    def linear_map(self, M: ArrayLike) -> ConstrainedZonotope:
+        """Image under ``x -> M x`` for any ``m x n`` matrix ``M`` (Scott et al. 2016, eq. (11))."""
+        M_a = as_matrix("M", M, cols=self.dim)
+        return ConstrainedZonotope._trusted(M_a @ self._G, M_a @ self._c, self._A, self._b,
+                                            self._h, self.radius)
+
+    def __rmatmul__(self, M: Any) -> ConstrainedZonotope:
+        return self.linear_map(M)
+
+    def __matmul__(self, other: Any) -> ConstrainedZonotope:
+        return NotImplemented
+
+    def cartesian(self, other: ConstrainedZonotope) -> ConstrainedZonotope:
+        """Cartesian product ``self x other``."""
+        if not isinstance(other, ConstrainedZonotope):
+            raise TypeError(f"cartesian expects a ConstrainedZonotope, got {type(other).__name__}")
+        return ConstrainedZonotope._trusted(
+            block_diag(self._G, other._G),
+            np.concatenate([self._c, other._c]),
+            block_diag(self._A, other._A) if self.n_con + other.n_con else
+            np.zeros((0, self.n_gen + other.n_gen)),
+            np.concatenate([self._b, other._b]),
+            np.concatenate([self._h, other._h]),
+            min(self.radius, other.radius),
+        )
+
+    def intersect_affine(self, C: ArrayLike, y: ArrayLike) -> ConstrainedZonotope:
+        """Intersection with the affine set ``{z : C z = y}`` (Li-Cong-Dong, eq. (21))."""
+        C_a = as_matrix("C", C, cols=self.dim)
+        y_a = as_vector("y", y, size=C_a.shape[0])
+        return ConstrainedZonotope._trusted(
+            self._G, self._c,
+            np.vstack([self._A, C_a @ self._G]),
+            np.concatenate([self._b, y_a - C_a @ self._c]),
+            self._h, self.radius,
+        )
+
+    def intersect(self, other: ConstrainedZonotope, R: ArrayLike | None = None
+                  ) -> ConstrainedZonotope:
+        """Generalised intersection ``{z in self : R z in other}`` (Scott et al. 2016, eq. (13)).
+
+        ``R`` defaults to the identity (plain intersection).
+        """
+        if not isinstance(other, ConstrainedZonotope):
+            raise TypeError(f"intersect expects a ConstrainedZonotope, got {type(other).__name__}")
+        if R is None:
+            self._check_same_dim(other, "intersection")
+            R_a = np.eye(self.dim)
+        else:
+            R_a = as_matrix("R", R, rows=other.dim, cols=self.dim)
+        n_c1, n_c2 = self.n_con, other.n_con
+        A = np.zeros((n_c1 + n_c2 + other.dim, self.n_gen + other.n_gen))
+        A[:n_c1, : self.n_gen] = self._A
+        A[n_c1 : n_c1 + n_c2, self.n_gen :] = other._A
+        A[n_c1 + n_c2 :, : self.n_gen] = R_a @ self._G
+        A[n_c1 + n_c2 :, self.n_gen :] = -other._G
+        b = np.concatenate([self._b, other._b, other._c - R_a @ self._c])
+        return ConstrainedZonotope._trusted(
+            np.hstack([self._G, np.zeros((self.dim, other.n_gen))]), self._c, A, b,
+            np.concatenate([self._h, other._h]), min(self.radius, other.radius),
+        )
+
+    def project(self, dims: Sequence[int]) -> ConstrainedZonotope:
+        """Projection onto the coordinates ``dims`` (in that order)."""
+        idx = np.asarray(dims, dtype=int).reshape(-1)
+        if idx.size == 0 or (idx < 0).any() or (idx >= self.dim).any():
+            raise DimensionError(
+                f"dims must be indices in [0, {self.dim - 1}], got {list(np.atleast_1d(dims))}"
+            )
+        return ConstrainedZonotope._trusted(self._G[idx], self._c[idx], self._A, self._b,
+                                            self._h, self.radius)
+
+    # ------------------------------------------------------------------ LP queries
+    def _lp(self) -> FactorPolytope:
+        fp = self._cache.get("lp")
+        if fp is None:
+            fp = FactorPolytope(self._A, self._b, self._h, radius=self.radius)
+            self._cache["lp"] = fp
+        return fp
+
+    def interval_hull(self) -> Box:
+        """Certified interval hull (smallest box containing the set), as a :class:`Box`.
+
+        Computed with ``2n`` LPs that share one HiGHS model (only the objective
+        changes). Bounds are certified outer bounds (see
+        :mod:`setobs.geometry.lp`); unbounded directions give ``+-inf``.
+
+        Raises
+        ------
+        EmptySetError
+            If the set is certified empty.
+        SolverError
+            If the LP solver fails.
+        """
+        box = self._cache.get("hull")
+        if box is not None:
+            return box
+        n = self.dim
+        lo = np.empty(n)
+        hi = np.empty(n)
+        fp = self._lp()
+        zero_rows = ~self._G.any(axis=1)
+        if self.n_con and zero_rows.any() and fp.emptiness().empty:
+            raise EmptySetError("the set is empty (certified by the phase-1 LP)")
+        for i in range(n):
+            g = self._G[i]
+            if zero_rows[i]:
+                lo[i] = hi[i] = self._c[i]
+                continue
+            low = fp.minimize(g).bound
+            upp = -fp.minimize(-g).bound
+            lo[i] = _down(low + self._c[i]) if np.isfinite(low) else -np.inf
+            hi[i] = _up(upp + self._c[i]) if np.isfinite(upp) else np.inf
+        box = Box(lo, hi)
+        self._cache["hull"] = box
+        return box
+
+    def support(self, direction: ArrayLike) -> float:
+        """Certified support function ``max_{z in Z} d^T z`` (``+inf`` if unbounded).
+
+        Raises
+        ------
+        EmptySetError
+            If the set is certified empty.
+        """
+        d = as_vector("direction", direction, size=self.dim)
+        w = self._G.T @ d
+        w_err = 2.0 * _gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
+        out = self._lp().minimize(-w, w_err=w_err)
+        if not np.isfinite(out.bound):
+            return np.inf
+        dc = float(d @ self._c)
+        err = 2.0 * _gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
+        s = -out.bound + dc
+        return _up(s + err + _U * abs(s))
+
+    def support_point(self, direction: ArrayLike) -> NDArray[np.float64]:
+        """A maximiser of ``d^T z`` over the set (the solver's point; not certified).
+
+        Raises
+        ------
+        UnboundedSetError
+            If the support function is infinite in this direction.
+        """
+        d = as_vector("direction", direction, size=self.dim)
+        out = self._lp().minimize(-(self._G.T @ d))
+        if out.point is None or not np.isfinite(out.bound):
+            raise UnboundedSetError("the set is unbounded in this direction")
+        return self._G @ out.point + self._c
+
+    def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
+        """Certified emptiness report (see :meth:`FactorPolytope.emptiness`)."""
+        return self._lp().emptiness(tol)
+
+    def is_empty(self, tol: float = FEASIBILITY_TOL) -> bool:
+        """Whether the set is empty.
+
+        ``True`` is certified: every point violates some constraint, normalised
+        to a unit infinity-norm row, by more than ``tol``. Sets that are empty
+        only by a margin below ``tol`` are reported non-empty.
+        """
+        return self.emptiness(tol).empty
+
+    def contains(self, x: ArrayLike, tol: float = FEASIBILITY_TOL) -> bool:
+        """Whether ``x`` is in the set, up to ``tol``.
+
+        ``False`` is certified: no representation ``x = G xi + c`` with
+        ``|xi| <= h`` satisfies the normalised equalities (including
+        ``G xi = x - c``) within ``tol``.
+        """
+        xv = as_vector("x", x, size=self.dim)
+        return not self.intersect_affine(np.eye(self.dim), xv).is_empty(tol)
+
+    # ------------------------------------------------------------------ reduction
+    def remove_redundancy(self, tol: float | None = None) -> ConstrainedZonotope:
+        """Remove zero/duplicate/dependent constraints and unused factors; see
+        :func:`setobs.geometry.reduction.remove_redundancy`."""
+        from .reduction import remove_redundancy
+
+        return remove_redundancy(self) if tol is None else remove_redundancy(self, tol=tol)
+
+    def rescale(self) -> ConstrainedZonotope:
+        """Tighten factor bounds to the certified factor hull; see
+        :func:`setobs.geometry.reduction.rescale`."""
+        from .reduction import rescale
+
+        return rescale(self)
+
+    def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
+        """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`."""
+        from .reduction import reduce_order
+
+        return reduce_order(self, max_generators)
+
+    # ------------------------------------------------------------------ conversion, plotting
+    def vertices(self) -> NDArray[np.float64]:
+        """Vertices of a bounded set (pycddlib); see :func:`setobs.geometry.polytope.vertices`."""
+        from .polytope import vertices
+
+        return vertices(self)
+
+    def to_hrep(self) -> HRep:
+        """H-representation of a bounded set; see :func:`setobs.geometry.polytope.to_hrep`."""
+        from .polytope import to_hrep
+
+        return to_hrep(self)
+
+    def plot(self, ax: Axes | None = None, dims: Sequence[int] = (0, 1), **kwargs: Any) -> Patch:
+        """Plot the projection onto ``dims``; see :func:`setobs.geometry.plotting.plot_cz`."""
+        from .plotting import plot_cz
+
+        return plot_cz(self, ax=ax, dims=dims, **kwargs)

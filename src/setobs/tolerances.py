@@ -1,0 +1,43 @@
+"""Default tolerances of :mod:`setobs`, in one place.
+
+Policy
+------
+* **LP bounds are certified, not tolerance-based.** Interval hulls and support
+  values are computed from a dual (Lagrangian) bound that is valid for *any*
+  multiplier vector, evaluated with a rigorous floating-point error term
+  (see :mod:`setobs.geometry.lp`). They contain the set defined by the stored
+  data, whatever the solver's tolerances were.
+* **Unbounded factors** (``h_j = inf``) need zero reduced cost on their columns.
+  After refinement the residual reduced cost is tiny but rarely exactly zero; the
+  bound then covers every point of the set that has a representation with
+  ``|xi_j| <= UNBOUNDED_RADIUS`` on the unbounded factors (the term
+  ``|r_j| * UNBOUNDED_RADIUS`` is added). If the residual exceeds
+  ``UNBOUNDED_REDUCED_COST_TOL`` (relative) the direction is declared unbounded
+  (``+inf``), which is always an outer answer.
+* **Emptiness and containment use a feasibility tolerance** on constraints
+  normalised to unit infinity-norm rows: a set is reported empty only when a
+  certified lower bound on the constraint violation exceeds ``FEASIBILITY_TOL``;
+  otherwise it is reported non-empty. A ``False`` from :meth:`contains` and a
+  ``True`` from :meth:`is_empty` are therefore never caused by solver round-off.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "FEASIBILITY_TOL",
+    "UNBOUNDED_RADIUS",
+    "UNBOUNDED_REDUCED_COST_TOL",
+    "ZERO_TOL",
+]
+
+#: Absolute tolerance on normalised equality constraints for emptiness/containment.
+FEASIBILITY_TOL: float = 1e-9
+
+#: Radius of unbounded factors up to which certified bounds hold (see module docs).
+UNBOUNDED_RADIUS: float = 1e8
+
+#: Relative reduced-cost residual on unbounded factors above which a direction is unbounded.
+UNBOUNDED_REDUCED_COST_TOL: float = 1e-10
+
+#: Relative threshold below which a row/column is treated as numerically zero in reductions.
+ZERO_TOL: float = 1e-12
