@@ -40,6 +40,7 @@ smallest constraint violation (see :meth:`FactorPolytope.emptiness`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import highspy
@@ -54,6 +55,12 @@ __all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_b
 _U = np.finfo(np.float64).eps / 2.0
 _TINY = np.finfo(np.float64).tiny
 _INF = highspy.kHighsInf
+_DECIDED = (
+    highspy.HighsModelStatus.kOptimal,
+    highspy.HighsModelStatus.kUnbounded,
+    highspy.HighsModelStatus.kInfeasible,
+    highspy.HighsModelStatus.kUnboundedOrInfeasible,
+)
 
 
 def _gamma(k: int) -> float:
@@ -121,6 +128,51 @@ class EmptinessReport:
     tol: float = field(default=FEASIBILITY_TOL)
 
 
+def _split(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Dekker's split of doubles into 26-bit halves (``a = hi + lo`` exactly)."""
+    t = 134217729.0 * a  # 2**27 + 1
+    hi = t - (t - a)
+    return hi, a - hi
+
+
+def _two_prod(M: NDArray[np.float64], v: NDArray[np.float64]):
+    """Exact products ``M * v[:, None] = p + e`` (Dekker's TwoProduct)."""
+    p = M * v[:, None]
+    mh, ml = _split(M)
+    vh, vl = _split(np.broadcast_to(v[:, None], M.shape))
+    return p, ((mh * vh - p) + mh * vl + ml * vh) + ml * vl
+
+
+def _exact_residual(
+    w: NDArray[np.float64],
+    A: NDArray[np.float64],
+    ys: list[NDArray[np.float64]],
+    w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> NDArray[np.float64]:
+    """Correctly rounded ``w - A^T (y_1 + y_2 + ...)``, column by column.
+
+    With ``w_pair = (M, v)`` the objective is taken as the exact ``M^T v``
+    instead of ``w``.
+
+    Products are split exactly (Dekker's TwoProduct) and summed with
+    :func:`math.fsum`, so each entry has relative error at most ``u``
+    (barring underflow, covered by an absolute guard in the caller).
+    """
+    neg = []
+    for y in ys:
+        neg.extend(_two_prod(A, y))
+    pos = list(_two_prod(*w_pair)) if w_pair is not None else []
+    out = np.empty(w.size)
+    for j in range(w.size):
+        terms = [] if w_pair is not None else [w[j]]
+        for block in pos:
+            terms.extend(block[:, j].tolist())
+        for block in neg:
+            terms.extend((-block[:, j]).tolist())
+        out[j] = math.fsum(terms)
+    return out
+
+
 def lagrangian_lower_bound(
     w: NDArray[np.float64],
     A: NDArray[np.float64],
@@ -131,6 +183,7 @@ def lagrangian_lower_bound(
     w_err: NDArray[np.float64] | None = None,
     radius: float = UNBOUNDED_RADIUS,
     unbounded_pinv: NDArray[np.float64] | None = None,
+    w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[float, NDArray[np.float64]]:
     """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any multiplier ``y``.
 
@@ -149,6 +202,10 @@ def lagrangian_lower_bound(
         Radius on unbounded factors (see module notes).
     unbounded_pinv : ndarray, optional
         ``pinv(A[:, unbounded].T)``, used to refine ``y``; computed if omitted.
+    w_pair : (M, v), optional
+        When ``w`` was computed as ``M^T v``, the exact objective on unbounded
+        columns is taken from ``(M[:, unbounded], v)`` (no rounding of ``w``
+        enters the radius term).
 
     Returns
     -------
@@ -156,42 +213,63 @@ def lagrangian_lower_bound(
         Certified lower bound (``-inf`` if the unbounded columns' reduced costs
         cannot be made negligible).
     y : ndarray
-        The (refined) multiplier used.
+        The (refined) multiplier used (``y1 + y2`` rounded).
+
+    Notes
+    -----
+    With unbounded factors the multiplier is kept in double-double form
+    ``y1 + y2``: ``y1`` is refined in floating point, then the residual reduced
+    costs on the unbounded columns are evaluated exactly (correctly rounded)
+    and corrected by ``y2``. This brings them to ``O(eps^2)`` relative size, so
+    that the radius term is negligible.
     """
     n_c, n_g = A.shape
     unb = np.isinf(h)
-    y = np.asarray(y, dtype=np.float64)
-    r = w - A.T @ y
-    if unb.any():
+    y1 = np.array(y, dtype=np.float64)
+    y2 = np.zeros(n_c)
+    ru = np.zeros(0)
+    if unb.any() and n_c:
         if unbounded_pinv is None:
-            unbounded_pinv = np.linalg.pinv(A[:, unb].T) if n_c else np.zeros((0, unb.sum()))
-        for _ in range(3):
-            ru = r[unb]
-            if not ru.any() or n_c == 0:
+            unbounded_pinv = np.linalg.pinv(A[:, unb].T)
+        Au, wu = A[:, unb], w[unb]
+        pair = (w_pair[0][:, unb], w_pair[1]) if w_pair is not None else None
+        for _ in range(2):
+            y1 = y1 + unbounded_pinv @ (wu - Au.T @ y1)
+        ru = _exact_residual(wu, Au, [y1, y2], pair)
+        for _ in range(2):
+            if not ru.any():
                 break
-            y = y + unbounded_pinv @ ru
-            r = w - A.T @ y
-    abs_y = np.abs(y)
+            y2 = y2 + unbounded_pinv @ ru
+            ru = _exact_residual(wu, Au, [y1, y2], pair)
+    elif unb.any():
+        ru = w[unb] if w_pair is None else _exact_residual(
+            w[unb], np.zeros((0, int(unb.sum()))), [], (w_pair[0][:, unb], w_pair[1]))
+    abs_y = np.abs(y1) + np.abs(y2)
     scale_r = np.abs(w) + (np.abs(A).T @ abs_y if n_c else 0.0)
-    err_r = 2.0 * _gamma(n_c + 2) * scale_r
+    r = w - A.T @ y1 - A.T @ y2 if n_c else w.copy()
+    err_r = 2.0 * _gamma(2 * n_c + 2) * scale_r
     if w_err is not None:
         err_r = err_r + w_err * (1.0 + 4.0 * _U)
     bound_r = np.abs(r) + err_r
     t2 = 0.0
     if unb.any():
-        rel = np.abs(r[unb]) / np.maximum(scale_r[unb], _TINY)
+        # Correctly rounded residual: |true| <= |ru| / (1 - u), plus an underflow guard.
+        ru_bound = np.abs(ru) / (1.0 - _U) + 2.0 * (2 * n_c + 1) * _TINY
+        if w_err is not None and w_pair is None:
+            ru_bound = ru_bound + w_err[unb] * (1.0 + 4.0 * _U)
+        rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / np.maximum(scale_r[unb], _TINY)
         if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
-            return -np.inf, y
-        t2 += radius * float(bound_r[unb].sum())
+            return -np.inf, y1
+        t2 += radius * float(ru_bound.sum()) * (1.0 + _gamma(ru_bound.size + 1))
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
-    t1 = float(y @ b) if n_c else 0.0
+    t1 = float(y1 @ b + y2 @ b) if n_c else 0.0
     err = 2.0 * (
-        _gamma(n_c + 1) * (float(abs_y @ np.abs(b)) if n_c else 0.0)
+        _gamma(2 * n_c + 2) * (float(abs_y @ np.abs(b)) if n_c else 0.0)
         + _gamma(n_g + 3) * t2
         + _U * (abs(t1) + t2)
     )
-    return _down(t1 - t2 - err), y
+    return _down(t1 - t2 - err), y1 + y2
 
 
 def _status_name(h: highspy.Highs) -> str:
@@ -290,45 +368,81 @@ class FactorPolytope:
 
     # -- queries -----------------------------------------------------------
     def certify(
-        self, w: NDArray[np.float64], y: NDArray[np.float64], w_err=None
+        self,
+        w: NDArray[np.float64],
+        y: NDArray[np.float64],
+        w_err: NDArray[np.float64] | None = None,
+        w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> float:
         """Certified lower bound of ``min w^T xi`` from multiplier ``y``."""
         bound, _ = lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
-            unbounded_pinv=self._pinv() if self._unb.any() else None,
+            unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
         )
         return bound
 
+    @staticmethod
+    def _pow2_scale(w: NDArray[np.float64]) -> float:
+        """A power of two close to ``max |w|`` (dividing by it is exact)."""
+        m = float(np.abs(w).max(initial=0.0))
+        if m == 0.0 or not np.isfinite(m):
+            return 1.0
+        return float(np.ldexp(1.0, np.frexp(m)[1]))
+
+    def _solve(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
+        hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w / scale)
+        hs.run()
+        return hs.getModelStatus()
+
     def minimize(
-        self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None = None
+        self,
+        w: NDArray[np.float64],
+        w_err: NDArray[np.float64] | None = None,
+        w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> LPOutcome:
         """Certified ``min w^T xi`` over the polytope.
+
+        Parameters
+        ----------
+        w : ndarray
+            Objective.
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
 
         Raises
         ------
         EmptySetError
             If the polytope is certified empty (see :meth:`emptiness`).
         SolverError
-            If HiGHS ends in any status other than optimal/unbounded/infeasible,
-            or reports infeasibility that cannot be confirmed or worked around.
+            If HiGHS ends in any status other than optimal/unbounded/infeasible
+            twice (a fresh model with the dual simplex is tried once).
         """
         w = np.asarray(w, dtype=np.float64)
         if self.n_c == 0:
             # No constraints: the minimum over the box is analytic and exact.
-            if (self._unb & (w != 0.0)).any():
+            bound = self.certify(w, np.zeros(0), w_err, w_pair)
+            if not np.isfinite(bound):
                 return LPOutcome(-np.inf, -np.inf, None, "unbounded")
-            bound = self.certify(w, np.zeros(0), w_err)
             point = -np.sign(w) * np.where(self._unb, 0.0, self.h)
             return LPOutcome(bound, float(w @ point), point, "optimal")
+        # HiGHS sees the objective divided by a power of two (exact), so that its
+        # tolerances act on a unit-size problem; certification uses the true w.
+        scale = self._pow2_scale(w)
         hs = self._get_model()
-        hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w)
-        hs.run()
-        st = hs.getModelStatus()
+        st = self._solve(hs, w, scale)
+        if st not in _DECIDED:
+            hs = self._new_highs()
+            hs.setOptionValue("simplex_strategy", 1)
+            lo, up = self._col_bounds()
+            self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
+            st = self._solve(hs, w, scale)
         if st == highspy.HighsModelStatus.kOptimal:
             sol = hs.getSolution()
-            y = np.asarray(sol.row_dual, dtype=np.float64)
+            y = np.asarray(sol.row_dual, dtype=np.float64) * scale
             x = np.asarray(sol.col_value, dtype=np.float64)
-            bound = self.certify(w, y, w_err)
+            bound = self.certify(w, y, w_err, w_pair)
             obj = float(w @ x)
             if np.isinf(bound):
                 return LPOutcome(-np.inf, obj, x, "unbounded")
@@ -343,45 +457,52 @@ class FactorPolytope:
                     "the set is empty (certified: every point violates a normalised "
                     f"constraint by at least {rep.violation_lower_bound:.3g})"
                 )
-            if st == highspy.HighsModelStatus.kUnboundedOrInfeasible:
-                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
-            return self._minimize_relaxed(w, w_err, rep)
+            return self.minimize_relaxed(w, w_err, w_pair)
         raise SolverError(
             f"HiGHS did not solve the LP (status: {_status_name(hs)})", status=_status_name(hs)
         )
 
-    def _minimize_relaxed(self, w, w_err, rep: EmptinessReport) -> LPOutcome:
-        """Nearly-feasible case: solve with rows relaxed to ``b +- delta``.
+    def minimize_relaxed(
+        self,
+        w: NDArray[np.float64],
+        w_err: NDArray[np.float64] | None = None,
+        w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    ) -> LPOutcome:
+        """Certified ``min w^T xi`` with the rows relaxed to ``|A xi - b| <= delta``.
 
-        The set is not certified empty, but HiGHS found it infeasible. The LP
-        with relaxed rows contains the original feasible set, so a certified
-        bound for it is a certified bound for the original.
+        Used when the set is not certified empty but the exact LP is infeasible
+        or its certified bounds cross: the relaxed feasible set contains every
+        point that satisfies the normalised constraints within the emptiness
+        tolerance, so its certified bound is an outer bound in the sense of
+        :meth:`emptiness` (and a valid bound for the exact set).
         """
-        scale = self._row_scale()
-        delta = scale * max(2.0 * rep.violation_found, FEASIBILITY_TOL)
+        rep = self.emptiness()
+        delta = self._row_scale() * max(2.0 * rep.violation_found, 2.0 * rep.tol)
+        scale = self._pow2_scale(w)
         hs = self._new_highs()
         lo, up = self._col_bounds()
-        self._pass(hs, self.A, lo, up, self.b - delta, self.b + delta, w)
+        self._pass(hs, self.A, lo, up, self.b - delta, self.b + delta, w / scale)
         hs.run()
-        if hs.getModelStatus() == highspy.HighsModelStatus.kUnbounded:
+        st = hs.getModelStatus()
+        if st == highspy.HighsModelStatus.kUnbounded:
             return LPOutcome(-np.inf, -np.inf, None, "unbounded")
-        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+        if st != highspy.HighsModelStatus.kOptimal:
             raise SolverError(
                 "HiGHS reported infeasibility that could not be certified, and the relaxed "
                 f"LP did not solve (status: {_status_name(hs)})",
                 status=_status_name(hs),
             )
         sol = hs.getSolution()
-        y = np.asarray(sol.row_dual, dtype=np.float64)
+        y = np.asarray(sol.row_dual, dtype=np.float64) * scale
         x = np.asarray(sol.col_value, dtype=np.float64)
         bound, y = lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
-            unbounded_pinv=self._pinv() if self._unb.any() else None,
+            unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
         )
-        # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
-        relax = float(np.abs(y) @ delta) * (1.0 + _gamma(self.n_c + 1)) * 2.0
         if np.isinf(bound):
             return LPOutcome(-np.inf, float(w @ x), x, "unbounded")
+        # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
+        relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * _gamma(self.n_c + 1))
         return LPOutcome(_down(bound - relax), float(w @ x), x, "optimal")
 
     def _row_scale(self) -> NDArray[np.float64]:

@@ -424,6 +424,13 @@ class ConstrainedZonotope:
                 continue
             low = fp.minimize(g).bound
             upp = -fp.minimize(-g).bound
+            if low > upp:
+                # Crossing certified bounds prove the exact set empty; within the
+                # emptiness tolerance it may not be: decide, then relax outward.
+                if fp.emptiness().empty:
+                    raise EmptySetError("the set is empty (certified by the phase-1 LP)")
+                low = fp.minimize_relaxed(g).bound
+                upp = -fp.minimize_relaxed(-g).bound
             lo[i] = _down(low + self._c[i]) if np.isfinite(low) else -np.inf
             hi[i] = _up(upp + self._c[i]) if np.isfinite(upp) else np.inf
         box = Box(lo, hi)
@@ -441,7 +448,7 @@ class ConstrainedZonotope:
         d = as_vector("direction", direction, size=self.dim)
         w = self._G.T @ d
         w_err = 2.0 * _gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
-        out = self._lp().minimize(-w, w_err=w_err)
+        out = self._lp().minimize(-w, w_err=w_err, w_pair=(self._G, -d))
         if not np.isfinite(out.bound):
             return np.inf
         dc = float(d @ self._c)

@@ -1,0 +1,149 @@
+"""Shared test oracles: independent of the code under test.
+
+* :func:`exact_factor_vertices` enumerates the vertices of
+  ``{xi : A xi = b, |xi| <= h}`` basis by basis in exact rational arithmetic
+  (``fractions.Fraction``), so "is this bound outside the true set?" can be
+  decided exactly.
+* :func:`cdd_vertices` enumerates them with pycddlib (floating point), the
+  independent tightness reference the issue asks for.
+* :func:`random_cz` draws small bounded, non-empty constrained zonotopes.
+"""
+
+from __future__ import annotations
+
+import itertools
+from fractions import Fraction
+
+import cdd
+import matplotlib
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, settings
+
+from setobs import ConstrainedZonotope
+
+matplotlib.use("Agg")
+
+settings.register_profile(
+    "setobs", deadline=None, max_examples=60,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.load_profile("setobs")
+
+
+def _solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
+    """Solve a square system exactly (Gauss-Jordan); ``None`` if singular."""
+    n = len(M)
+    aug = [row[:] + [r[i]] for i, row in enumerate(M)]
+    for col in range(n):
+        piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
+        if piv is None:
+            return None
+        aug[col], aug[piv] = aug[piv], aug[col]
+        p = aug[col][col]
+        aug[col] = [v / p for v in aug[col]]
+        for i in range(n):
+            if i != col and aug[i][col] != 0:
+                f = aug[i][col]
+                aug[i] = [a - f * bcol for a, bcol in zip(aug[i], aug[col], strict=True)]
+    return [aug[i][n] for i in range(n)]
+
+
+def _rank_exact(M: list[list[Fraction]]) -> int:
+    rows = [r[:] for r in M]
+    rank, ncol = 0, len(rows[0]) if rows else 0
+    for col in range(ncol):
+        piv = next((i for i in range(rank, len(rows)) if rows[i][col] != 0), None)
+        if piv is None:
+            continue
+        rows[rank], rows[piv] = rows[piv], rows[rank]
+        for i in range(len(rows)):
+            if i != rank and rows[i][col] != 0:
+                f = rows[i][col] / rows[rank][col]
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[rank], strict=True)]
+        rank += 1
+    return rank
+
+
+def exact_factor_vertices(A: np.ndarray, b: np.ndarray, h: np.ndarray) -> list[list[Fraction]]:
+    """Exact vertices of ``{xi : A xi = b, |xi| <= h}`` (``A`` must have full row rank)."""
+    n_c, n_g = A.shape
+    Af = [[Fraction(float(v)) for v in row] for row in A]
+    bf = [Fraction(float(v)) for v in b]
+    hf = [Fraction(float(v)) for v in h]
+    if n_c and _rank_exact(Af) < n_c:
+        raise ValueError("A must have full row rank for the exact oracle")
+    verts = []
+    for basis in itertools.combinations(range(n_g), n_c):
+        nonbasis = [j for j in range(n_g) if j not in basis]
+        MB = [[Af[i][j] for j in basis] for i in range(n_c)]
+        for signs in itertools.product((-1, 1), repeat=len(nonbasis)):
+            xi = [Fraction(0)] * n_g
+            for j, s in zip(nonbasis, signs, strict=True):
+                xi[j] = s * hf[j]
+            rhs = [bf[i] - sum(Af[i][j] * xi[j] for j in nonbasis) for i in range(n_c)]
+            if n_c:
+                sol = _solve_exact(MB, rhs)
+                if sol is None:
+                    continue
+                for j, v in zip(basis, sol, strict=True):
+                    xi[j] = v
+                if any(abs(xi[j]) > hf[j] for j in basis):
+                    continue
+            verts.append(xi)
+    return verts
+
+
+def exact_extremes(Z: ConstrainedZonotope, d: np.ndarray) -> tuple[Fraction, Fraction]:
+    """Exact ``(min, max)`` of ``d^T (G xi + c)`` over the factor polytope's vertices."""
+    verts = exact_factor_vertices(Z.A, Z.b, Z.h)
+    if not verts:
+        raise ValueError("empty")
+    df = [Fraction(float(v)) for v in d]
+    Gf = [[Fraction(float(v)) for v in row] for row in Z.G]
+    cf = [Fraction(float(v)) for v in Z.c]
+    w = [sum(df[i] * Gf[i][j] for i in range(Z.dim)) for j in range(Z.n_gen)]
+    const = sum(df[i] * cf[i] for i in range(Z.dim))
+    vals = [sum(wj * xj for wj, xj in zip(w, xi, strict=True)) + const for xi in verts]
+    return min(vals), max(vals)
+
+
+def cdd_vertices(Z: ConstrainedZonotope) -> np.ndarray:
+    """Points ``G xi + c`` over the cdd vertices of the factor polytope (floating point)."""
+    n_g = Z.n_gen
+    rows = [np.hstack([Z.h[:, None], -np.eye(n_g)]), np.hstack([Z.h[:, None], np.eye(n_g)])]
+    if Z.n_con:
+        rows.append(np.hstack([Z.b[:, None], -Z.A]))
+    mat = cdd.matrix_from_array(np.vstack(rows).tolist(), rep_type=cdd.RepType.INEQUALITY)
+    mat.lin_set = set(range(2 * n_g, 2 * n_g + Z.n_con))
+    gen = np.array(cdd.copy_generators(cdd.polyhedron_from_matrix(mat)).array, dtype=float)
+    xi = gen[gen[:, 0] == 1.0, 1:]
+    return xi @ Z.G.T + Z.c
+
+
+def random_cz(rng: np.random.Generator, n: int | None = None, n_g: int | None = None,
+              n_c: int | None = None, scale: float = 1.0) -> ConstrainedZonotope:
+    """A random bounded, non-empty constrained zonotope with full-row-rank ``A``."""
+    n = int(rng.integers(1, 4)) if n is None else n
+    n_g = int(rng.integers(1, 6)) if n_g is None else n_g
+    n_c = int(rng.integers(0, min(3, n_g))) if n_c is None else n_c
+    G = rng.normal(size=(n, n_g)) * scale
+    c = rng.normal(size=n) * scale
+    h = rng.uniform(0.2, 2.0, size=n_g)
+    A = rng.normal(size=(n_c, n_g))
+    xi0 = rng.uniform(-0.8, 0.8, size=n_g) * h
+    b = A @ xi0
+    return ConstrainedZonotope(G, c, A, b, h)
+
+
+def sample_points(Z: ConstrainedZonotope, rng: np.random.Generator, k: int = 20) -> np.ndarray:
+    """Points of a bounded ``Z``: random convex combinations of its exact factor vertices."""
+    verts = np.array([[float(v) for v in xi] for xi in exact_factor_vertices(Z.A, Z.b, Z.h)])
+    wts = rng.dirichlet(np.ones(len(verts)), size=k)
+    xi = wts @ verts
+    return xi @ Z.G.T + Z.c
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20261122)
