@@ -34,7 +34,7 @@ settings.load_profile("setobs")
 def _solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
     """Solve a square system exactly (Gauss-Jordan); ``None`` if singular."""
     n = len(M)
-    aug = [row[:] + [r[i]] for i, row in enumerate(M)]
+    aug = [[*row, r[i]] for i, row in enumerate(M)]
     for col in range(n):
         piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
         if piv is None:

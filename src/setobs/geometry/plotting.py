@@ -49,7 +49,7 @@ def polygon_2d(Z: ConstrainedZonotope, max_iter: int = 10_000) -> NDArray[np.flo
             pts.append(p)
     if len(pts) > 1 and np.linalg.norm(pts[0] - pts[-1]) <= tol:
         pts.pop()
-    if len(pts) <= 2:
+    if len(pts) <= 1:
         return np.array(pts)
     done = [False] * len(pts)
     i = 0
@@ -70,7 +70,17 @@ def polygon_2d(Z: ConstrainedZonotope, max_iter: int = 10_000) -> NDArray[np.flo
         else:
             done[i] = True
             i = (i + 1) % len(pts)
-    return np.array(pts)
+    # Degenerate LPs may return points inside an edge: drop collinear points.
+    P = np.array(pts)
+    while len(P) > 2:
+        prev, nxt = np.roll(P, 1, axis=0), np.roll(P, -1, axis=0)
+        u, v = P - prev, nxt - P
+        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+        flat = cross <= tol * (np.linalg.norm(u, axis=1) + np.linalg.norm(v, axis=1))
+        if not flat.any():
+            break
+        P = np.delete(P, int(np.argmax(flat)), axis=0)
+    return P
 
 
 def plot_cz(

@@ -1,0 +1,92 @@
+"""The certificate itself: valid for any multiplier, and solver failures are never silent."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import highspy
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from setobs import ConstrainedZonotope, SolverError
+from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
+from tests.conftest import exact_extremes, random_cz
+
+seeds = st.integers(0, 2**32 - 1)
+
+
+@given(seeds)
+def test_bound_is_valid_for_arbitrary_multipliers(seed):
+    """Weak duality: a garbage multiplier gives a loose but valid bound."""
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=5, n_c=2)
+    d = rng.normal(size=2)
+    true_min = exact_extremes(Z, d)[0] - Fraction(float(d @ Z.c))  # min (G^T d)^T xi, exact
+    w = Z.G.T @ d
+    werr = 4 * np.finfo(float).eps * (np.abs(Z.G).T @ np.abs(d))
+    for y in (rng.normal(size=2) * 10.0 ** rng.uniform(-3, 3), np.zeros(2)):
+        bound, _ = lagrangian_lower_bound(w, Z.A, Z.b, Z.h, y, w_err=werr,
+                                          w_pair=(Z.G, d))
+        assert Fraction(bound) <= true_min
+
+
+@given(seeds)
+def test_sloppy_solver_duals_still_give_outer_bounds(seed):
+    """Perturb the solver's optimal duals (as a sloppy solver would): still outer."""
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=5, n_c=2)
+    fp = FactorPolytope(Z.A, Z.b, Z.h)
+    for i in range(2):
+        out = fp.minimize(Z.G[i])
+        hs = fp._get_model()
+        y = np.asarray(hs.getSolution().row_dual) * fp._pow2_scale(Z.G[i])
+        e = np.zeros(2)
+        e[i] = 1.0
+        exact_min = exact_extremes(Z, e)[0] - Fraction(float(Z.c[i]))
+        for eps in (1e-9, 1e-6, 1e-3):
+            noisy = y + eps * rng.normal(size=y.size)
+            bound = fp.certify(Z.G[i], noisy)
+            assert Fraction(bound) <= exact_min
+            assert bound >= out.bound - 20 * eps * (np.abs(Z.A).sum() + np.abs(Z.b).sum()
+                                                    + Z.h.sum()) - 1e-9
+
+
+def test_unbounded_factor_bound_covers_points_within_radius():
+    # x = xi_1 (free), constraint xi_1 - 3 xi_2 = 0.1, |xi_2| <= 1 -> x in [-2.9, 3.1].
+    Z = ConstrainedZonotope([[1.0, 0.0]], [0.0], [[1.0, -3.0]], [0.1], [np.inf, 1.0])
+    box = Z.interval_hull()
+    assert box.lo[0] <= -2.9 and box.hi[0] >= 3.1
+    assert box.hi[0] - 3.1 < 1e-12 and -2.9 - box.lo[0] < 1e-12
+
+
+def test_solver_failure_raises_with_status(monkeypatch):
+    Z = ConstrainedZonotope(np.eye(3), np.zeros(3), [[1.0, 1.0, 1.0]], [0.5])
+    original = FactorPolytope._new_highs
+
+    def crippled():
+        hs = original()
+        hs.setOptionValue("simplex_iteration_limit", 0)
+        return hs
+
+    monkeypatch.setattr(FactorPolytope, "_new_highs", staticmethod(crippled))
+    with pytest.raises(SolverError, match="did not solve") as info:
+        Z.interval_hull()
+    assert "limit" in info.value.status.lower()
+
+
+def test_highs_infeasible_claim_is_checked(monkeypatch):
+    """If HiGHS claims infeasibility on a feasible set, we must not report it empty."""
+    Z = ConstrainedZonotope(np.eye(2), np.zeros(2), [[1.0, 1.0]], [0.5])
+    fp = Z._lp()
+    real_solve = FactorPolytope._solve
+
+    def lying_solve(self, hs, w, scale):
+        real_solve(self, hs, w, scale)
+        return highspy.HighsModelStatus.kInfeasible
+
+    monkeypatch.setattr(FactorPolytope, "_solve", lying_solve)
+    out = fp.minimize(np.array([1.0, 0.0]))
+    # Relaxed-and-certified: still a valid bound for min xi_1 = -0.5.
+    assert out.bound <= -0.5 and out.bound > -0.5 - 1e-6

@@ -1,0 +1,126 @@
+"""Polytope conversion (pycddlib) and 2-D plotting."""
+
+from __future__ import annotations
+
+import cdd
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from matplotlib.patches import Polygon
+from scipy.spatial import ConvexHull
+
+from setobs import ConstrainedZonotope, EmptySetError, UnboundedSetError
+from setobs.geometry.plotting import polygon_2d
+from tests.conftest import cdd_vertices, random_cz
+
+seeds = st.integers(0, 2**32 - 1)
+
+
+def as_set(P, decimals=7):
+    return {tuple(np.round(p, decimals) + 0.0) for p in P}
+
+
+def hull_vertices(P):
+    """Extreme points with scipy's Qhull (independent of cdd)."""
+    return P[ConvexHull(P).vertices]
+
+
+def test_vertices_of_triangle():
+    Z = ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], [0.0, 0.0],
+                            A=[[1.0, 1.0, 1.0]], b=[1.0])
+    assert as_set(Z.vertices()) == {(0.0, 0.0), (2.0, 0.0), (0.0, 2.0)}
+
+
+@given(seeds)
+def test_vertices_match_qhull(seed):
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=5, n_c=1)
+    V = Z.vertices()
+    P = cdd_vertices(Z)
+    if np.linalg.matrix_rank(P - P.mean(axis=0), tol=1e-9) < 2:
+        return  # flat set: Qhull needs full dimension
+    assert as_set(V, 6) == as_set(hull_vertices(P), 6)
+
+
+@given(seeds)
+def test_hrep_round_trip(seed):
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=4, n_c=1)
+    H = Z.to_hrep()
+    for v in Z.vertices():
+        assert H.contains(v, tol=1e-8)
+    if H.E.shape[0] == 0:
+        W = ConstrainedZonotope.from_hpolytope(H.H, H.k)
+        for _ in range(4):
+            d = rng.normal(size=2)
+            assert W.support(d) == pytest.approx(Z.support(d), abs=1e-7)
+
+
+@given(seeds)
+def test_from_hpolytope_matches_cdd(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 4))
+    # A random bounded polytope: random halfspaces around the origin plus a box.
+    Hr = rng.normal(size=(6, n))
+    H = np.vstack([Hr, np.eye(n), -np.eye(n)])
+    k = np.concatenate([rng.uniform(0.5, 2.0, 6), np.full(2 * n, 3.0)])
+    Z = ConstrainedZonotope.from_hpolytope(H, k)
+    mat = cdd.matrix_from_array(np.hstack([k[:, None], -H]).tolist(),
+                                rep_type=cdd.RepType.INEQUALITY)
+    gen = np.array(cdd.copy_generators(cdd.polyhedron_from_matrix(mat)).array)
+    V = gen[:, 1:]
+    box = Z.interval_hull()
+    np.testing.assert_allclose(box.lo, V.min(axis=0), atol=1e-7)
+    np.testing.assert_allclose(box.hi, V.max(axis=0), atol=1e-7)
+    for _ in range(4):
+        d = rng.normal(size=n)
+        assert Z.support(d) == pytest.approx((V @ d).max(), abs=1e-7)
+    assert Z.contains(V.mean(axis=0))
+
+
+def test_from_hpolytope_errors():
+    with pytest.raises(UnboundedSetError, match="unbounded"):
+        ConstrainedZonotope.from_hpolytope([[1.0, 0.0]], [1.0])
+    with pytest.raises(EmptySetError, match="empty"):
+        ConstrainedZonotope.from_hpolytope([[1.0], [-1.0]], [0.0, -1.0])
+
+
+def test_vertices_of_unbounded_set_raises():
+    with pytest.raises(UnboundedSetError, match="bounded"):
+        ConstrainedZonotope.full_space(2).vertices()
+
+
+def test_vertices_of_set_with_pinned_unbounded_factor():
+    # x = xi_u with xi_u + xi_b = 0, |xi_b| <= 1: the interval [-1, 1].
+    Z = ConstrainedZonotope([[1.0, 0.0]], [0.0], [[1.0, 1.0]], [0.0], [np.inf, 1.0])
+    assert as_set(Z.vertices()) == {(-1.0,), (1.0,)}
+
+
+@given(seeds)
+def test_polygon_2d_matches_vertices(seed):
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=5, n_c=1)
+    P = polygon_2d(Z)
+    V = Z.vertices()
+    if len(V) >= 3:
+        assert as_set(P, 6) == as_set(V, 6)
+        # Counter-clockwise order: positive signed area.
+        x, y = P[:, 0], P[:, 1]
+        assert 0.5 * (x @ np.roll(y, -1) - y @ np.roll(x, -1)) > 0
+
+
+def test_plot_returns_artist_on_given_and_current_axes():
+    Z = ConstrainedZonotope.from_box([0, 0, 0], [1, 2, 3])
+    fig, ax = plt.subplots()
+    art = Z.plot(ax=ax, dims=(0, 2), facecolor="C1")
+    assert isinstance(art, Polygon) and art in ax.patches
+    assert as_set(art.get_xy()[:-1]) == {(0, 0), (1, 0), (1, 3), (0, 3)}
+    plt.close(fig)
+    fig2 = plt.figure()
+    art2 = Z.plot()  # ax=None: current axes
+    assert art2 in plt.gca().patches
+    plt.close(fig2)
+    with pytest.raises(UnboundedSetError):
+        ConstrainedZonotope.full_space(2).plot()
