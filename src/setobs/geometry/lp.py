@@ -55,6 +55,8 @@ __all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_b
 _U = np.finfo(np.float64).eps / 2.0
 _TINY = np.finfo(np.float64).tiny
 _INF = highspy.kHighsInf
+#: Relative certification gap above which duals are recomputed from the basis.
+_REFINE_GAP = 1e-9
 _DECIDED = (
     highspy.HighsModelStatus.kOptimal,
     highspy.HighsModelStatus.kUnbounded,
@@ -290,8 +292,13 @@ class FactorPolytope:
     Notes
     -----
     HiGHS runs with presolve off (with presolve on it returned no status on
-    some LPs with many infinite bounds) and with the primal simplex, which is the
-    fastest when only the objective changes between solves.
+    some LPs with many infinite bounds). The model is re-solved warm with a new
+    objective per direction. The dual simplex is used: on the benchmark's dense
+    interval-hull LPs (``benchmarks/interval_hull.py``) it measured faster than
+    the primal simplex at every size (e.g. 374 ms vs 558 ms for the 20 LPs of
+    ``(n, n_gen, n_con) = (10, 200, 150)``), although only the objective changes.
+    If a solve ends without a decided status, a fresh model with the dual
+    simplex is tried once before :class:`~setobs.SolverError` is raised.
     """
 
     def __init__(
@@ -354,7 +361,7 @@ class FactorPolytope:
     def _get_model(self) -> highspy.Highs:
         if self._model is None:
             hs = self._new_highs()
-            hs.setOptionValue("simplex_strategy", 4)  # primal simplex
+            hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
             lo, up = self._col_bounds()
             self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
             self._model = hs
@@ -435,6 +442,7 @@ class FactorPolytope:
         if st not in _DECIDED:
             hs = self._new_highs()
             hs.setOptionValue("simplex_strategy", 1)
+            hs.setOptionValue("simplex_scale_strategy", 0)
             lo, up = self._col_bounds()
             self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
             st = self._solve(hs, w, scale)
@@ -444,6 +452,10 @@ class FactorPolytope:
             x = np.asarray(sol.col_value, dtype=np.float64)
             bound = self.certify(w, y, w_err, w_pair)
             obj = float(w @ x)
+            if np.isfinite(bound) and obj - bound > _REFINE_GAP * (1.0 + abs(obj)):
+                y_ref = self._basis_duals(hs, w)
+                if y_ref is not None:
+                    bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
             if np.isinf(bound):
                 return LPOutcome(-np.inf, obj, x, "unbounded")
             return LPOutcome(bound, obj, x, "optimal")
@@ -461,6 +473,29 @@ class FactorPolytope:
         raise SolverError(
             f"HiGHS did not solve the LP (status: {_status_name(hs)})", status=_status_name(hs)
         )
+
+    def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """Duals recomputed from HiGHS's optimal basis, with one refinement step.
+
+        Solves ``A[N, B]^T y_N = w_B`` (``B`` basic columns, ``N`` nonbasic rows;
+        ``y = 0`` on rows whose slack is basic). Only a candidate multiplier:
+        the bound is certified by :meth:`certify` like any other.
+        """
+        basis = hs.getBasis()
+        basic = highspy.HighsBasisStatus.kBasic
+        bc = np.flatnonzero([st == basic for st in basis.col_status])
+        nbr = np.flatnonzero([st != basic for st in basis.row_status])
+        if bc.size != nbr.size:
+            return None
+        M = self.A[np.ix_(nbr, bc)].T
+        try:
+            yn = np.linalg.solve(M, w[bc])
+            yn += np.linalg.solve(M, w[bc] - M @ yn)
+        except np.linalg.LinAlgError:
+            return None
+        y = np.zeros(self.n_c)
+        y[nbr] = yn
+        return y
 
     def minimize_relaxed(
         self,
