@@ -15,6 +15,16 @@ from tests.conftest import cdd_vertices, exact_extremes, random_cz, sample_point
 seeds = st.integers(0, 2**32 - 1)
 
 
+def assert_hull_never_inside(Z, box):
+    """Exact rational comparison: the certified box is never inside the true set."""
+    for i in range(Z.dim):
+        e = np.zeros(Z.dim)
+        e[i] = 1.0
+        lo_exact, hi_exact = exact_extremes(Z, e)
+        assert Fraction(float(box.lo[i])) <= lo_exact
+        assert Fraction(float(box.hi[i])) >= hi_exact
+
+
 @given(seeds)
 def test_interval_hull_equals_vertex_box_and_is_never_inside(seed):
     rng = np.random.default_rng(seed)
@@ -24,13 +34,7 @@ def test_interval_hull_equals_vertex_box_and_is_never_inside(seed):
     scale = 1.0 + np.abs(V).max()
     np.testing.assert_allclose(box.lo, V.min(axis=0), atol=1e-7 * scale)
     np.testing.assert_allclose(box.hi, V.max(axis=0), atol=1e-7 * scale)
-    for i in range(Z.dim):
-        e = np.zeros(Z.dim)
-        e[i] = 1.0
-        lo_exact, hi_exact = exact_extremes(Z, e)
-        # Exact rational comparison: the certified box is never inside the true set.
-        assert Fraction(float(box.lo[i])) <= lo_exact
-        assert Fraction(float(box.hi[i])) >= hi_exact
+    assert_hull_never_inside(Z, box)
 
 
 @given(seeds)
@@ -51,12 +55,11 @@ def test_badly_scaled_sets_remain_certified(seed):
     rng = np.random.default_rng(seed)
     Z = random_cz(rng, scale=10.0 ** rng.uniform(-6, 6))
     box = Z.interval_hull()
+    assert_hull_never_inside(Z, box)
     for i in range(Z.dim):
         e = np.zeros(Z.dim)
         e[i] = 1.0
         lo_exact, hi_exact = exact_extremes(Z, e)
-        assert Fraction(float(box.lo[i])) <= lo_exact
-        assert Fraction(float(box.hi[i])) >= hi_exact
         width = float(hi_exact - lo_exact) + 1e-300
         assert float(box.hi[i] - box.lo[i]) <= width * (1 + 1e-6) + 1e-9 * float(
             abs(hi_exact) + abs(lo_exact))

@@ -358,13 +358,19 @@ class FactorPolytope:
         up = np.where(self._unb, _INF, self.h)
         return -up, up
 
+    def _build(self, row_lo, row_hi, cost, *, unscaled: bool = False) -> highspy.Highs:
+        """A HiGHS model of ``min cost^T xi, row_lo <= A xi <= row_hi, |xi| <= h``."""
+        hs = self._new_highs()
+        hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
+        if unscaled:
+            hs.setOptionValue("simplex_scale_strategy", 0)
+        lo, up = self._col_bounds()
+        self._pass(hs, self.A, lo, up, row_lo, row_hi, cost)
+        return hs
+
     def _get_model(self) -> highspy.Highs:
         if self._model is None:
-            hs = self._new_highs()
-            hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
-            lo, up = self._col_bounds()
-            self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
-            self._model = hs
+            self._model = self._build(self.b, self.b, np.zeros(self.n_g))
         return self._model
 
     def _pinv(self) -> NDArray[np.float64]:
@@ -382,11 +388,13 @@ class FactorPolytope:
         w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> float:
         """Certified lower bound of ``min w^T xi`` from multiplier ``y``."""
-        bound, _ = lagrangian_lower_bound(
+        return self._certify(w, y, w_err, w_pair)[0]
+
+    def _certify(self, w, y, w_err=None, w_pair=None) -> tuple[float, NDArray[np.float64]]:
+        return lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
             unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
         )
-        return bound
 
     @staticmethod
     def _pow2_scale(w: NDArray[np.float64]) -> float:
@@ -440,11 +448,7 @@ class FactorPolytope:
         hs = self._get_model()
         st = self._solve(hs, w, scale)
         if st not in _DECIDED:
-            hs = self._new_highs()
-            hs.setOptionValue("simplex_strategy", 1)
-            hs.setOptionValue("simplex_scale_strategy", 0)
-            lo, up = self._col_bounds()
-            self._pass(hs, self.A, lo, up, self.b, self.b, np.zeros(self.n_g))
+            hs = self._build(self.b, self.b, np.zeros(self.n_g), unscaled=True)
             st = self._solve(hs, w, scale)
         if st == highspy.HighsModelStatus.kOptimal:
             sol = hs.getSolution()
@@ -514,9 +518,7 @@ class FactorPolytope:
         rep = self.emptiness()
         delta = self._row_scale() * max(2.0 * rep.violation_found, 2.0 * rep.tol)
         scale = self._pow2_scale(w)
-        hs = self._new_highs()
-        lo, up = self._col_bounds()
-        self._pass(hs, self.A, lo, up, self.b - delta, self.b + delta, w / scale)
+        hs = self._build(self.b - delta, self.b + delta, w / scale)
         hs.run()
         st = hs.getModelStatus()
         if st == highspy.HighsModelStatus.kUnbounded:
@@ -530,10 +532,7 @@ class FactorPolytope:
         sol = hs.getSolution()
         y = np.asarray(sol.row_dual, dtype=np.float64) * scale
         x = np.asarray(sol.col_value, dtype=np.float64)
-        bound, y = lagrangian_lower_bound(
-            w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
-            unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
-        )
+        bound, y = self._certify(w, y, w_err, w_pair)
         if np.isinf(bound):
             return LPOutcome(-np.inf, float(w @ x), x, "unbounded")
         # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
