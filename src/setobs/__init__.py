@@ -1,6 +1,6 @@
 """setobs: set-membership geometry and disturbance observers for linear discrete-time systems."""
 
-from . import geometry, tolerances
+from . import analysis, examples, geometry, tolerances
 from .exceptions import (
     DimensionError,
     EmptySetError,
@@ -9,6 +9,7 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
+from .systems import LinearSystem
 
 __version__ = "0.1.0"
 
@@ -17,10 +18,13 @@ __all__ = [
     "ConstrainedZonotope",
     "DimensionError",
     "EmptySetError",
+    "LinearSystem",
     "SetobsError",
     "SolverError",
     "UnboundedSetError",
     "__version__",
+    "analysis",
+    "examples",
     "geometry",
     "tolerances",
 ]

@@ -41,3 +41,30 @@ UNBOUNDED_REDUCED_COST_TOL: float = 1e-10
 
 #: Relative threshold below which a row/column is treated as numerically zero in reductions.
 ZERO_TOL: float = 1e-12
+
+# ---------------------------------------------------------------------------
+# Structural analysis (setobs.analysis)
+# ---------------------------------------------------------------------------
+# Policy: every rank or zero decision is made on a *balanced* realisation
+# (diagonal state scaling from LAPACK's balancing of the system matrix, inputs
+# and outputs scaled with it; all of these leave ranks, zeros and relative
+# degrees unchanged), and a singular value counts as nonzero when it exceeds
+# RANK_RTOL times the norm of the matrix it belongs to. Each decision is
+# reported with its margin: how many orders of magnitude the smallest kept and
+# the largest dropped singular value sit from the threshold.
+
+#: Relative threshold for numerical rank decisions on balanced data.
+RANK_RTOL: float = 1e-9
+
+#: Relative threshold for computed products ``C A^k E`` (relative degrees, UIO
+#: delay), measured against their rounding-error scale
+#: ``||C|| max(||A^k E||, ||A|| ||A^(k-1) E||)`` (about 4500 eps): such products
+#: can legitimately span many decades in non-normal coordinates, so a threshold
+#: relative to their own size would cut into the signal.
+PRODUCT_RTOL: float = 1e-12
+
+#: A decision whose margin is below this many decades is flagged as fragile.
+FRAGILE_MARGIN_DECADES: float = 2.0
+
+#: Invariant zeros with |z| within this of the unit circle are reported as marginal.
+UNIT_CIRCLE_TOL: float = 1e-8

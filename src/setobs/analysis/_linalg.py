@@ -1,0 +1,135 @@
+"""Scale-aware numerical rank decisions and balancing (the analysis tolerance policy)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.linalg import matrix_balance, svd
+
+from ..tolerances import FRAGILE_MARGIN_DECADES, RANK_RTOL
+
+__all__ = ["RankDecision", "balance_system", "orth_rows", "rank_decision"]
+
+
+@dataclass(frozen=True)
+class RankDecision:
+    """A numerical rank with the numbers it was decided on.
+
+    Attributes
+    ----------
+    rank : int
+        The decided rank.
+    singular_values : ndarray
+        All singular values, descending.
+    threshold : float
+        Singular values above it count as nonzero.
+    """
+
+    rank: int
+    singular_values: NDArray[np.float64]
+    threshold: float
+
+    @property
+    def smallest_kept(self) -> float:
+        """Smallest singular value counted as nonzero (``inf`` if rank 0)."""
+        return float(self.singular_values[self.rank - 1]) if self.rank else np.inf
+
+    @property
+    def largest_dropped(self) -> float:
+        """Largest singular value counted as zero (0 if full rank)."""
+        s = self.singular_values
+        return float(s[self.rank]) if self.rank < s.size else 0.0
+
+    @property
+    def margin_decades(self) -> float:
+        """Distance of the decision from the threshold, in decades (log10).
+
+        ``min(log10(smallest_kept / threshold), log10(threshold / largest_dropped))``;
+        ``inf`` when nothing is close. Small margins mean a fragile verdict.
+        """
+        t = max(self.threshold, np.finfo(float).tiny)
+        a = np.log10(self.smallest_kept / t) if self.rank else np.inf
+        b = np.log10(t / self.largest_dropped) if self.largest_dropped > 0 else np.inf
+        return float(min(a, b))
+
+    @property
+    def fragile(self) -> bool:
+        """Whether the margin is below ``FRAGILE_MARGIN_DECADES``."""
+        return self.margin_decades < FRAGILE_MARGIN_DECADES
+
+    def __repr__(self) -> str:
+        return (f"RankDecision(rank={self.rank}, margin={self.margin_decades:.1f} decades, "
+                f"kept>={self.smallest_kept:.3g}, dropped<={self.largest_dropped:.3g}, "
+                f"threshold={self.threshold:.3g})")
+
+
+def rank_decision(M: NDArray[np.float64], rtol: float = RANK_RTOL,
+                  scale: float | None = None) -> RankDecision:
+    """Numerical rank of ``M``: singular values above ``rtol * scale`` (default ``||M||_2``)."""
+    if M.size == 0:
+        return RankDecision(0, np.zeros(0), 0.0)
+    s = svd(M, compute_uv=False)
+    ref = float(s[0]) if scale is None else float(scale)
+    thr = rtol * ref
+    r = int((s > thr).sum()) if ref > 0 else 0
+    return RankDecision(r, s, thr)
+
+
+def orth_rows(M: NDArray[np.float64], rtol: float = RANK_RTOL, scale: float | None = None
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], RankDecision]:
+    """Orthonormal bases of the row space of ``M`` and of its orthogonal complement.
+
+    Returns ``(R, N, decision)`` with ``R`` (rank x cols) spanning the row space
+    and ``N`` ((cols - rank) x cols) spanning ``ker(M)``.
+    """
+    cols = M.shape[1]
+    if M.shape[0] == 0:
+        return np.zeros((0, cols)), np.eye(cols), RankDecision(0, np.zeros(0), 0.0)
+    _, s, Vt = svd(M, full_matrices=True)
+    ref = float(s[0]) if scale is None else float(scale)
+    thr = rtol * ref
+    r = int((s > thr).sum()) if ref > 0 else 0
+    return Vt[:r], Vt[r:], RankDecision(r, s, thr)
+
+
+def balance_system(
+    A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+           NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Balance ``(A, B, C)`` with one diagonal scaling of states, inputs and outputs.
+
+    LAPACK's balancing (``gebal``, scaling only, powers of two: exact) is applied
+    to the square matrix ``[[A, B], [C, 0]]`` (padded), so that rows and
+    columns of states, inputs and outputs have comparable norms. Ranks, invariant
+    zeros and relative degrees are unchanged by these scalings.
+
+    Returns
+    -------
+    Ab, Bb, Cb : ndarrays
+        ``Dx^-1 A Dx``, ``Dx^-1 B Du``, ``Dy^-1 C Dx``.
+    dx, du, dy : ndarrays
+        The scalings (states, inputs, outputs).
+    """
+    n, m = B.shape
+    p = C.shape[0]
+    k = max(m, p)
+    N = n + k
+    S = np.zeros((N, N))
+    S[:n, :n] = A
+    S[:n, n : n + m] = B
+    S[n : n + p, :n] = C
+    # Zero rows/columns (e.g. an output that sees nothing) make gebal's scaling
+    # degenerate; give them a unit diagonal so they are scaled neutrally.
+    empty = ~(S.any(axis=0) | S.any(axis=1))
+    S[empty, empty] = 1.0
+    if N:
+        _, (sc, _) = matrix_balance(S, permute=False, separate=True)
+    else:
+        sc = np.ones(0)
+    dx, du, dy = sc[:n], sc[n : n + m], sc[n : n + p]
+    Ab = A * (1.0 / dx)[:, None] * dx[None, :]
+    Bb = (1.0 / dx)[:, None] * B * du[None, :]
+    Cb = (1.0 / dy)[:, None] * C * dx[None, :]
+    return Ab, Bb, Cb, dx, du, dy

@@ -1,0 +1,219 @@
+"""One report: which observer designs exist for a system, and why not."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..systems import LinearSystem
+from ..tolerances import RANK_RTOL
+from .existence import (
+    BoundedDOReport,
+    ObserverCondition,
+    bounded_do_exists,
+    higher_order_conditions,
+    modular_conditions,
+    pio_conditions,
+)
+from .structure import RelativeDegreeResult, UIOResult, relative_degrees, uio_conditions
+from .zeros import ZerosResult
+
+__all__ = ["DesignVerdict", "Diagnosis", "diagnose"]
+
+
+@dataclass(frozen=True)
+class DesignVerdict:
+    """Existence verdict of one observer design."""
+
+    design: str
+    exists: bool
+    condition: str
+    numbers: dict
+    reason: str = ""
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Which observer designs exist for a system (see :func:`diagnose`).
+
+    Attributes
+    ----------
+    verdicts : list of DesignVerdict
+    bounded_do : BoundedDOReport
+    zeros : ZerosResult
+    relative_degrees : RelativeDegreeResult
+    uio : UIOResult
+    """
+
+    system: LinearSystem
+    verdicts: list[DesignVerdict]
+    bounded_do: BoundedDOReport
+    zeros: ZerosResult
+    relative_degrees: RelativeDegreeResult
+    uio: UIOResult
+    notes: list[str] = field(default_factory=list)
+
+    def __getitem__(self, design: str) -> DesignVerdict:
+        for v in self.verdicts:
+            if v.design == design:
+                return v
+        raise KeyError(f"no design {design!r}; designs: {[v.design for v in self.verdicts]}")
+
+    @property
+    def existing(self) -> list[str]:
+        """Names of the designs that exist."""
+        return [v.design for v in self.verdicts if v.exists]
+
+    def _header(self) -> str:
+        s = self.system
+        zs = ", ".join(_fmt_z(z) for z in self.zeros.zeros) or "none"
+        return (f"system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs; "
+                f"finite invariant zeros: {zs}")
+
+    def __repr__(self) -> str:
+        width = max(len(v.design) for v in self.verdicts)
+        lines = ["Diagnosis", "  " + self._header()]
+        for v in self.verdicts:
+            mark = "yes" if v.exists else "NO "
+            lines.append(f"  {v.design:<{width}}  {mark}  {v.condition}")
+            if not v.exists:
+                lines.append(f"  {'':<{width}}       -> {v.reason}")
+        lines += [f"  note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def to_markdown(self) -> str:
+        """A Markdown table of the verdicts, with the deciding numbers."""
+        out = [f"**{self._header()}**", "",
+               "| design | exists | deciding condition | numbers | why not |",
+               "|---|---|---|---|---|"]
+        for v in self.verdicts:
+            nums = "; ".join(f"{k}={_fmt(val)}" for k, val in v.numbers.items())
+            out.append(f"| {v.design} | {'yes' if v.exists else 'no'} | {v.condition} | "
+                       f"{nums} | {v.reason or '—'} |")
+        if self.notes:
+            out += ["", *[f"- {n}" for n in self.notes]]
+        return "\n".join(out)
+
+
+def _fmt_z(z: complex) -> str:
+    return f"{z.real:.6g}" if abs(z.imag) < 1e-12 else f"{z.real:.6g}{z.imag:+.6g}j"
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, np.ndarray):
+        return np.array2string(v, precision=4, separator=", ")
+    return str(v)
+
+
+def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
+    """For each observer design in the library, whether it exists for ``sys`` and why not.
+
+    Designs and their deciding conditions:
+
+    * **SMFDO** (Li-Cong-Dong, Algorithm 1): Theorem 1 (bounded DO exists).
+    * **MB-ESO** (Chen-Gao-Lin, eq. (16)): ``q = l``, no invariant zeros
+      (Assumption 1; Lemma 2), and ``V0`` diagonal (Theorem 2).
+    * **variant MB-ESO** (eqs. (18)-(22)): ``q = l`` and no invariant zeros.
+    * **delayed UIO**: condition (b) (strong detectability: full normal rank,
+      every invariant zero strictly inside the unit circle); delay from (25)-(26).
+    * **PIO** (Chang 2006): augmented pair detectable.
+    * **higher-order observer** (Fu-Wang): pair with a double-integrator
+      disturbance model detectable.
+    * **modular observer** (Sec. VIII): ``(Phi, Xi)`` detectable, ``rank(Xi V) = q``.
+
+    Examples
+    --------
+    >>> from setobs.examples import chang2006
+    >>> d = diagnose(chang2006())
+    >>> d.existing
+    ['SMFDO', 'PIO', 'higher-order observer', 'modular observer']
+    """
+    bdo = bounded_do_exists(sys, rtol=rtol)
+    rd = relative_degrees(sys, rtol=rtol)
+    uio = uio_conditions(sys, rtol=rtol)
+    z = uio.zeros
+    verdicts: list[DesignVerdict] = []
+    notes: list[str] = []
+
+    # SMFDO -----------------------------------------------------------------
+    nums = {"rank[O, IbarOG]": bdo.rank_Oaug, "rank O": bdo.rank_O, "q": bdo.q,
+            "N_o": bdo.N_o, "n_o": bdo.n_o, "margin_decades": round(bdo.margin_decades, 1)}
+    if bdo.satisfied:
+        reason = ""
+    elif bdo.corollary1:
+        reason = f"Corollary 1: n_o = {bdo.n_o} < q = {bdo.q}"
+    else:
+        k = bdo.unrecoverable_directions.shape[1]
+        dirs = np.round(bdo.unrecoverable_directions.T, 4).tolist()
+        reason = (f"rank[O, IbarOG] = {bdo.rank_Oaug} < rank O + q = {bdo.rank_O + bdo.q}: "
+                  f"{k} disturbance direction(s) not recoverable: {dirs}")
+    verdicts.append(DesignVerdict("SMFDO", bdo.satisfied,
+                                  "Theorem 1: rank[O, IbarOG] = rank O + q", nums, reason,
+                                  "Li-Cong-Dong Thm 1"))
+    if not bdo.forms_agree:
+        notes.append("Theorem 1 and Remark 1 disagree: a rank decision is fragile "
+                     f"(margin {bdo.margin_decades:.1f} decades)")
+    if bdo.satisfied and not bdo.printed_horizon_satisfied:
+        notes.append("Theorem 1 with only n blocks (as printed in eq. (16)) fails here; "
+                     "n + q blocks are needed for the augmented system")
+
+    # Zero-based designs ------------------------------------------------------
+    square = sys.q == sys.l
+    no_zeros = z.full_normal_rank and z.zeros.size == 0
+    zs = [_fmt_z(v) for v in z.zeros]
+    zero_nums = {"finite zeros": zs, "normal rank": z.normal_rank, "n+q": sys.n + sys.q,
+                 "degrees": rd.degrees, "V0 nonsingular": rd.nonsingular,
+                 "V0 diagonal": rd.diagonal, "margin_decades": round(z.margin_decades, 1)}
+    if not square:
+        why = f"needs as many disturbances as outputs (q = {sys.q}, l = {sys.l})"
+    elif not z.full_normal_rank:
+        why = f"pencil normal rank {z.normal_rank} < n + q = {sys.n + sys.q}"
+    elif z.zeros.size:
+        why = f"invariant zero(s) at {', '.join(zs)} (Assumption 1 violated)"
+    else:
+        why = ""
+    verdicts.append(DesignVerdict(
+        "variant MB-ESO", square and no_zeros, "q = l and no invariant zeros (Assumption 1)",
+        zero_nums, why, "Chen-Gao-Lin Thm 3"))
+    mb_ok = square and no_zeros and rd.diagonal
+    mb_why = why or ("" if rd.diagonal
+                     else "V0 is not diagonal (Theorem 2); use the variant MB-ESO")
+    verdicts.append(DesignVerdict("MB-ESO", mb_ok,
+                                  "q = l, no invariant zeros, V0 diagonal", zero_nums, mb_why,
+                                  "Chen-Gao-Lin Thm 2"))
+    if square and no_zeros != rd.lemma2_no_zeros:
+        notes.append("Lemma 2 (V0 nonsingular, sum r_i = n) disagrees with the zero computation")
+
+    # Delayed UIO -------------------------------------------------------------
+    uio_nums = {"unstable zeros": [_fmt_z(v) for v in uio.unstable_zeros],
+                "normal rank": z.normal_rank, "n+rank G": sys.n + uio.rank_G,
+                "delay tau": uio.delay, "rank(Xi G)": uio.rank_XiG, "rank G": uio.rank_G}
+    if uio.delayed_uio_exists:
+        uio_why = ""
+    elif z.normal_rank < sys.n + uio.rank_G:
+        uio_why = f"not left invertible (normal rank {z.normal_rank} < n + rank G)"
+    elif uio.unstable_zeros.size:
+        uio_why = (f"invariant zero(s) on/outside the unit circle: "
+                   f"{', '.join(_fmt_z(v) for v in uio.unstable_zeros)}")
+    else:
+        uio_why = "no finite delay satisfies eq. (25)"
+    verdicts.append(DesignVerdict("delayed UIO", uio.delayed_uio_exists,
+                                  "condition (b): strongly detectable", uio_nums, uio_why,
+                                  "Chen-Gao-Lin Sec. III-A"))
+
+    # Augmented-model observers -------------------------------------------------
+    for name, cond, src in (("PIO", pio_conditions(sys, rtol=rtol), "Chang 2006"),
+                            ("higher-order observer", higher_order_conditions(sys, rtol=rtol),
+                             "Fu-Wang"),
+                            ("modular observer", modular_conditions(sys, rtol=rtol),
+                             "modular observer Sec. VIII")):
+        c: ObserverCondition = cond
+        verdicts.append(DesignVerdict(name, c.exists, c.condition, c.numbers, c.reason, src))
+    order = ["SMFDO", "MB-ESO", "variant MB-ESO", "delayed UIO", "PIO",
+             "higher-order observer", "modular observer"]
+    verdicts.sort(key=lambda v: order.index(v.design))
+    return Diagnosis(sys, verdicts, bdo, z, rd, uio, notes)

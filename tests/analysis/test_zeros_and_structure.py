@@ -1,0 +1,184 @@
+"""Invariant zeros, relative degrees, V0 and UIO delay against independent answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import block_diag, eigvals
+
+from setobs import examples as ex
+from setobs.analysis import invariant_zeros, relative_degrees, system_zeros, uio_conditions
+from tests.analysis.helpers import (
+    block_system,
+    diagonal_rescaling,
+    random_similarity,
+    siso_with_zeros,
+)
+
+
+def real_sorted(z):
+    return np.sort(np.asarray(z).real)
+
+
+# ----------------------------------------------------------------------- Chang 2006
+def test_chang_has_one_zero_at_1_26095():
+    sys = ex.chang2006()
+    z = invariant_zeros(sys).zeros
+    assert z.size == 1
+    assert z[0].real == pytest.approx(1.26095, abs=5e-6) and abs(z[0].imag) < 1e-12
+    # Independent closed form: Xi G is invertible (relative degree 1), so the zero
+    # dynamics are x+ = (I - G (Xi G)^-1 Xi) Phi x on ker Xi; its spectrum is the
+    # zero plus l = 2 eigenvalues at 0.
+    Pi = np.eye(3) - sys.G @ np.linalg.solve(sys.Xi @ sys.G, sys.Xi)
+    ev = eigvals(Pi @ sys.Phi)
+    nonzero = ev[np.abs(ev) > 1e-8]
+    assert nonzero.size == 1 and nonzero[0].real == pytest.approx(z[0].real, abs=1e-10)
+    # The pencil really loses rank there.
+    P = np.block([[sys.Phi - z[0].real * np.eye(3), sys.G], [sys.Xi, np.zeros((2, 2))]])
+    s = np.linalg.svd(P, compute_uv=False)
+    assert s[-1] / s[0] < 1e-12
+
+
+# ----------------------------------------------------------------------- Example 1
+def test_example1_no_zeros_where_plain_eig_invents_some():
+    sys = ex.chen_gao_lin_example1()
+    res = invariant_zeros(sys)
+    assert res.zeros.size == 0 and res.full_normal_rank
+    # Pin the failure mode we avoid: a plain generalized eigenvalue call on the
+    # Rosenbrock pencil returns large finite "zeros" (near 1.9e6 and 1.4e15 here).
+    P = np.block([[sys.Phi, sys.G], [sys.Xi, np.zeros((3, 3))]])
+    E = block_diag(np.eye(9), np.zeros((3, 3)))
+    ev = eigvals(P, E)
+    finite = np.abs(ev[np.isfinite(ev)])
+    assert finite.size >= 2 and finite.min() > 1e5 and finite.max() > 1e14
+
+
+def test_example1_relative_degrees_V0_and_delay():
+    sys = ex.chen_gao_lin_example1()
+    rd = relative_degrees(sys)
+    assert rd.degrees == (2, 4, 3)
+    np.testing.assert_allclose(rd.V0, [[2, 0.5, 0.25], [0.35, 1.5, 0.5], [0.4, 0.6, 0.5]],
+                               atol=1e-12)
+    assert rd.nonsingular and not rd.diagonal and rd.lemma2_no_zeros
+    uio = uio_conditions(sys)
+    assert uio.delay == 5 == rd.r_max + 1  # Theorem 1 of Chen-Gao-Lin
+    assert uio.condition_b and not uio.condition_a
+
+
+def test_example4_reconstruction_reproduces_printed_V0():
+    rd = relative_degrees(ex.chen_gao_lin_example4())
+    assert rd.degrees == (2, 4, 3)
+    np.testing.assert_array_equal(rd.V0, np.diag([2.0, 1.5, 0.5]))
+    assert rd.diagonal and rd.nonsingular
+    assert invariant_zeros(ex.chen_gao_lin_example4()).zeros.size == 0
+    assert uio_conditions(ex.chen_gao_lin_example4()).delay == 5
+
+
+@pytest.mark.parametrize(("ts", "V0"), [("20ms", [0.0145, 74.96]), ("1ms", [4.3984e-5, 0.1904])])
+def test_example2_sea_both_sampling_times(ts, V0):
+    sys = ex.chen_gao_lin_example2(ts)
+    rd = relative_degrees(sys)
+    assert rd.degrees == (2, 2)
+    assert rd.diagonal and rd.nonsingular
+    np.testing.assert_allclose(rd.V0, np.diag(V0), rtol=1e-12)
+    assert invariant_zeros(sys).zeros.size == 0
+    assert uio_conditions(sys).delay == 3
+
+
+def test_bad_sample_time():
+    with pytest.raises(ValueError, match="sample_time must be"):
+        ex.chen_gao_lin_example2("5ms")
+
+
+@pytest.mark.parametrize("zeros", [(0.0, 0.0), (0.2, 0.2), (0.4, 0.4), (0.6, 0.8), (0.3, 0.7),
+                                   (-0.5, 0.9), (1.5, 0.2), (1.0, 0.5)])
+def test_example5_zeros_equal_the_placed_ones(zeros):
+    z = invariant_zeros(ex.chen_gao_lin_example5(zeros)).zeros
+    np.testing.assert_allclose(real_sorted(z), np.sort(zeros), atol=1e-7)
+    assert np.abs(z.imag).max() < 1e-7
+
+
+# ----------------------------------------------------------------------- random structure
+def test_known_zeros_from_transfer_functions(rng):
+    for _ in range(25):
+        nz = int(rng.integers(0, 3))
+        zs = rng.uniform(-1.5, 1.5, nz)
+        ps = rng.uniform(-0.9, 0.9, nz + int(rng.integers(1, 3)))
+        sys = siso_with_zeros(zs, ps)
+        np.testing.assert_allclose(real_sorted(invariant_zeros(sys).zeros), np.sort(zs),
+                                   atol=1e-7)
+
+
+def test_mimo_block_system_zeros_are_the_union(rng):
+    parts = [siso_with_zeros([0.5], [0.1, 0.2, 0.3]), siso_with_zeros([], [0.4, -0.2]),
+             siso_with_zeros([-0.7, 1.2], [0.0, 0.25, -0.3, 0.6])]
+    sys = block_system(*parts)
+    z = invariant_zeros(sys).zeros
+    np.testing.assert_allclose(real_sorted(z), [-0.7, 0.5, 1.2], atol=1e-7)
+    rd = relative_degrees(sys)
+    assert rd.degrees == (2, 2, 2)
+    assert not rd.lemma2_no_zeros  # sum r_i = 6 < n = 9: zeros exist (Lemma 2)
+
+
+def test_verdicts_invariant_under_similarity_and_scaling(rng):
+    base = [ex.chang2006(), ex.chen_gao_lin_example1(), ex.chen_gao_lin_example2("1ms"),
+            ex.chen_gao_lin_example4(), ex.chen_gao_lin_example5((0.3, 1.2))]
+    for sys in base:
+        z0 = real_sorted(invariant_zeros(sys).zeros)
+        rd0 = relative_degrees(sys)
+        tau0 = uio_conditions(sys).delay
+        for transform in (random_similarity, diagonal_rescaling):
+            for _ in range(3):
+                S = transform(sys, rng, decades=3.0)  # six orders of magnitude
+                z = invariant_zeros(S).zeros
+                assert z.size == z0.size
+                np.testing.assert_allclose(real_sorted(z), z0, atol=1e-5)
+                rd = relative_degrees(S)
+                assert rd.degrees == rd0.degrees
+                assert rd.nonsingular == rd0.nonsingular
+                if transform is diagonal_rescaling:
+                    assert rd.diagonal == rd0.diagonal  # similarity can fill V0? no: invariant
+                assert uio_conditions(S).delay == tau0
+
+
+def test_tall_and_wide_systems(rng):
+    siso = siso_with_zeros([0.5, -0.3], [0.1, 0.2, 0.3, 0.4])
+    # Duplicate (scaled) output: same zeros.
+    tall = system_zeros(siso.Phi, siso.G, np.vstack([siso.Xi, 3.0 * siso.Xi]))
+    np.testing.assert_allclose(real_sorted(tall.zeros), [-0.3, 0.5], atol=1e-7)
+    # A generic second independent output removes the zeros.
+    tall2 = system_zeros(siso.Phi, siso.G, np.vstack([siso.Xi, rng.normal(size=(1, 4))]))
+    assert tall2.zeros.size == 0 and tall2.full_normal_rank
+    # More disturbances than outputs: not left invertible.
+    wide = system_zeros(siso.Phi, np.hstack([siso.G, rng.normal(size=(4, 1))]), siso.Xi)
+    assert not wide.full_normal_rank and wide.normal_rank == 5
+
+
+def test_lemma2_agrees_with_zero_computation_on_random_square_systems(rng):
+    agree = 0
+    for _ in range(30):
+        n, p = int(rng.integers(3, 7)), int(rng.integers(1, 3))
+        A = rng.normal(size=(n, n)) * 0.5
+        E = rng.normal(size=(n, p))
+        C = rng.normal(size=(p, n))
+        if rng.random() < 0.5:  # make relative degrees larger: C orthogonal to E
+            C = C - (C @ E) @ np.linalg.pinv(E)
+        from setobs import LinearSystem
+
+        sys = LinearSystem(A, E, C)
+        z = invariant_zeros(sys)
+        rd = relative_degrees(sys)
+        assert (z.zeros.size == 0 and z.full_normal_rank) == rd.lemma2_no_zeros
+        agree += 1
+    assert agree == 30
+
+
+def test_slycot_cross_check():
+    slycot = pytest.importorskip("slycot")
+    sys = ex.chang2006()
+    out = slycot.ab08nd(3, 2, 2, sys.Phi, sys.G, sys.Xi, np.zeros((2, 2)))
+    nu = out[0]
+    Af, Bf = out[8], out[9]
+    zs = eigvals(Af[:nu, :nu], Bf[:nu, :nu])
+    np.testing.assert_allclose(real_sorted(zs[np.isfinite(zs)]),
+                               real_sorted(invariant_zeros(sys).zeros), atol=1e-8)
