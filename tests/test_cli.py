@@ -21,3 +21,16 @@ def test_demo_prints_certified_interval(capsys):
 def test_help(capsys):
     assert main([]) == 0
     assert "demo" in capsys.readouterr().out
+
+
+def test_diagnose_all_examples(capsys):
+    assert main(["diagnose", "all"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("Diagnosis") == 6
+    assert "1.26095" in out  # the Chang zero
+    assert "V0 is not diagonal" in out  # Example 1
+
+
+def test_diagnose_markdown(capsys):
+    assert main(["diagnose", "cgl1", "--markdown"]) == 0
+    assert "| variant MB-ESO | yes |" in capsys.readouterr().out

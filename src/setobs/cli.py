@@ -14,8 +14,18 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from . import __version__
+from . import __version__, examples
+from .analysis import diagnose
 from .geometry import ConstrainedZonotope
+
+EXAMPLES = {
+    "chang2006": examples.chang2006,
+    "cgl1": examples.chen_gao_lin_example1,
+    "cgl2-20ms": lambda: examples.chen_gao_lin_example2("20ms"),
+    "cgl2-1ms": lambda: examples.chen_gao_lin_example2("1ms"),
+    "cgl4": examples.chen_gao_lin_example4,
+    "cgl5": examples.chen_gao_lin_example5,
+}
 
 
 def demo() -> int:
@@ -56,9 +66,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--version", action="version", version=f"setobs {__version__}")
     sub = parser.add_subparsers(dest="command")
     sub.add_parser("demo", help="run a short constrained-zonotope demo")
+    pd = sub.add_parser("diagnose", help="which observer designs exist for an example system")
+    pd.add_argument("system", choices=[*EXAMPLES, "all"])
+    pd.add_argument("--markdown", action="store_true", help="print a Markdown table")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo()
+    if args.command == "diagnose":
+        names = list(EXAMPLES) if args.system == "all" else [args.system]
+        for name in names:
+            d = diagnose(EXAMPLES[name]())
+            print(f"## {name}\n")
+            print(d.to_markdown() if args.markdown else repr(d))
+            print()
+        return 0
     parser.print_help()
     return 0
 

@@ -80,6 +80,9 @@ class Diagnosis:
             lines.append(f"  {v.design:<{width}}  {mark}  {v.condition}")
             if not v.exists:
                 lines.append(f"  {'':<{width}}       -> {v.reason}")
+            nums = "; ".join(f"{k}={_fmt(val)}" for k, val in v.numbers.items()
+                             if not isinstance(val, list | tuple) or len(val) <= 3)
+            lines.append(f"  {'':<{width}}       [{nums}]")
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
