@@ -10,7 +10,7 @@ from scipy.linalg import matrix_balance, svd
 
 from ..tolerances import FRAGILE_MARGIN_DECADES, RANK_RTOL
 
-__all__ = ["RankDecision", "balance_system", "orth_rows", "rank_decision"]
+__all__ = ["RankDecision", "balance_system", "min_margin", "orth_rows", "rank_decision"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,11 @@ class RankDecision:
         return (f"RankDecision(rank={self.rank}, margin={self.margin_decades:.1f} decades, "
                 f"kept>={self.smallest_kept:.3g}, dropped<={self.largest_dropped:.3g}, "
                 f"threshold={self.threshold:.3g})")
+
+
+def min_margin(decisions: list[RankDecision]) -> float:
+    """Smallest margin (decades) of a list of rank decisions (``inf`` if none)."""
+    return min((d.margin_decades for d in decisions), default=np.inf)
 
 
 def rank_decision(M: NDArray[np.float64], rtol: float = RANK_RTOL,

@@ -12,7 +12,7 @@ from scipy.linalg import eigvals, null_space, solve_discrete_are
 from .._validation import as_matrix
 from ..systems import LinearSystem
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, orth_rows, rank_decision
+from ._linalg import RankDecision, balance_system, min_margin, orth_rows, rank_decision
 from .observability import ObservabilityReport, observability, observability_matrix
 
 __all__ = [
@@ -89,7 +89,7 @@ class BoundedDOReport:
     @property
     def margin_decades(self) -> float:
         """Smallest margin of the rank decisions (decades)."""
-        return min((d.margin_decades for d in self.decisions), default=np.inf)
+        return min_margin(self.decisions)
 
     @property
     def fragile(self) -> bool:
@@ -305,7 +305,7 @@ def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
 def pio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCondition:
     """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable."""
     rep: ObservabilityReport = observability(sys.augmented().A, sys.augmented().C, rtol=rtol)
-    bad = rep.unobservable_modes[np.abs(rep.unobservable_modes) >= 1.0 - UNIT_CIRCLE_TOL]
+    bad = rep.unstable_unobservable_modes
     pbh = _pbh_at_one(sys, rtol)
     nums = {"N_o": rep.n_observable, "n_aug": sys.n + sys.q,
             "rank[[Phi-I, G], [Xi, 0]]": pbh.rank,
@@ -328,7 +328,7 @@ def higher_order_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Ob
                   [np.zeros((q, n + q)), np.eye(q)]])
     C = np.hstack([sys.Xi, np.zeros((sys.l, 2 * q))])
     rep = observability(A, C, rtol=rtol)
-    bad = rep.unobservable_modes[np.abs(rep.unobservable_modes) >= 1.0 - UNIT_CIRCLE_TOL]
+    bad = rep.unstable_unobservable_modes
     nums = {"N_o": rep.n_observable, "n_aug": n + 2 * q,
             "margin_decades": round(rep.margin_decades, 1)}
     reason = "" if rep.detectable else (

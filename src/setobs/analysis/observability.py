@@ -10,7 +10,7 @@ from scipy.linalg import eigvals
 
 from ..systems import LinearSystem
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, orth_rows
+from ._linalg import RankDecision, balance_system, min_margin, orth_rows
 
 __all__ = [
     "ObservabilityDecomposition",
@@ -76,12 +76,18 @@ class ObservabilityReport:
         Modes within ``UNIT_CIRCLE_TOL`` of the circle count as not stable (a mode
         at ``z = 1`` computed as ``0.99999999`` is still a mode at ``z = 1``).
         """
-        return bool(np.all(np.abs(self.unobservable_modes) < 1.0 - UNIT_CIRCLE_TOL))
+        return self.unstable_unobservable_modes.size == 0
+
+    @property
+    def unstable_unobservable_modes(self) -> NDArray[np.complex128]:
+        """Unobservable modes on or outside the unit circle (within ``UNIT_CIRCLE_TOL``)."""
+        m = self.unobservable_modes
+        return m[np.abs(m) >= 1.0 - UNIT_CIRCLE_TOL]
 
     @property
     def margin_decades(self) -> float:
         """Smallest margin of the rank decisions (decades)."""
-        return min((d.margin_decades for d in self.decisions), default=np.inf)
+        return min_margin(self.decisions)
 
     def __repr__(self) -> str:
         return (f"ObservabilityReport(n_observable={self.n_observable} of {self.n}, "

@@ -10,7 +10,7 @@ from scipy.linalg import eigvals, svd
 
 from ..systems import LinearSystem
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, rank_decision
+from ._linalg import RankDecision, balance_system, min_margin, rank_decision
 
 __all__ = ["ZerosResult", "invariant_zeros", "system_zeros"]
 
@@ -46,7 +46,7 @@ class ZerosResult:
     @property
     def margin_decades(self) -> float:
         """Smallest margin (decades) of any rank decision taken."""
-        return min((d.margin_decades for d in self.decisions), default=np.inf)
+        return min_margin(self.decisions)
 
     def outside_or_on_unit_circle(self, tol: float = UNIT_CIRCLE_TOL) -> NDArray[np.complex128]:
         """Zeros with ``|z| >= 1 - tol``."""
