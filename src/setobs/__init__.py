@@ -1,6 +1,6 @@
 """setobs: set-membership geometry and disturbance observers for linear discrete-time systems."""
 
-from . import analysis, examples, geometry, tolerances
+from . import analysis, examples, geometry, setmembership, tolerances
 from .exceptions import (
     DimensionError,
     EmptySetError,
@@ -9,16 +9,19 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
+from .setmembership import SMFDO, ModelInvalidatedError
 from .systems import LinearSystem
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "SMFDO",
     "Box",
     "ConstrainedZonotope",
     "DimensionError",
     "EmptySetError",
     "LinearSystem",
+    "ModelInvalidatedError",
     "SetobsError",
     "SolverError",
     "UnboundedSetError",
@@ -26,5 +29,6 @@ __all__ = [
     "analysis",
     "examples",
     "geometry",
+    "setmembership",
     "tolerances",
 ]

@@ -285,8 +285,7 @@ class ConstrainedZonotope:
         """Minkowski sum with a set or a vector (Scott et al. 2016, eq. (12))."""
         if not isinstance(other, ConstrainedZonotope):
             v = as_vector("vector", other, size=self.dim)
-            return ConstrainedZonotope._trusted(self._G, self._c + v, self._A, self._b, self._h,
-                                                self.radius)
+            return self._same_factors(self._G, self._c + v)
         self._check_same_dim(other, "Minkowski sum")
         return ConstrainedZonotope._trusted(
             np.hstack([self._G, other._G]),
@@ -316,8 +315,15 @@ class ConstrainedZonotope:
     def linear_map(self, M: ArrayLike) -> ConstrainedZonotope:
         """Image under ``x -> M x`` for any ``m x n`` matrix ``M`` (Scott et al. 2016, eq. (11))."""
         M_a = as_matrix("M", M, cols=self.dim)
-        return ConstrainedZonotope._trusted(M_a @ self._G, M_a @ self._c, self._A, self._b,
-                                            self._h, self.radius)
+        return self._same_factors(M_a @ self._G, M_a @ self._c)
+
+    def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64]
+                      ) -> ConstrainedZonotope:
+        """A set with the same factor polytope; shares its LP model (and emptiness cache)."""
+        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.radius)
+        if "lp" in self._cache:
+            out._cache["lp"] = self._cache["lp"]
+        return out
 
     def __rmatmul__(self, M: Any) -> ConstrainedZonotope:
         return self.linear_map(M)
@@ -382,8 +388,7 @@ class ConstrainedZonotope:
             raise DimensionError(
                 f"dims must be indices in [0, {self.dim - 1}], got {list(np.atleast_1d(dims))}"
             )
-        return ConstrainedZonotope._trusted(self._G[idx], self._c[idx], self._A, self._b,
-                                            self._h, self.radius)
+        return self._same_factors(self._G[idx], self._c[idx])
 
     # ------------------------------------------------------------------ LP queries
     def _lp(self) -> FactorPolytope:

@@ -1,0 +1,81 @@
+"""Benchmark: time per SMFDO ``update`` on the paper example (Li-Cong-Dong, eq. (25)).
+
+Windowed mode for delta in {3, 10, 20} (steady state: steps after the window has
+filled), and exact mode around k = 100 (the cost of exact mode grows with k).
+Also records the mean worst-case radius, so speed and accuracy are read together.
+Writes medians to ``benchmarks/results/smfdo.json``.
+
+Run: ``python benchmarks/smfdo.py [--steps N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+import setobs as so
+
+
+def data(N: int, seed: int = 0):
+    sys = so.examples.chang2006()
+    rng = np.random.default_rng(seed)
+    x, d = np.array([0.0, 1.0, 0.0]), np.zeros(2)
+    Y, D = [], []
+    for _ in range(N):
+        Y.append(sys.Xi @ x)
+        D.append(d.copy())
+        x = sys.Phi @ x + sys.G @ d
+        d = d + rng.uniform(-1, 1, 2)  # eq. (27): |dd_i| <= 1
+    return sys, np.array(Y), np.array(D)
+
+
+def time_updates(obs, Y, first: int):
+    times, radii = [], []
+    for k, y in enumerate(Y):
+        t0 = time.perf_counter()
+        st = obs.update(y)
+        dt = time.perf_counter() - t0
+        if k >= first:
+            times.append(dt)
+            radii.append(st.radius)
+    return times, radii
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "smfdo.json"))
+    args = ap.parse_args()
+    sys, Y, _ = data(max(args.steps, 110))
+    rows = []
+    for delta in (3, 10, 20):
+        obs = so.SMFDO(sys, window=delta)
+        times, radii = time_updates(obs, Y[: args.steps], first=delta + 5)
+        rows.append({"mode": f"window={delta}", "median_update_ms": 1e3 * statistics.median(times),
+                     "p90_update_ms": 1e3 * float(np.percentile(times, 90)),
+                     "steps_timed": len(times), "mean_radius_inf": float(np.mean(radii))})
+    obs = so.SMFDO(sys, window=None)
+    times, radii = time_updates(obs, Y[:110], first=95)  # k = 95..109, around k = 100
+    rows.append({"mode": "exact (k=95..109)", "median_update_ms": 1e3 * statistics.median(times),
+                 "p90_update_ms": 1e3 * float(np.percentile(times, 90)),
+                 "steps_timed": len(times), "mean_radius_inf": float(np.mean(radii))})
+    for r in rows:
+        print(f"{r['mode']:>20}: median {r['median_update_ms']:7.2f} ms/update, "
+              f"p90 {r['p90_update_ms']:7.2f} ms, mean inf-norm radius {r['mean_radius_inf']:.3f}")
+    out = {"benchmark": "smfdo_update", "system": "chang2006 (Li-Cong-Dong eq. 25)",
+           "increment": "|dd_i| <= 1", "setobs": so.__version__,
+           "python": platform.python_version(), "machine": platform.machine(),
+           "cpus": os.cpu_count(), "results": rows}
+    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
