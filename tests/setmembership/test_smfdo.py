@@ -263,3 +263,38 @@ def test_inconsistent_data_raises_or_resets():
     assert "k=20" in str(rec[0].message) and len(rec) <= 3
     assert np.isfinite(res.lo[25:]).all()
     assert ((D[25:] >= res.lo[25:]) & (D[25:] <= res.hi[25:])).all()
+
+
+def test_time_varying_increment_set_matches_history_lp():
+    """A callable increment set: quiet (|dd| <= 0.05) for k < 10, then |dd| <= 1."""
+    rng = np.random.default_rng(4)
+    sys = so.examples.chang2006()
+    steps = np.where(np.arange(20) < 10, 0.05, 1.0)
+    x, d, Y, D = np.zeros(3), np.array([0.5, -0.5]), [], []
+    for k in range(20):
+        Y.append(sys.Xi @ x)
+        D.append(d.copy())
+        x = sys.Phi @ x + sys.G @ d
+        d = d + rng.uniform(-steps[k], steps[k], 2)
+    Y, D = np.array(Y), np.array(D)
+    sets = {r: ConstrainedZonotope.from_box([-r, -r], [r, r]) for r in (0.05, 1.0)}
+    X0 = box(-np.ones(3), np.ones(3))
+    res = so.SMFDO(sys, window=None, increment_set=lambda k: sets[float(steps[k])],
+                   initial_state_set=X0).run(Y)
+    assert res.violations(D) == 0
+    # The time-varying set is used: tighter than the constant |dd| <= 1 filter while quiet.
+    const = so.SMFDO(sys, window=None, increment_set=[1.0, 1.0], initial_state_set=X0).run(Y)
+    assert np.all(res.radius[5:] <= const.radius[5:] + 1e-9)  # tighter while quiet
+    assert res.radius[9] < 0.5 * const.radius[9]
+
+
+def test_increment_set_validation():
+    sys = so.examples.chang2006()
+    with pytest.raises(DimensionError, match="increment_set must be bounded"):
+        so.SMFDO(sys, increment_set=ConstrainedZonotope.full_space(2))
+    with pytest.raises(DimensionError, match="increment_set must have dimension 2"):
+        so.SMFDO(sys, increment_set=ConstrainedZonotope.from_box([0], [1]))
+    with pytest.raises(DimensionError, match="nonnegative"):
+        so.SMFDO(sys, increment_set=[-1.0, 1.0])
+    with pytest.raises(DimensionError, match="initial_state_set must have dimension 3"):
+        so.SMFDO(sys, initial_state_set=ConstrainedZonotope.full_space(2))
