@@ -1,6 +1,6 @@
 """setobs: set-membership geometry and disturbance observers for linear discrete-time systems."""
 
-from . import analysis, examples, geometry, setmembership, tolerances
+from . import analysis, compare, examples, geometry, observers, setmembership, tolerances
 from .exceptions import (
     DimensionError,
     EmptySetError,
@@ -27,8 +27,10 @@ __all__ = [
     "UnboundedSetError",
     "__version__",
     "analysis",
+    "compare",
     "examples",
     "geometry",
+    "observers",
     "setmembership",
     "tolerances",
 ]

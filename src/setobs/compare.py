@@ -1,0 +1,111 @@
+"""Worst-case error of point estimates over the set of disturbances consistent with the data."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["ComparisonTable", "compare", "worst_case_error"]
+
+
+def worst_case_error(estimates: ArrayLike, lo: ArrayLike, hi: ArrayLike) -> NDArray[np.float64]:
+    """``max_{d in [lo, hi]} ||d_hat - d||_inf`` per step (exact over the box).
+
+    For the interval hull ``[lo, hi]`` of the consistent set this equals the
+    worst-case infinity-norm error over the consistent set itself (each
+    coordinate's extremes are attained in the set). ``inf`` while unbounded;
+    NaN estimates give NaN.
+
+    Parameters
+    ----------
+    estimates, lo, hi : array_like, shape (N, q)
+    """
+    E = np.atleast_2d(np.asarray(estimates, float))  # NaN allowed: "no estimate yet"
+    L = np.atleast_2d(np.asarray(lo, float))
+    H = np.atleast_2d(np.asarray(hi, float))
+    if not (E.shape == L.shape == H.shape):
+        raise ValueError(f"shapes differ: estimates {E.shape}, lo {L.shape}, hi {H.shape}")
+    with np.errstate(invalid="ignore"):
+        per = np.maximum(np.abs(E - L), np.abs(H - E))
+    return per.max(axis=1)
+
+
+@dataclass(frozen=True)
+class ComparisonTable:
+    """Rows ``(observer, k, error, optimal, ratio, outside)`` and per-observer summaries.
+
+    ``error``: worst-case infinity-norm error of the observer's estimate over
+    the consistent set; ``optimal``: that of the worst-case-optimal estimate (the
+    interval-hull centre, the SMFDO radius); ``ratio = error / optimal`` (>= 1);
+    ``outside``: the estimate lies outside the consistent set's interval hull.
+    """
+
+    observers: list[str]
+    error: dict[str, NDArray[np.float64]]
+    optimal: NDArray[np.float64]
+    outside: dict[str, NDArray[np.bool_]]
+
+    @property
+    def rows(self) -> list[dict]:
+        """One row per observer and step (a tidy table)."""
+        out = []
+        for name in self.observers:
+            for k, (e, o, f) in enumerate(zip(self.error[name], self.optimal, self.outside[name],
+                                              strict=True)):
+                ratio = float(e / o) if (o > 0 and np.isfinite(o) and np.isfinite(e)) else np.nan
+                out.append({"observer": name, "k": k, "error": float(e), "optimal": float(o),
+                            "ratio": ratio, "outside": bool(f)})
+        return out
+
+    def summary(self, start: int = 0) -> list[dict]:
+        """Per observer, over steps ``k >= start`` where everything is finite."""
+        ok = np.isfinite(self.optimal) & (np.arange(self.optimal.size) >= start)
+        out = []
+        for name in self.observers:
+            e = self.error[name]
+            m = ok & np.isfinite(e)
+            ratio = e[m] / np.where(self.optimal[m] > 0, self.optimal[m], np.nan)
+            out.append({
+                "observer": name, "steps": int(m.sum()),
+                "mean_error": float(np.mean(e[m])) if m.any() else np.nan,
+                "max_error": float(np.max(e[m])) if m.any() else np.nan,
+                "mean_optimal": float(np.mean(self.optimal[m])) if m.any() else np.nan,
+                "mean_ratio": float(np.nanmean(ratio)) if m.any() else np.nan,
+                "fraction_outside": float(self.outside[name][m].mean()) if m.any() else np.nan,
+            })
+        return out
+
+    def to_markdown(self, start: int = 0) -> str:
+        """The summary as a Markdown table."""
+        lines = ["| observer | steps | mean worst-case error | optimal | mean ratio | outside |",
+                 "|---|---|---|---|---|---|"]
+        for s in self.summary(start):
+            lines.append(f"| {s['observer']} | {s['steps']} | {s['mean_error']:.4g} | "
+                         f"{s['mean_optimal']:.4g} | {s['mean_ratio']:.3g} | "
+                         f"{s['fraction_outside']:.2%} |")
+        return "\n".join(lines)
+
+
+def compare(estimates: Mapping[str, ArrayLike], reference) -> ComparisonTable:
+    """Score point estimates against the consistent set of an SMFDO run.
+
+    Parameters
+    ----------
+    estimates : mapping name -> array (N, q)
+        Point estimates (e.g. ``observer.run(Y).d_hat``).
+    reference : SMFDOResult
+        SMFDO result on the same data (exact mode gives the true consistent
+        set; windowed mode an outer approximation, so scores are upper bounds).
+    """
+    lo, hi = np.asarray(reference.lo), np.asarray(reference.hi)
+    optimal = np.asarray(reference.radius, float)
+    err, out = {}, {}
+    for name, est in estimates.items():
+        E = np.asarray(est, float)
+        err[name] = worst_case_error(E, lo, hi)
+        with np.errstate(invalid="ignore"):
+            out[name] = np.any((E < lo) | (E > hi), axis=1)
+    return ComparisonTable(list(estimates), err, optimal, out)

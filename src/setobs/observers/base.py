@@ -1,0 +1,162 @@
+"""The common interface of point observers."""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import as_matrix, as_vector
+from ..exceptions import DimensionError, SetobsError
+from ..systems import LinearSystem
+
+__all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
+
+
+class DesignError(SetobsError, ValueError):
+    """The observer design's existence condition fails for this system.
+
+    Attributes
+    ----------
+    condition : str
+        The condition that failed.
+    """
+
+    def __init__(self, message: str, condition: str = "") -> None:
+        super().__init__(message)
+        self.condition = condition
+
+
+@dataclass(frozen=True)
+class ObserverResult:
+    """Output of :meth:`PointObserver.run`.
+
+    Attributes
+    ----------
+    d_hat : ndarray, shape (N, q)
+        Disturbance estimates (NaN where not yet available, e.g. during a delay).
+    x_hat : ndarray, shape (N, n) or None
+        State estimates, for observers that have one.
+    delay : int
+        Steps by which ``d_hat[k]`` lags ``d[k]`` by design (0 for causal estimates).
+    gains : dict
+        The gains used.
+    """
+
+    d_hat: NDArray[np.float64]
+    x_hat: NDArray[np.float64] | None
+    delay: int
+    gains: dict = field(default_factory=dict)
+
+
+class PointObserver:
+    """Base class: ``reset()``, ``step(y, u)`` and ``run(Y, U)`` on a :class:`LinearSystem`.
+
+    ``step(y_k, u_k)`` consumes the measurement at step ``k`` and the input
+    applied at step ``k`` (which affects ``x_(k+1)``), and returns the current
+    disturbance estimate (NaN while unavailable).
+    """
+
+    name = "observer"
+
+    def __init__(self, sys: LinearSystem) -> None:
+        if not isinstance(sys, LinearSystem):
+            raise TypeError(f"sys must be a LinearSystem, got {type(sys).__name__}")
+        self.sys = sys
+        self.delay = 0
+
+    @property
+    def gains(self) -> dict[str, Any]:
+        """The gains used (for reports)."""
+        return {}
+
+    def reset(self) -> None:  # pragma: no cover - overridden
+        """Restart from the initial estimate."""
+        raise NotImplementedError
+
+    def _check(self, y: ArrayLike, u: ArrayLike | None):
+        yv = as_vector("y", y, size=self.sys.l)
+        if self.sys.p:
+            uv = np.zeros(self.sys.p) if u is None else as_vector("u", u, size=self.sys.p)
+        else:
+            uv = np.zeros(0)
+        return yv, uv
+
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Process ``y_k`` (and ``u_k``); return the disturbance estimate ``d_hat_k``."""
+        raise NotImplementedError  # pragma: no cover
+
+    def state_estimate(self) -> NDArray[np.float64] | None:
+        """Current state estimate (``None`` if the observer has none)."""
+        return None
+
+    def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> ObserverResult:
+        """Run over a record from a fresh start (calls :meth:`reset` first)."""
+        Ya = as_matrix("Y", Y, cols=self.sys.l)
+        N = Ya.shape[0]
+        Ua = None
+        if U is not None:
+            Ua = as_matrix("U", U, cols=self.sys.p)
+            if Ua.shape[0] < N:
+                raise DimensionError(f"U must have at least {N} rows, got {Ua.shape[0]}")
+        self.reset()
+        D = np.empty((N, self.sys.q))
+        X = None
+        for k in range(N):
+            D[k] = self.step(Ya[k], None if Ua is None else Ua[k])
+            xh = self.state_estimate()
+            if xh is not None:
+                if X is None:
+                    X = np.full((N, self.sys.n), np.nan)
+                X[k] = xh
+        return ObserverResult(D, X, self.delay, self.gains)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.sys!r})"
+
+
+class StateSpaceObserver(PointObserver):
+    """A linear observer ``xi+ = F xi + K y + M u``, ``d_hat = H xi`` (+ optional delay line).
+
+    Subclasses set ``F, K, M, H`` (and ``Hx`` for the state estimate), the
+    initial state ``xi0`` and an optional per-channel output delay.
+    """
+
+    def _init_state_space(self, F, K, M, H, Hx=None, xi0=None, channel_delays=None,
+                          output_map=None) -> None:
+        self.F, self.K, self.M, self.H = F, K, M, H
+        self.Hx = Hx
+        self.xi0 = np.zeros(F.shape[0]) if xi0 is None else np.asarray(xi0, float)
+        self.channel_delays = channel_delays
+        self.output_map = output_map
+        self.reset()
+
+    def reset(self) -> None:
+        """Restart from ``xi0``."""
+        self.xi = self.xi0.copy()
+        self._last = None
+        if self.channel_delays is not None:
+            dmax = int(max(self.channel_delays))
+            self._buf: deque = deque(maxlen=dmax + 1)
+
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> NDArray[np.float64]:
+        yv, uv = self._check(y, u)
+        d = self.H @ self.xi  # the estimate at k uses data up to k-1 (as in the papers)
+        self._xk = self.xi.copy()
+        self.xi = self.F @ self.xi + self.K @ yv + (self.M @ uv if uv.size else 0.0)
+        if self.channel_delays is not None:
+            self._buf.append(d)
+            out = np.full(d.shape, np.nan)
+            for i, di in enumerate(self.channel_delays):
+                if len(self._buf) > di:
+                    out[i] = self._buf[-1 - di][i]
+            d = out
+        if self.output_map is not None:
+            d = self.output_map @ d
+        return d
+
+    def state_estimate(self) -> NDArray[np.float64] | None:
+        return None if self.Hx is None else self.Hx @ self._xk

@@ -1,0 +1,200 @@
+"""Model-based extended state observers (Chen-Gao-Lin): MB-ESO (16) and variant MB-ESO (20)-(22)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from math import comb, factorial
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import block_diag, lstsq
+
+from ..analysis import invariant_zeros, relative_degrees
+from ..systems import LinearSystem
+from .base import DesignError, StateSpaceObserver
+
+__all__ = ["MBESO", "VariantMBESO", "decoupled_gain", "mbeso_impulse_response"]
+
+
+def mbeso_impulse_response(k: int, r: int, omega: float) -> float:
+    """``h_i(k)`` of Chen-Gao-Lin eq. (54): response of ``f_i - f_hat_i`` to unit ``Delta f_i``."""
+    if k < 1:
+        return 0.0
+    if k <= r + 1:
+        return 1.0
+    total = 0.0
+    for i in range(1, r + 2):
+        prod = 1.0
+        for j in range(-i + 1, 0):
+            prod *= k + j
+        total += prod / factorial(i - 1) * (1 - omega) ** (i - 1) * omega ** (k - i)
+    return total
+
+
+def decoupled_gain(A: NDArray[np.float64], E: NDArray[np.float64], C: NDArray[np.float64],
+                   degrees: Sequence[int], V0: NDArray[np.float64],
+                   omegas: Sequence[float]) -> tuple[NDArray[np.float64], float]:
+    """Gain ``L`` that decouples the MB-ESO error into ``p`` blocks with eigenvalues ``omega_i``.
+
+    Chen-Gao-Lin construct ``L`` through the canonical forms (33)-(40) and (75):
+    after ``e3 = W e`` the closed loop is the block-diagonal observer companion
+    ``J`` of eq. (56) (block ``i`` of size ``r_i + 1``, characteristic polynomial
+    ``(z - omega_i)^(r_i+1)``), output ``i`` reads the first coordinate of block
+    ``i`` up to an output recombination ``R`` (eq. (38)), and ``Delta f`` enters
+    the last coordinate of block ``i`` through row ``i`` of ``V0`` (eq. (44)).
+    These conditions are *linear* in ``(W, K = W L, R)``:
+
+    ``W A - J W - K C = 0``, ``Cbar_J W = R C``, ``W E = E_J``,
+
+    so ``W``, ``K``, ``R`` are obtained from one least-squares solve (its
+    residual is returned; it is zero when the construction exists) and
+    ``L = W^-1 K``. The tests check the resulting error responses against
+    eq. (54) and the delays of Theorems 1-3.
+
+    Returns
+    -------
+    L : ndarray, shape (n + p, p)
+    residual : float
+        Relative residual of the linear conditions.
+    """
+    N, p = A.shape[0], C.shape[0]
+    blocks = []
+    CJ = np.zeros((p, N))
+    EJ = np.zeros((N, p))
+    off = 0
+    for i in range(p):
+        m = int(degrees[i]) + 1
+        w = float(omegas[i])
+        Jb = np.zeros((m, m))
+        Jb[:-1, 1:] = np.eye(m - 1)
+        Jb[:, 0] = [(-1) ** (k + 2) * comb(m, k + 1) * w ** (k + 1) for k in range(m)]  # eq. (56)
+        blocks.append(Jb)
+        CJ[i, off] = 1.0
+        EJ[off + m - 1, :] = V0[i]
+        off += m
+    if off != N:
+        raise DesignError(f"sum(r_i + 1) = {off} differs from n + p = {N}: the augmented system "
+                          "does not have the structure of Lemma 3", "Assumption 1")
+    J = block_diag(*blocks)
+    eye = np.eye(N)
+    M = np.vstack([
+        np.hstack([np.kron(eye, A.T) - np.kron(J, eye), -np.kron(eye, C.T),
+                   np.zeros((N * N, p * p))]),
+        np.hstack([np.kron(CJ, eye), np.zeros((p * N, N * p)), -np.kron(np.eye(p), C.T)]),
+        np.hstack([np.kron(eye, E.T), np.zeros((N * p, N * p + p * p))]),
+    ])
+    rhs = np.concatenate([np.zeros(N * N + p * N), EJ.reshape(-1)])
+    sol = lstsq(M, rhs)[0]
+    residual = float(np.linalg.norm(M @ sol - rhs) / max(np.linalg.norm(rhs), 1e-300))
+    W = sol[: N * N].reshape(N, N)
+    K = sol[N * N : N * N + N * p].reshape(N, p)
+    return np.linalg.solve(W, K), residual
+
+
+def _omegas(omega: float | Sequence[float], p: int) -> list[float]:
+    om = [float(omega)] * p if np.ndim(omega) == 0 else [float(w) for w in omega]  # type: ignore[arg-type]
+    if len(om) != p:
+        raise DesignError(f"omega must be a scalar or have {p} entries, got {len(om)}")
+    if any(not (0.0 <= w < 1.0) for w in om):
+        raise DesignError(f"omega must lie in [0, 1) (discrete-time eigenvalues), got {om}")
+    return om
+
+
+def _check_assumption1(sys: LinearSystem, name: str):
+    if sys.q != sys.l:
+        raise DesignError(f"{name} needs as many disturbances as outputs (q = {sys.q}, "
+                          f"l = {sys.l})", "q = l")
+    z = invariant_zeros(sys)
+    if not z.full_normal_rank or z.zeros.size:
+        zs = ", ".join(f"{v.real:.6g}" if abs(v.imag) < 1e-12 else f"{v:.6g}" for v in z.zeros)
+        raise DesignError(f"{name} requires Assumption 1 (no invariant zeros); zeros: "
+                          f"{zs or 'pencil not of full normal rank'}", "Assumption 1")
+    return relative_degrees(sys)
+
+
+class MBESO(StateSpaceObserver):
+    """MB-ESO of Chen-Gao-Lin, eq. (16): Luenberger observer of the augmented system (14).
+
+    ``X_hat(k+1) = A X_hat(k) + B u(k) + L (y(k) - C X_hat(k))`` with the
+    decoupling gain of :func:`decoupled_gain` (eigenvalues of subsystem ``i`` at
+    ``omega_i``). ``d_hat(k)`` is the ``f`` part of ``X_hat(k)``.
+
+    Parameters
+    ----------
+    sys : LinearSystem
+    omega : float or sequence of float
+        Observer eigenvalues per subsystem, in ``[0, 1)`` (0: deadbeat).
+
+    Raises
+    ------
+    DesignError
+        If ``q != l``, Assumption 1 fails, or ``V0`` is not diagonal (Theorem 2:
+        use :class:`VariantMBESO`).
+
+    Notes
+    -----
+    With ``omega = 0``: ``f_hat_i(k) = f_i(k - r_i - 1)`` (Theorem 2); in general
+    ``f - f_hat = diag(h_i) * Delta f`` with ``h_i`` of eq. (54) (Theorem 4).
+    """
+
+    name = "MB-ESO"
+
+    def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
+                 x0: ArrayLike | None = None, d0: ArrayLike | None = None) -> None:
+        super().__init__(sys)
+        rd = _check_assumption1(sys, "MB-ESO")
+        if not rd.diagonal:
+            raise DesignError("MB-ESO (16) needs a diagonal V0 (Theorem 2); V0 = "
+                              f"{np.round(rd.V0, 6).tolist()}: use VariantMBESO", "V0 diagonal")
+        self._build(sys.G, rd.degrees, rd.V0, _omegas(omega, sys.q), x0, d0)
+
+    def _build(self, Gdist, degrees, V0, omegas, x0, d0, channel_delays=None, output_map=None):
+        sys = self.sys
+        n, q = sys.n, sys.q
+        A = np.block([[sys.Phi, Gdist], [np.zeros((q, n)), np.eye(q)]])
+        E = np.vstack([np.zeros((n, q)), np.eye(q)])
+        C = np.hstack([sys.Xi, np.zeros((q, q))])
+        B = np.vstack([sys.Gamma, np.zeros((q, sys.p))])
+        L, res = decoupled_gain(A, E, C, degrees, V0, omegas)
+        if res > 1e-8:
+            raise DesignError(f"decoupling gain construction failed (residual {res:.2e})",
+                              "decoupling")
+        self.L, self.omegas, self.degrees, self.V0 = L, omegas, tuple(degrees), V0
+        self.residual = res
+        xi0 = np.concatenate([np.zeros(n) if x0 is None else np.asarray(x0, float),
+                              np.zeros(q) if d0 is None else np.asarray(d0, float)])
+        self._init_state_space(A - L @ C, L, B, np.hstack([np.zeros((q, n)), np.eye(q)]),
+                               np.hstack([np.eye(n), np.zeros((n, q))]), xi0, channel_delays,
+                               output_map)
+
+    @property
+    def gains(self) -> dict:
+        return {"L": self.L, "omega": self.omegas}
+
+
+class VariantMBESO(MBESO):
+    """Variant MB-ESO, Chen-Gao-Lin eqs. (18)-(22), for a non-diagonal ``V0``.
+
+    The disturbance is rescaled, ``f_new = V0 f`` (so ``V0_new = I``), the MB-ESO
+    (20) estimates ``f_new``, channel ``i`` is delayed by ``r_max - r_i`` (21) so
+    that all channels share the delay ``r_max + 1``, and ``f_hat = V0^-1 f_new_hat``
+    (22). With ``omega = 0``: ``f_hat(k) = f(k - r_max - 1)`` (Theorem 3).
+    ``d_hat`` is NaN until every channel's delay line is filled.
+    """
+
+    name = "variant MB-ESO"
+
+    def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
+                 x0: ArrayLike | None = None, d0: ArrayLike | None = None) -> None:
+        StateSpaceObserver.__init__(self, sys)
+        rd = _check_assumption1(sys, "variant MB-ESO")
+        V0inv = np.linalg.inv(rd.V0)
+        r = rd.degrees
+        rmax = max(r)  # type: ignore[type-var]
+        delays = [rmax - ri for ri in r]  # type: ignore[operator]
+        d0n = None if d0 is None else rd.V0 @ np.asarray(d0, float)
+        self._build(sys.G @ V0inv, r, np.eye(sys.q), _omegas(omega, sys.q), x0, d0n,
+                    channel_delays=delays, output_map=V0inv)
+        self.V0 = rd.V0
+        self.channel_delays = delays
+        self.delay = int(rmax) + 1 if all(w == 0 for w in self.omegas) else 0

@@ -1,0 +1,258 @@
+"""Point observers: the papers' claims, one interface, and the comparison with the SMFDO."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import place_poles
+
+import setobs as so
+from setobs.observers import (
+    MBESO,
+    PIO,
+    DesignError,
+    HigherOrderObserver,
+    ModularObserver,
+    VariantMBESO,
+    design_higher_order,
+    design_pio,
+    mbeso_impulse_response,
+)
+
+FW_POLES = [0.1, 0.2, 0.3 + 0.5j, 0.3 - 0.5j, 0.4]
+
+
+def simulate(sys, F, x0=None, U=None):
+    x = np.zeros(sys.n) if x0 is None else np.asarray(x0, float)
+    Y = []
+    for k in range(F.shape[0]):
+        Y.append(sys.Xi @ x)
+        u = U[k] if U is not None else np.zeros(sys.p)
+        x = sys.Phi @ x + sys.Gamma @ u + sys.G @ F[k]
+    return np.array(Y)
+
+
+def h_closed_form(k, r, w):
+    """Eq. (54), written out independently of the library's implementation."""
+    from math import factorial
+
+    if 1 <= k <= r + 1:
+        return 1.0
+    return sum(np.prod([k + j for j in range(-i + 1, 0)]) / factorial(i - 1)
+               * (1 - w) ** (i - 1) * w ** (k - i) for i in range(1, r + 2))
+
+
+def predicted_error(F, f_hat0, degrees, omegas, lag_shift=None):
+    """sum_j h(j) Delta f(k - j), with Delta f(-1) = f(0) - f_hat(0) (initial error)."""
+    N, p = F.shape
+    dF = np.vstack([F[:1] - f_hat0, np.diff(F, axis=0)])  # dF[m] = Delta f(m - 1)
+    out = np.zeros((N, p))
+    for i in range(p):
+        h = [h_closed_form(j, degrees[i], omegas[i]) for j in range(N + 1)]
+        for k in range(N):
+            out[k, i] = sum(h[j] * dF[k - j + 1, i] for j in range(1, k + 2))
+    return out
+
+
+# ------------------------------------------------------------------ MB-ESO (Chen-Gao-Lin)
+def test_theorem2_example4_deadbeat_mbeso():
+    rng = np.random.default_rng(0)
+    sys = so.examples.chen_gao_lin_example4()
+    F = rng.normal(size=(60, 3))
+    res = MBESO(sys, omega=0.0).run(simulate(sys, F))
+    for i, r in enumerate((2, 4, 3)):
+        k = np.arange(r + 2, 60)
+        np.testing.assert_allclose(res.d_hat[k, i], F[k - r - 1, i], atol=1e-8)
+
+
+def test_theorem3_example1_variant_mbeso_delay_5():
+    rng = np.random.default_rng(1)
+    sys = so.examples.chen_gao_lin_example1()
+    F = rng.normal(loc=[1, 2, 3], scale=np.sqrt([0.1, 0.2, 0.3]), size=(80, 3))
+    obs = VariantMBESO(sys, omega=0.0)
+    res = obs.run(simulate(sys, F))
+    assert obs.delay == 5 and res.delay == 5
+    k = np.arange(8, 80)
+    np.testing.assert_allclose(res.d_hat[k], F[k - 5], atol=1e-8)
+    assert np.isnan(res.d_hat[0]).any()  # delay line not yet filled
+
+
+@pytest.mark.parametrize("omega", [0.2, 0.4, 0.6])
+def test_theorem4_error_is_the_convolution_of_eq54(omega):
+    rng = np.random.default_rng(2)
+    sys = so.examples.chen_gao_lin_example4()
+    F = np.cumsum(rng.normal(size=(50, 3)), axis=0)
+    res = MBESO(sys, omega=omega).run(simulate(sys, F))
+    pred = predicted_error(F, np.zeros(3), (2, 4, 3), [omega] * 3)
+    np.testing.assert_allclose(F - res.d_hat, pred, atol=1e-9)
+
+
+def test_theorem4_monotonicity_from_the_observer_itself():
+    """Impulse responses simulated from the designed observers: decreasing in k (k > r+1)
+    and increasing in omega, and equal to eq. (54)."""
+    sys = so.examples.chen_gao_lin_example4()
+    a = sys.augmented()
+    resp = {}
+    for w in (0.2, 0.4, 0.6):
+        obs = MBESO(sys, omega=w)
+        Fcl = a.A - obs.L @ a.C
+        e = a.E[:, 1].copy()  # Delta f_2 (r = 4)
+        h = []
+        for _ in range(30):
+            h.append(e[-3 + 1])
+            e = Fcl @ e
+        resp[w] = np.array(h)
+        np.testing.assert_allclose(resp[w], [mbeso_impulse_response(k, 4, w)
+                                             for k in range(1, 31)], atol=1e-9)
+        assert np.all(np.diff(resp[w][5:]) < 0)
+    assert np.all(resp[0.2][5:] < resp[0.4][5:]) and np.all(resp[0.4][5:] < resp[0.6][5:])
+
+
+def test_theorem5_variant_error_eq70():
+    rng = np.random.default_rng(3)
+    sys = so.examples.chen_gao_lin_example1()
+    V0 = so.analysis.relative_degrees(sys).V0
+    F = np.cumsum(rng.normal(size=(50, 3)), axis=0)
+    w = 0.3
+    res = VariantMBESO(sys, omega=w).run(simulate(sys, F))
+    # f_new = V0 f; channel i delayed by r_max - r_i; f_hat = V0^-1 f_new_hat (eqs. 21-22).
+    Fn = F @ V0.T
+    pred_new = predicted_error(Fn, np.zeros(3), (2, 4, 3), [w] * 3)
+    fnew_hat = Fn - pred_new
+    delayed = np.full_like(fnew_hat, np.nan)
+    for i, r in enumerate((2, 4, 3)):
+        s = 4 - r
+        delayed[s:, i] = fnew_hat[: 50 - s, i] if s else fnew_hat[:, i]
+    pred = delayed @ np.linalg.inv(V0).T
+    k = np.arange(4, 50)
+    np.testing.assert_allclose(res.d_hat[k], pred[k], atol=1e-8)
+
+
+def test_mbeso_design_errors_name_the_condition():
+    with pytest.raises(DesignError, match="Assumption 1") as info:
+        MBESO(so.examples.chang2006())
+    assert info.value.condition == "Assumption 1"
+    with pytest.raises(DesignError, match="diagonal V0") as info:
+        MBESO(so.examples.chen_gao_lin_example1())
+    assert info.value.condition == "V0 diagonal"
+    with pytest.raises(DesignError, match=r"omega must lie in \[0, 1\)"):
+        MBESO(so.examples.chen_gao_lin_example4(), omega=1.2)
+
+
+def test_mbeso_on_the_sea_models():
+    """SEA (Example 2): MB-ESO with deadbeat eigenvalues recovers step disturbances."""
+    for ts in ("20ms", "1ms"):
+        sys = so.examples.chen_gao_lin_example2(ts)
+        F = np.zeros((80, 2))
+        F[10:, 0], F[15:, 1] = 1.5, 2.0
+        U = np.ones((80, 1))
+        res = MBESO(sys, omega=0.0).run(simulate(sys, F, U=U), U)
+        np.testing.assert_allclose(res.d_hat[40:], F[40:], atol=1e-6)
+
+
+# ------------------------------------------------------------------ Fu-Wang / Chang
+def test_designed_gains_place_exactly_the_stated_poles():
+    sys = so.examples.chang2006()
+    g = design_pio(sys, FW_POLES)
+    poles = so.analysis.pio_error_poles(sys, g["P"], g["L"]).poles
+    np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(FW_POLES), atol=1e-8)
+    ho = design_higher_order(sys, [*FW_POLES, 0.5, 0.45])
+    ep = so.analysis.higher_order_error_poles(sys.Phi, sys.Xi, ho["P0"], ho["L0"], ho["L1"],
+                                              E=sys.G)
+    np.testing.assert_allclose(np.sort_complex(ep.poles),
+                               np.sort_complex([*FW_POLES, 0.5, 0.45]), atol=1e-8)
+
+
+def test_printed_baseline_is_unstable_and_diverges():
+    sys = so.examples.chang2006()
+    base = PIO.chang2006_baseline(sys)
+    assert not base.error_poles.stable
+    F = np.tile([0.5, 2.0], (60, 1))
+    res = base.run(simulate(sys, F, x0=[0, 1, 0]))
+    assert np.abs(res.d_hat[-1] - F[-1]).max() > 1e3  # the pole at -1.37 blows up
+    good = PIO(sys).run(simulate(sys, F, x0=[0, 1, 0]))
+    np.testing.assert_allclose(good.d_hat[-1], F[-1], atol=1e-6)
+
+
+def test_higher_order_tracks_ramps_pio_does_not():
+    """A ramp disturbance: the double-integrator model of the HO observer tracks it
+    with zero steady-state error; the PIO lags with a constant error."""
+    sys = so.examples.chang2006()
+    F = np.outer(np.arange(200) * 0.01, [1.0, -0.5])
+    Y = simulate(sys, F)
+    ho = HigherOrderObserver(sys).run(Y)
+    pio = PIO(sys).run(Y)
+    assert np.abs(ho.d_hat[-1] - F[-1]).max() < 1e-6
+    assert np.abs(pio.d_hat[-1] - F[-1]).max() > 1e-3
+
+
+# ------------------------------------------------------------------ modular observer
+def test_modular_equals_simultaneous_design_with_same_eigenvalues():
+    sys = so.examples.chen_gao_lin_example5((0.3, 0.7))  # single output: gains are unique
+    mod = ModularObserver(sys, w_poles=[0.6])
+    eig = np.concatenate([np.linalg.eigvals(sys.Phi - mod.L0 @ sys.Xi), [0.6]])
+    a = sys.augmented()
+    K = place_poles(a.A.T, a.C.T, eig).gain_matrix.T
+    # The modular observer is the augmented Luenberger observer with gain [L0 + V Lw; Lw].
+    np.testing.assert_allclose(K, np.vstack([mod.L0 + mod.V @ mod.Lw, mod.Lw]), atol=1e-7)
+    rng = np.random.default_rng(4)
+    F = np.cumsum(rng.normal(size=(60, 1)), axis=0) * 0.1
+    Y = simulate(sys, F)
+    simultaneous = PIO(sys, K[:4], K[4:]).run(Y)
+    np.testing.assert_allclose(mod.run(Y).d_hat, simultaneous.d_hat, atol=1e-8)
+
+
+def test_modular_error_is_block_triangular():
+    sys = so.examples.chang2006()
+    mod = ModularObserver(sys)
+    V = mod.V
+    # Sylvester (48) with S = I, Q = 0: V - (Phi - L0 Xi) V = G.
+    np.testing.assert_allclose(V - (sys.Phi - mod.L0 @ sys.Xi) @ V, sys.G, atol=1e-12)
+    F = np.tile([1.0, -1.0], (400, 1))
+    res = mod.run(simulate(sys, F, x0=[0.5, 0.0, -0.5]))
+    np.testing.assert_allclose(res.d_hat[-1], F[-1], atol=1e-6)
+    assert res.x_hat.shape == (400, 3)
+
+
+# ------------------------------------------------------------------ one interface + compare
+def test_every_observer_runs_through_one_interface():
+    cases = [
+        (MBESO, so.examples.chen_gao_lin_example4()),
+        (VariantMBESO, so.examples.chen_gao_lin_example1()),
+        (PIO, so.examples.chang2006()),
+        (HigherOrderObserver, so.examples.chang2006()),
+        (ModularObserver, so.examples.chang2006()),
+    ]
+    for cls, sys in cases:
+        obs = cls(sys)
+        Y = np.zeros((10, sys.l))
+        res = obs.run(Y)
+        assert res.d_hat.shape == (10, sys.q)
+        assert isinstance(res.gains, dict) and res.gains
+        obs.reset()
+        d = obs.step(Y[0])
+        assert d.shape == (sys.q,)
+        with pytest.raises(so.DimensionError, match="y must have length"):
+            obs.step(np.zeros(sys.l + 1))
+
+
+def test_compare_every_observer_is_at_least_the_optimal_radius():
+    rng = np.random.default_rng(6)
+    sys = so.examples.chang2006()
+    N = 60
+    F = np.cumsum(rng.uniform(-1, 1, size=(N, 2)), axis=0)
+    Y = simulate(sys, F, x0=[0.2, -0.1, 0.3])
+    X0 = so.ConstrainedZonotope.from_box(-np.ones(3), np.ones(3))
+    ref = so.SMFDO(sys, window=None, initial_state_set=X0).run(Y)
+    est = {"PIO": PIO(sys).run(Y).d_hat, "HO": HigherOrderObserver(sys).run(Y).d_hat,
+           "modular": ModularObserver(sys).run(Y).d_hat, "SMFDO": ref.estimate}
+    table = so.compare.compare(est, ref)
+    fin = np.isfinite(ref.radius)
+    for name in ("PIO", "HO", "modular"):
+        assert np.all(table.error[name][fin] >= ref.radius[fin] - 1e-9)
+    np.testing.assert_allclose(table.error["SMFDO"][fin], ref.radius[fin], atol=1e-9)
+    summ = {s["observer"]: s for s in table.summary(start=5)}
+    assert summ["SMFDO"]["mean_ratio"] == pytest.approx(1.0)
+    assert summ["PIO"]["mean_ratio"] > 1.0
+    assert "| PIO |" in table.to_markdown(start=5)
+    assert len(table.rows) == 4 * N
