@@ -256,3 +256,33 @@ def test_compare_every_observer_is_at_least_the_optimal_radius():
     assert summ["PIO"]["mean_ratio"] > 1.0
     assert "| PIO |" in table.to_markdown(start=5)
     assert len(table.rows) == 4 * N
+
+
+# ------------------------------------------------------------------ delayed UIO
+def test_delayed_uio_equals_variant_mbeso_on_example1():
+    """Chen-Gao-Lin Theorems 1 and 3: tau = r_max + 1 = 5 and identical estimates."""
+    from setobs.observers import DelayedUIO
+
+    rng = np.random.default_rng(1)
+    sys = so.examples.chen_gao_lin_example1()
+    F = rng.normal(loc=[1, 2, 3], scale=np.sqrt([0.1, 0.2, 0.3]), size=(80, 3))
+    Y = simulate(sys, F)
+    uio = DelayedUIO(sys)
+    assert uio.tau == 5 and uio.delay == 5
+    res = uio.run(Y)
+    assert np.isnan(res.d_hat[:5]).all()
+    k = np.arange(20, 80)
+    np.testing.assert_allclose(res.d_hat[k], F[k - 5], atol=1e-8)
+    var = VariantMBESO(sys).run(Y)
+    np.testing.assert_allclose(res.d_hat[k], var.d_hat[k], atol=1e-8)
+    # With the paper's eigenvalues at 0.67 the error decays geometrically.
+    slow = DelayedUIO(sys, poles=0.67).run(Y)
+    assert np.abs(slow.d_hat[70:] - F[65:75]).max() < 1e-6
+
+
+def test_delayed_uio_refused_for_chang():
+    from setobs.observers import DelayedUIO
+
+    with pytest.raises(DesignError, match=r"1\.26095") as info:
+        DelayedUIO(so.examples.chang2006())
+    assert info.value.condition == "condition (b)"

@@ -11,12 +11,14 @@ from .luenberger import (
     design_pio,
 )
 from .mbeso import MBESO, VariantMBESO, decoupled_gain, mbeso_impulse_response
+from .uio import DelayedUIO
 
 __all__ = [
     "CHANG2006_PIO_GAINS",
     "FU_WANG_HO_GAINS",
     "MBESO",
     "PIO",
+    "DelayedUIO",
     "DesignError",
     "HigherOrderObserver",
     "ModularObserver",
