@@ -47,6 +47,8 @@ class ComparisonTable:
     error: dict[str, NDArray[np.float64]]
     optimal: NDArray[np.float64]
     outside: dict[str, NDArray[np.bool_]]
+    error_2: dict[str, NDArray[np.float64]] | None = None
+    optimal_2: NDArray[np.float64] | None = None
 
     @property
     def rows(self) -> list[dict]:
@@ -89,7 +91,8 @@ class ComparisonTable:
         return "\n".join(lines)
 
 
-def compare(estimates: Mapping[str, ArrayLike], reference) -> ComparisonTable:
+def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = False
+            ) -> ComparisonTable:
     """Score point estimates against the consistent set of an SMFDO run.
 
     Parameters
@@ -99,6 +102,11 @@ def compare(estimates: Mapping[str, ArrayLike], reference) -> ComparisonTable:
     reference : SMFDOResult
         SMFDO result on the same data (exact mode gives the true consistent
         set; windowed mode an outer approximation, so scores are upper bounds).
+    euclidean : bool
+        Also compute Euclidean worst-case errors ``max_v ||d_hat - v||_2`` over
+        the vertices ``v`` of the consistent set, and the optimal (Chebyshev)
+        radius. Needs the SMFDO run with ``keep_sets=True``; steps where the set
+        is unbounded give ``inf``.
     """
     lo, hi = np.asarray(reference.lo), np.asarray(reference.hi)
     optimal = np.asarray(reference.radius, float)
@@ -108,4 +116,23 @@ def compare(estimates: Mapping[str, ArrayLike], reference) -> ComparisonTable:
         err[name] = worst_case_error(E, lo, hi)
         with np.errstate(invalid="ignore"):
             out[name] = np.any((E < lo) | (E > hi), axis=1)
-    return ComparisonTable(list(estimates), err, optimal, out)
+    if not euclidean:
+        return ComparisonTable(list(estimates), err, optimal, out)
+    from .setmembership.estimates import chebyshev_center
+
+    steps = reference.steps
+    if any(s.disturbance_set is None for s in steps):
+        raise ValueError("euclidean=True needs the SMFDO run with keep_sets=True")
+    N = len(steps)
+    opt2 = np.full(N, np.inf)
+    err2 = {name: np.full(N, np.inf) for name in estimates}
+    for k, st in enumerate(steps):
+        if not np.all(np.isfinite(st.lo)) or not np.all(np.isfinite(st.hi)):
+            continue
+        V = st.disturbance_set.vertices()
+        opt2[k] = chebyshev_center(st.disturbance_set).radius
+        for name, est in estimates.items():
+            e = np.asarray(est, float)[k]
+            err2[name][k] = (np.linalg.norm(V - e, axis=1).max() if np.all(np.isfinite(e))
+                             else np.nan)
+    return ComparisonTable(list(estimates), err, optimal, out, err2, opt2)

@@ -286,3 +286,37 @@ def test_delayed_uio_refused_for_chang():
     with pytest.raises(DesignError, match=r"1\.26095") as info:
         DelayedUIO(so.examples.chang2006())
     assert info.value.condition == "condition (b)"
+
+
+def test_compare_euclidean_scores():
+    rng = np.random.default_rng(8)
+    sys = so.examples.chang2006()
+    F = np.cumsum(rng.uniform(-1, 1, size=(25, 2)), axis=0)
+    Y = simulate(sys, F, x0=[0.2, -0.1, 0.3])
+    X0 = so.ConstrainedZonotope.from_box(-np.ones(3), np.ones(3))
+    ref = so.SMFDO(sys, window=None, initial_state_set=X0, keep_sets=True).run(Y)
+    est = {"PIO": PIO(sys).run(Y).d_hat, "IH centre": ref.estimate}
+    t = so.compare.compare(est, ref, euclidean=True)
+    fin = np.isfinite(t.optimal_2)
+    assert fin.sum() > 15
+    for name in est:  # nothing beats the Chebyshev radius
+        assert np.all(t.error_2[name][fin] >= t.optimal_2[fin] - 1e-6)
+    # The interval-hull centre's Euclidean error is at most sqrt(q) times the optimum.
+    assert np.all(t.error_2["IH centre"][fin] <= np.sqrt(2) * t.optimal_2[fin] + 1e-6)
+    with pytest.raises(ValueError, match="keep_sets=True"):
+        so.compare.compare(est, so.SMFDO(sys, window=None, initial_state_set=X0).run(Y),
+                           euclidean=True)
+
+
+def test_vertices_of_many_generator_2d_sets_match_cdd():
+    """The LP polygon path (used for n_gen > 8 in 2-D) agrees with cdd enumeration."""
+    from setobs.geometry.polytope import _extreme_points, _factor_vertices
+
+    rng = np.random.default_rng(12)
+    for _ in range(3):
+        A = rng.normal(size=(2, 10))
+        Z = so.ConstrainedZonotope(rng.normal(size=(2, 10)), [0, 0], A,
+                                   A @ rng.uniform(-0.5, 0.5, 10))
+        V = Z.vertices()
+        ref = _extreme_points(_factor_vertices(Z) @ Z.G.T + Z.c)
+        assert {tuple(np.round(v, 6)) for v in V} == {tuple(np.round(v, 6)) for v in ref}

@@ -95,9 +95,12 @@ def _extreme_points(P: NDArray[np.float64]) -> NDArray[np.float64]:
 def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     """Vertices of a bounded constrained zonotope, one per row.
 
-    Enumerates the vertices of the factor polytope with cdd, maps them through
-    ``xi -> G xi + c`` and keeps the extreme points. Exponential in the number of
-    factors in the worst case: meant for small sets (tests, plots, exact checks).
+    In dimension 1 the vertices are the interval-hull ends; in dimension 2 they
+    come from the LP-based polygon construction
+    (:func:`setobs.geometry.plotting.polygon_2d`, polynomial in the number of
+    factors). Otherwise the vertices of the factor polytope are enumerated
+    with cdd, mapped through ``xi -> G xi + c`` and reduced to the extreme
+    points: exponential in the number of factors in the worst case.
 
     Raises
     ------
@@ -106,6 +109,16 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     EmptySetError
         If the set is empty.
     """
+    if Z.dim <= 2 and Z.n_gen > 8:
+        box = Z.interval_hull()
+        if not box.is_bounded:
+            raise UnboundedSetError("vertex enumeration needs a bounded set; this one is "
+                                    "unbounded")
+        if Z.dim == 1:
+            return np.unique(np.array([[box.lo[0]], [box.hi[0]]]), axis=0)
+        from .plotting import polygon_2d
+
+        return polygon_2d(Z)
     Zb = _bounded_factors(Z)
     xi = _factor_vertices(Zb)
     return _extreme_points(xi @ Zb.G.T + Zb.c)
