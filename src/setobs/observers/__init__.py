@@ -1,6 +1,7 @@
 """Point observers on one interface (``reset``, ``step``, ``run``), from the seed papers."""
 
 from .base import DesignError, ObserverResult, PointObserver, StateSpaceObserver
+from .descriptor import DescriptorObserver
 from .luenberger import (
     CHANG2006_PIO_GAINS,
     FU_WANG_HO_GAINS,
@@ -19,6 +20,7 @@ __all__ = [
     "MBESO",
     "PIO",
     "DelayedUIO",
+    "DescriptorObserver",
     "DesignError",
     "HigherOrderObserver",
     "ModularObserver",
