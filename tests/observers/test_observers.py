@@ -222,6 +222,9 @@ def test_every_observer_runs_through_one_interface():
         (PIO, so.examples.chang2006()),
         (HigherOrderObserver, so.examples.chang2006()),
         (ModularObserver, so.examples.chang2006()),
+        (so.observers.DelayedUIO, so.examples.chen_gao_lin_example4()),
+        (lambda s: so.observers.DescriptorObserver(s, np.ones((s.l, 1))),
+         so.examples.chen_gao_lin_example1()),
     ]
     for cls, sys in cases:
         obs = cls(sys)
