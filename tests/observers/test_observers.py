@@ -224,8 +224,13 @@ def test_every_observer_runs_through_one_interface():
         (ModularObserver, so.examples.chang2006()),
         (so.observers.DelayedUIO, so.examples.chen_gao_lin_example4()),
         (lambda s: so.observers.DescriptorObserver(s, np.ones((s.l, 1))),
-         so.examples.chen_gao_lin_example1()),
+         so.LinearSystem(so.examples.chang2006().Phi, so.examples.chang2006().G[:, :1],
+                         np.vstack([so.examples.chang2006().Xi, [[0.0, 1.0, 0.0]]]))),
     ]
+    # Example 1 has p = 3 outputs for k = 3 disturbances and l = 1 noise channel:
+    # Assumption 2 (p >= k + l) fails and the descriptor observer says so.
+    with pytest.raises(DesignError, match="Assumptions 2-3"):
+        so.observers.DescriptorObserver(so.examples.chen_gao_lin_example1(), np.ones((3, 1)))
     for cls, sys in cases:
         obs = cls(sys)
         Y = np.zeros((10, sys.l))
