@@ -1,6 +1,16 @@
 """setobs: set-membership geometry and disturbance observers for linear discrete-time systems."""
 
-from . import analysis, compare, examples, geometry, observers, setmembership, tolerances
+from . import (
+    analysis,
+    compare,
+    examples,
+    geometry,
+    observers,
+    plotting,
+    setmembership,
+    studies,
+    tolerances,
+)
 from .exceptions import (
     DimensionError,
     EmptySetError,
@@ -31,6 +41,8 @@ __all__ = [
     "examples",
     "geometry",
     "observers",
+    "plotting",
     "setmembership",
+    "studies",
     "tolerances",
 ]

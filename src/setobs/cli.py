@@ -1,109 +1,247 @@
-"""Command-line interface (a thin layer over the public API).
+"""Command line: a thin layer over the public API.
 
-``python -m setobs demo`` runs a short geometry demo (the main job until the
-SMFDO lands): the paper's initial disturbance range ``R^q`` becomes bounded
-once it is intersected with measurements, and the certified interval hull and
-worst-case-optimal centre are printed.
+``setobs demo`` (the main job), ``setobs check FILE`` (which observers exist for
+a system), ``setobs study CONFIG`` (a Monte Carlo campaign). Bad input prints one
+line on stderr and exits with code 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from . import __version__, examples
+from . import __version__
 from .analysis import diagnose
-from .geometry import ConstrainedZonotope
+from .exceptions import SetobsError
+from .systems import LinearSystem
 
-EXAMPLES = {
-    "chang2006": examples.chang2006,
-    "cgl1": examples.chen_gao_lin_example1,
-    "cgl2-20ms": lambda: examples.chen_gao_lin_example2("20ms"),
-    "cgl2-1ms": lambda: examples.chen_gao_lin_example2("1ms"),
-    "cgl4": examples.chen_gao_lin_example4,
-    "cgl5": examples.chen_gao_lin_example5,
-}
+EXIT_BAD_INPUT = 2
+_ALIASES = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
+            "Gamma": ("Gamma", "B", "B0")}
 
 
-def demo() -> int:
-    """Print a short demonstration of the constrained-zonotope core."""
+class CLIError(Exception):
+    """Bad input on the command line (one line for stderr)."""
+
+
+# ---------------------------------------------------------------------------- demo
+def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -> int:
+    """The main job: the set-membership paper's example, SMFDO against the PIO baseline.
+
+    Prints a short table and writes a PNG like Li-Cong-Dong Fig. 1(a) (truth,
+    estimate and certified interval band per disturbance component).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .compare import compare
+    from .observers import PIO, HigherOrderObserver
+    from .plotting import plot_estimate_band
+    from .setmembership import SMFDO
+    from .studies import Scenario, rng_for_run
+
     np.set_printoptions(precision=4, suppress=True)
-    print(f"setobs {__version__} — constrained-zonotope demo\n")
-    # State x in a box, disturbance d completely unknown (R^1): the paper's start.
-    X0 = ConstrainedZonotope.from_box([-1.0, -1.0], [1.0, 1.0])
-    D0 = ConstrainedZonotope.full_space(1)
-    Z = X0.cartesian(D0)
-    print("Z = [[x0]] x R^q:", Z)
-    print("  interval hull:", Z.interval_hull())
-    # One step x+ = Phi x + G d, then a measurement y = C x+.
-    Phi = np.array([[1.0, 0.1], [0.0, 1.0]])
-    G = np.array([[0.0], [0.1]])
-    M = np.block([[Phi, G], [np.zeros((1, 2)), np.eye(1)]])
-    dd = ConstrainedZonotope.from_box([0, 0, -0.01], [0, 0, 0.01])
-    Z1 = M @ Z + dd
-    y = np.array([0.3])
-    Z1 = Z1.intersect_affine([[0.0, 1.0, 0.0]], y)
-    print("\nafter one step and y = C x+ =", y, ":", Z1)
-    box = Z1.interval_hull()
-    print("  certified interval hull:", box)
-    print("  disturbance interval  :", f"[{box.lo[2]:.4f}, {box.hi[2]:.4f}]")
-    print("  worst-case-optimal estimate (centre):", f"{box.center[2]:.4f}")
-    print("  is_bounded:", Z1.is_bounded, "| empty:", Z1.is_empty())
-    red = Z1.rescale().remove_redundancy()
-    print("\nrescaled + redundancy removed:", red)
-    print("  unbounded factors made bounded:", not red.has_unbounded_factors)
-    V = Z1.project([0, 2]).vertices()
-    print("  vertices of the (x1, d) projection:\n", V)
-    _smfdo_demo()
+    sc = Scenario(system="chang2006", horizon=steps, increment=1.0, x0_box=1.0)
+    sys_ = sc.build_system()
+    traj = sc.simulate(rng_for_run(seed, 0))
+    kw = {"increment_set": sc.increment_set(2), "initial_state_set": sc.initial_state_set(3)}
+    print(f"setobs {__version__} — Li-Cong-Dong example (eq. (25)), |dd_i| <= 1, "
+          f"{steps} steps, seed {seed}\n")
+    print(repr(diagnose(sys_)).split("\n")[1])
+    res = {w: SMFDO(sys_, window=w, **kw).run(traj.Y) for w in (3, 10, None)}
+    exact = res[None]
+    est = {f"SMFDO delta={w}": r.estimate for w, r in res.items() if w is not None}
+    est["SMFDO exact"] = exact.estimate
+    est["PIO (designed, Fu-Wang poles)"] = PIO(sys_).run(traj.Y).d_hat
+    est["PIO (printed gains, baseline)"] = PIO.chang2006_baseline(sys_).run(traj.Y).d_hat
+    est["higher-order observer"] = HigherOrderObserver(sys_).run(traj.Y).d_hat
+    table = compare(est, exact)
+    print("\nworst-case error over the consistent set (mean over k >= 10) and actual error:\n")
+    print(f"{'estimator':<32} {'worst-case':>12} {'/ optimal':>10} {'actual':>12}  violations")
+    for s in table.summary(start=10):
+        name = s["observer"]
+        e = est[name]
+        actual = np.nanmean(np.abs(e[10:] - traj.D[10:]).max(axis=1))
+        viol = ""
+        for w, r in res.items():
+            label = "SMFDO exact" if w is None else f"SMFDO delta={w}"
+            if name == label:
+                viol = str(r.violations(traj.D))
+        print(f"{name:<32} {s['mean_error']:>12.4g} {s['mean_ratio']:>10.3g} {actual:>12.4g}"
+              f"  {viol}")
+    fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    for i, ax in enumerate(axes):
+        plot_estimate_band(res[10], traj.D, component=i, ax=ax, label="SMFDO (delta=10)")
+    axes[0].set_title("SMFDO on the Li-Cong-Dong example: truth, estimate, certified interval")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    print(f"\nwrote {out}")
     return 0
 
 
-def _smfdo_demo() -> None:
-    """SMFDO on the Li-Cong-Dong example (eq. (25)) with a random-walk disturbance."""
-    from .setmembership import SMFDO
-
-    sys = examples.chang2006()
-    rng = np.random.default_rng(0)
-    x, d = np.array([0.0, 1.0, 0.0]), np.zeros(2)
-    Y, D = [], []
-    for _ in range(100):
-        Y.append(sys.Xi @ x)
-        D.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
-        d = d + rng.uniform(-1, 1, 2)
-    print("\nSMFDO on the paper example (eq. (25)), |dd_i| <= 1, 100 steps:")
-    for window in (3, 10, None):
-        res = SMFDO(sys, window=window).run(np.array(Y))
-        err = np.abs(res.estimate[10:] - np.array(D)[10:]).max(axis=1)
-        name = "exact" if window is None else f"delta={window}"
-        print(f"  {name:>9}: violations {res.violations(np.array(D))}, "
-              f"mean worst-case radius {res.radius[10:].mean():.3f}, "
-              f"mean actual error {err.mean():.3f}")
+# ---------------------------------------------------------------------------- check
+def _pick(data: dict[str, Any], key: str, required: bool = True):
+    for name in _ALIASES[key]:
+        if name in data:
+            return np.asarray(data[name], dtype=float)
+    if required:
+        raise CLIError(f"missing matrix {key!r} (accepted names: {', '.join(_ALIASES[key])})")
+    return None
 
 
+def load_system(path: str | Path) -> LinearSystem:
+    """A :class:`LinearSystem` from ``.json``, ``.yaml``/``.yml``, ``.npz`` or ``.mat``.
+
+    The file holds matrices named ``Phi``, ``G``, ``Xi`` (aliases ``A``/``E``/``C``)
+    and optionally ``Gamma`` (alias ``B``).
+    """
+    p = Path(path)
+    if not p.exists():
+        raise CLIError(f"no such file: {p}")
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".json":
+            data = json.loads(p.read_text())
+        elif suffix in (".yaml", ".yml"):
+            import yaml
+
+            data = yaml.safe_load(p.read_text())
+        elif suffix == ".npz":
+            with np.load(p) as z:
+                data = {k: z[k] for k in z.files}
+        elif suffix == ".mat":
+            from scipy.io import loadmat
+
+            data = {k: v for k, v in loadmat(p).items() if not k.startswith("__")}
+        else:
+            raise CLIError(f"unsupported file type {suffix!r} (use .json, .yaml, .npz or .mat)")
+    except CLIError:
+        raise
+    except Exception as exc:  # parse errors of any reader
+        raise CLIError(f"could not read {p}: {exc}") from None
+    if not isinstance(data, dict):
+        raise CLIError(f"{p} must contain a mapping of matrices")
+    Gamma = _pick(data, "Gamma", required=False)
+    return LinearSystem(_pick(data, "Phi"), _pick(data, "G"), _pick(data, "Xi"),
+                        Gamma if Gamma is not None and Gamma.size else None)
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, np.ndarray):
+        return _jsonable(v.tolist())
+    if isinstance(v, list | tuple):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, complex):
+        return [v.real, v.imag] if v.imag else v.real
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def check(path: str, fmt: str = "text") -> int:
+    """Print the ``diagnose`` report for the system in ``path``."""
+    d = diagnose(load_system(path))
+    if fmt == "markdown":
+        print(d.to_markdown())
+    elif fmt == "json":
+        out = {"zeros": _jsonable([complex(z) for z in d.zeros.zeros]),
+               "designs": [{"design": v.design, "exists": v.exists, "condition": v.condition,
+                            "reason": v.reason, "numbers": _jsonable(v.numbers)}
+                           for v in d.verdicts],
+               "notes": d.notes}
+        print(json.dumps(out, indent=2))
+    else:
+        print(repr(d))
+    return 0
+
+
+# ---------------------------------------------------------------------------- study
+def study(config: str, dask: str | None = None, out: str | None = None,
+          processes: int | None = None) -> int:
+    """Run a campaign from a YAML configuration (see the README)."""
+    import yaml
+
+    from .studies import ObserverSpec, Scenario, run_campaign
+
+    p = Path(config)
+    if not p.exists():
+        raise CLIError(f"no such file: {p}")
+    try:
+        cfg = yaml.safe_load(p.read_text()) or {}
+    except yaml.YAMLError as exc:
+        raise CLIError(f"could not parse {p}: {exc}") from None
+    if not isinstance(cfg, dict):
+        raise CLIError(f"{p} must contain a mapping")
+    unknown = set(cfg) - {"scenario", "observers", "runs", "seed", "reference_window", "out"}
+    if unknown:
+        raise CLIError(f"unknown keys in {p}: {sorted(unknown)}")
+    try:
+        scenario = Scenario(**(cfg.get("scenario") or {}))
+        specs = [ObserverSpec(o["name"], o["kind"], o.get("params") or {})
+                 for o in cfg.get("observers") or []]
+    except (TypeError, KeyError) as exc:
+        raise CLIError(f"bad configuration in {p}: {exc}") from None
+    out_dir = Path(out or cfg.get("out") or p.with_suffix("").name + "_results")
+    res = run_campaign(scenario, specs, int(cfg.get("runs", 10)), base_seed=int(cfg.get("seed", 0)),
+                       reference_window=cfg.get("reference_window", 20), client=dask,
+                       processes=processes, out_dir=out_dir)
+    print(res.summary().to_string(float_format=lambda x: f"{x:.4g}"))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .plotting import plot_comparison_bars, plot_error_curves
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+    plot_error_curves(res.table, "err_inf", ax=axes[0])
+    plot_comparison_bars(res.table, "worst_inf", ax=axes[1])
+    fig.tight_layout()
+    fig.savefig(out_dir / "summary.png", dpi=110)
+    plt.close(fig)
+    print(f"wrote {out_dir / 'results.csv'}, {out_dir / 'metadata.json'}, "
+          f"{out_dir / 'summary.png'}")
+    return 0
+
+
+# ---------------------------------------------------------------------------- main
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``setobs`` command."""
     parser = argparse.ArgumentParser(prog="setobs", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"setobs {__version__}")
-    sub = parser.add_subparsers(dest="command")
-    sub.add_parser("demo", help="run a short constrained-zonotope demo")
-    pd = sub.add_parser("diagnose", help="which observer designs exist for an example system")
-    pd.add_argument("system", choices=[*EXAMPLES, "all"])
-    pd.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    pd_ = sub.add_parser("demo", help="SMFDO vs PIO on the set-membership paper's example")
+    pd_.add_argument("--out", default="setobs_demo.png", help="PNG to write")
+    pd_.add_argument("--steps", type=int, default=120)
+    pd_.add_argument("--seed", type=int, default=0)
+    pc = sub.add_parser("check", help="which observer designs exist for a system file")
+    pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma)")
+    pc.add_argument("--format", choices=["text", "markdown", "json"], default="text")
+    ps = sub.add_parser("study", help="run a Monte Carlo campaign from a YAML file")
+    ps.add_argument("config")
+    ps.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler address")
+    ps.add_argument("--out", help="output directory")
+    ps.add_argument("--processes", type=int, help="local worker processes")
     args = parser.parse_args(argv)
-    if args.command == "demo":
-        return demo()
-    if args.command == "diagnose":
-        names = list(EXAMPLES) if args.system == "all" else [args.system]
-        for name in names:
-            d = diagnose(EXAMPLES[name]())
-            print(f"## {name}\n")
-            print(d.to_markdown() if args.markdown else repr(d))
-            print()
-        return 0
+    try:
+        if args.command == "demo":
+            return demo(args.out, args.steps, args.seed)
+        if args.command == "check":
+            return check(args.file, args.format)
+        if args.command == "study":
+            return study(args.config, args.dask, args.out, args.processes)
+    except (CLIError, SetobsError, ValueError, OSError) as exc:
+        print(f"setobs: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     parser.print_help()
     return 0
 

@@ -1,0 +1,75 @@
+"""Plots of sets, estimates with their interval bands, error curves and comparisons.
+
+matplotlib is imported lazily; every function takes ``ax=None`` (current axes)
+and returns what it drew.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .geometry.plotting import plot_cz as plot_set
+
+__all__ = ["plot_comparison_bars", "plot_error_curves", "plot_estimate_band", "plot_set"]
+
+
+def _ax(ax):
+    import matplotlib.pyplot as plt
+
+    return plt.gca() if ax is None else ax
+
+
+def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: int = 0,
+                       ax: Any = None, label: str = "SMFDO") -> Any:
+    """Estimate, its certified interval ``[lo, hi]`` and the truth (like Li-Cong-Dong Fig. 1(a)).
+
+    Parameters
+    ----------
+    result : SMFDOResult
+    truth : array_like, shape (N, q), optional
+    component : int
+        Disturbance component to draw.
+    """
+    ax = _ax(ax)
+    k = np.arange(result.lo.shape[0])
+    lo, hi = result.lo[:, component], result.hi[:, component]
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    ax.fill_between(k[ok], lo[ok], hi[ok], alpha=0.3, label=f"{label} interval")
+    ax.plot(k, result.estimate[:, component], lw=1.2, label=f"{label} estimate")
+    if truth is not None:
+        ax.plot(k, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
+    ax.set_xlabel("k")
+    ax.set_ylabel(f"d[{component}]")
+    ax.legend(loc="best", fontsize=7)
+    return ax
+
+
+def plot_error_curves(table: Any, metric: str = "err_inf", ax: Any = None,
+                      logy: bool = True) -> Any:
+    """Mean of ``metric`` over runs, per step and observer (like Li-Cong-Dong Fig. 1(b))."""
+    ax = _ax(ax)
+    mean = table.groupby(["observer", "k"], sort=False)[metric].mean().unstack(0)
+    for name in mean.columns:
+        ax.plot(mean.index, mean[name], label=name)
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel("k")
+    ax.set_ylabel(f"mean {metric}")
+    ax.legend(loc="best", fontsize=7)
+    return ax
+
+
+def plot_comparison_bars(table: Any, metric: str = "err_inf", start: int = 10,
+                         ax: Any = None) -> Any:
+    """Mean ``metric`` per observer over steps ``k >= start``, as bars."""
+    ax = _ax(ax)
+    t = table[table["k"] >= start]
+    mean = t.groupby("observer", sort=False)[metric].mean()
+    ax.bar(range(len(mean)), mean.to_numpy())
+    ax.set_xticks(range(len(mean)), list(mean.index), rotation=20, fontsize=7)
+    ax.set_yscale("log")
+    ax.set_ylabel(f"mean {metric} (k >= {start})")
+    return ax
