@@ -75,3 +75,21 @@ def test_bad_scenarios():
         Scenario(generator="chirp")
     with pytest.raises(DimensionError, match="unknown observer kind"):
         ObserverSpec("x", "kalman")
+
+
+def test_paper_claims_fig1b_small_campaign():
+    """Li-Cong-Dong Sec. V on a small campaign (the notebook runs the full 5000 runs):
+
+    * ">40 % better than the SFODO baseline": holds against a PIO with working gains at the
+      stated poles (the printed baseline gains are unstable, so that comparison is moot);
+    * "no significant improvement from delta = 3 to 20": does NOT hold; delta = 3 is clearly
+      worse, while 10 -> 20 changes little. Pinned here.
+    """
+    specs = [ObserverSpec("d3", "smfdo", {"window": 3}),
+             ObserverSpec("d10", "smfdo", {"window": 10}),
+             ObserverSpec("d20", "smfdo", {"window": 20}), ObserverSpec("PIO", "pio")]
+    res = run_campaign(Scenario(horizon=70), specs, runs=4, processes=2, progress=False)
+    e = res.summary(start=10)["err_inf"]
+    assert 1 - e["d10"] / e["PIO"] > 0.4
+    assert 1 - e["d20"] / e["d3"] > 0.15  # delta = 3 is significantly worse
+    assert abs(1 - e["d20"] / e["d10"]) < 0.08  # 10 -> 20: small
