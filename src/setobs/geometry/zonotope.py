@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import block_diag
 
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import DimensionError, EmptySetError, UnboundedSetError
@@ -26,6 +25,14 @@ __all__ = ["ConstrainedZonotope"]
 
 def _up(x: float) -> float:
     return float(np.nextafter(x, np.inf))
+
+
+def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[[X, 0], [0, Y]]`` (scipy's ``block_diag`` costs ~10x more on small matrices)."""
+    out = np.zeros((X.shape[0] + Y.shape[0], X.shape[1] + Y.shape[1]))
+    out[: X.shape[0], : X.shape[1]] = X
+    out[X.shape[0] :, X.shape[1] :] = Y
+    return out
 
 
 class ConstrainedZonotope:
@@ -290,8 +297,7 @@ class ConstrainedZonotope:
         return ConstrainedZonotope._trusted(
             np.hstack([self._G, other._G]),
             self._c + other._c,
-            block_diag(self._A, other._A) if self.n_con + other.n_con else
-            np.zeros((0, self.n_gen + other.n_gen)),
+            _blockdiag2(self._A, other._A),
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
             min(self.radius, other.radius),
@@ -336,10 +342,9 @@ class ConstrainedZonotope:
         if not isinstance(other, ConstrainedZonotope):
             raise TypeError(f"cartesian expects a ConstrainedZonotope, got {type(other).__name__}")
         return ConstrainedZonotope._trusted(
-            block_diag(self._G, other._G),
+            _blockdiag2(self._G, other._G),
             np.concatenate([self._c, other._c]),
-            block_diag(self._A, other._A) if self.n_con + other.n_con else
-            np.zeros((0, self.n_gen + other.n_gen)),
+            _blockdiag2(self._A, other._A),
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
             min(self.radius, other.radius),
