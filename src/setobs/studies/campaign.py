@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import DimensionError, SetobsError
+from ..exceptions import DimensionError
 from .scenarios import Scenario, rng_for_run
 
 __all__ = ["OBSERVER_KINDS", "CampaignResult", "ObserverSpec", "run_campaign", "run_one"]
@@ -216,8 +216,6 @@ def run_campaign(
                          for r in todo}
                 for fut in as_completed(futs2):
                     store(futs2[fut], fut.result())
-    except SetobsError:
-        raise
     finally:
         bar.close()
     order = {s.name: i for i, s in enumerate(specs)}
