@@ -221,6 +221,12 @@ class SMFDO:
             raise ExistenceError("P T_o = [0 I] has no solution (fragile Theorem 1 verdict)",
                                  report)
         self.P = P
+        # When P selects coordinates exactly (e.g. T_o = I for a fully observable
+        # augmented pair), the hull of P Z is the selected coordinates of the hull of Z:
+        # the same LPs, so no extra solves are needed (windowed mode).
+        sel = (np.count_nonzero(P, axis=1) == 1) & (np.abs(P).max(axis=1) == 1.0) & \
+            (P.max(axis=1) == 1.0)
+        self._P_coords = np.argmax(P, axis=1) if sel.all() else None
         self.T_o = T_o
         self.A_o, self.B_o, self.Gamma_o, self.C_o = dec.A_o, dec.B_o, dec.Gamma_o, dec.C_o
         X0 = ConstrainedZonotope.full_space(n) if initial_state_set is None else initial_state_set
@@ -358,6 +364,9 @@ class SMFDO:
         """Disturbance set ``P Z``, its hull, and (windowed mode) the hull of ``Z``."""
         box_o = Z.interval_hull() if self.window is not None else None
         Zd = self.P @ Z
+        if box_o is not None and self._P_coords is not None:
+            j = self._P_coords
+            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o
         return Zd, Zd.interval_hull(), box_o
 
     def _outward(self, lo, hi):
