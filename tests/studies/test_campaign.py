@@ -93,3 +93,20 @@ def test_paper_claims_fig1b_small_campaign():
     assert 1 - e["d10"] / e["PIO"] > 0.4
     assert 1 - e["d20"] / e["d3"] > 0.15  # delta = 3 is significantly worse
     assert abs(1 - e["d20"] / e["d10"]) < 0.08  # 10 -> 20: small
+
+
+@pytest.mark.slow
+def test_paper_claims_fig1b_larger_campaign():
+    """The same claims on 60 runs x 100 steps (run with ``pytest -m slow``)."""
+    specs = [ObserverSpec("d3", "smfdo", {"window": 3}),
+             ObserverSpec("d10", "smfdo", {"window": 10}),
+             ObserverSpec("d20", "smfdo", {"window": 20}), ObserverSpec("PIO", "pio")]
+    res = run_campaign(Scenario(horizon=100), specs, runs=60, reference_window=20,
+                       progress=False)
+    e = res.summary(start=10)["err_inf"]
+    assert 1 - e["d10"] / e["PIO"] > 0.4
+    assert 1 - e["d20"] / e["d3"] > 0.15
+    assert abs(1 - e["d20"] / e["d10"]) < 0.08
+    t = res.table
+    smfdo = t[t.observer.isin(["d3", "d10", "d20"]) & (t.k > 0)]
+    assert (smfdo.contained == 1.0).all()  # soundness over all runs
