@@ -32,6 +32,7 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
+from _common import hull_cvxpy
 from setobs import ConstrainedZonotope
 
 SIZES = [(5, 45, 40), (5, 100, 90), (10, 200, 150)]
@@ -49,25 +50,6 @@ def hull_setobs(Z: ConstrainedZonotope) -> tuple[np.ndarray, np.ndarray]:
     fresh = ConstrainedZonotope(Z.G, Z.c, Z.A, Z.b, Z.h)  # no cached model or hull
     box = fresh.interval_hull()
     return box.lo, box.hi
-
-
-def hull_cvxpy(Z: ConstrainedZonotope) -> tuple[np.ndarray, np.ndarray]:
-    lo = np.empty(Z.dim)
-    hi = np.empty(Z.dim)
-    for i in range(Z.dim):
-        for sign in (1.0, -1.0):
-            xi = cp.Variable(Z.n_gen)
-            cons = [Z.A @ xi == Z.b, cp.abs(xi) <= Z.h]
-            prob = cp.Problem(cp.Minimize(sign * (Z.G[i] @ xi)), cons)
-            prob.solve(solver=cp.CLARABEL)
-            if prob.status != cp.OPTIMAL:
-                raise RuntimeError(f"cvxpy status {prob.status}")
-            val = sign * prob.value + Z.c[i]
-            if sign > 0:
-                lo[i] = val
-            else:
-                hi[i] = val
-    return lo, hi
 
 
 def timeit(fn, *args, repeats: int) -> tuple[float, list[float], object]:

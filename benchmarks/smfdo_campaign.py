@@ -26,27 +26,9 @@ import statistics
 import time
 from pathlib import Path
 
-import cvxpy as cp
-import numpy as np
-
 import setobs as so
+from _common import hull_cvxpy
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign
-
-
-def hull_cvxpy(Z):
-    lo, hi = np.empty(Z.dim), np.empty(Z.dim)
-    for i in range(Z.dim):
-        for sgn in (1.0, -1.0):
-            xi = cp.Variable(Z.n_gen)
-            cons = [cp.abs(xi) <= Z.h] + ([Z.A @ xi == Z.b] if Z.n_con else [])
-            prob = cp.Problem(cp.Minimize(sgn * (Z.G[i] @ xi)), cons)
-            prob.solve(solver=cp.CLARABEL)
-            v = sgn * prob.value + Z.c[i]
-            if sgn > 0:
-                lo[i] = v
-            else:
-                hi[i] = v
-    return lo, hi
 
 
 def main() -> None:
