@@ -108,3 +108,12 @@ def test_help_everywhere(capsys):
     with pytest.raises(SystemExit) as info:
         main(["check"])  # missing argument: argparse exits 2
     assert info.value.code == 2
+
+
+def test_check_example_names_and_all(capsys):
+    assert main(["check", "all"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("Diagnosis") == 6 and "1.26095" in out  # every example, Chang's zero
+    assert "V0 is not diagonal" in out  # Example 1
+    assert main(["check", "cgl1", "--format", "markdown"]) == 0
+    assert "| variant MB-ESO | yes |" in capsys.readouterr().out

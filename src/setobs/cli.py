@@ -147,9 +147,23 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
-def check(path: str, fmt: str = "text") -> int:
-    """Print the ``diagnose`` report for the system in ``path``."""
-    d = diagnose(load_system(path))
+def check(target: str, fmt: str = "text") -> int:
+    """Print the ``diagnose`` report for a system file, an example name, or ``all`` examples."""
+    from .studies import EXAMPLE_SYSTEMS
+
+    if target == "all" or (target in EXAMPLE_SYSTEMS and not Path(target).exists()):
+        for name in EXAMPLE_SYSTEMS if target == "all" else [target]:
+            if target == "all":
+                print(f"## {name}\n")
+            _print_report(diagnose(EXAMPLE_SYSTEMS[name]()), fmt)
+            if target == "all":
+                print()
+        return 0
+    _print_report(diagnose(load_system(target)), fmt)
+    return 0
+
+
+def _print_report(d, fmt: str) -> None:
     if fmt == "markdown":
         print(d.to_markdown())
     elif fmt == "json":
@@ -161,7 +175,6 @@ def check(path: str, fmt: str = "text") -> int:
         print(json.dumps(out, indent=2))
     else:
         print(repr(d))
-    return 0
 
 
 # ---------------------------------------------------------------------------- study
@@ -223,8 +236,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     pd_.add_argument("--out", default="setobs_demo.png", help="PNG to write")
     pd_.add_argument("--steps", type=int, default=120)
     pd_.add_argument("--seed", type=int, default=0)
-    pc = sub.add_parser("check", help="which observer designs exist for a system file")
-    pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma)")
+    pc = sub.add_parser("check", help="which observer designs exist for a system")
+    pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma); "
+                                 "or an example name (chang2006, cgl1, ...), or 'all'")
     pc.add_argument("--format", choices=["text", "markdown", "json"], default="text")
     ps = sub.add_parser("study", help="run a Monte Carlo campaign from a YAML file")
     ps.add_argument("config")
