@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
-import warnings
 from collections import deque
 from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import lstsq, svd
-from scipy.signal import place_poles
 
 from ..analysis import uio_conditions, uio_delay
 from ..systems import LinearSystem
 from .base import DesignError, PointObserver
+from .luenberger import _place
 
 __all__ = ["DelayedUIO"]
 
@@ -85,22 +84,11 @@ class DelayedUIO(PointObserver):
         pol = np.full(N, float(poles)) if np.ndim(poles) == 0 else np.asarray(poles, complex)
         if pol.size != N:
             raise DesignError(f"need {N} poles, got {pol.size}", "poles")
-        Zbar = self._place(A1, Cbar, pol)
+        Zbar = _place(A1, Cbar, pol, check="radius")
         K = F + Zbar @ U[:, :r].T @ Pi
         self.J, self.K, self.O, self.M, self.Nu, self.B = A - K @ O, K, O, M, Nu, B
         self.tau = tau
         self.reset()
-
-    @staticmethod
-    def _place(A, C, poles):
-        """Gain ``Z`` with ``eig(A - Z C) = poles`` (scipy ``place_poles``, checked)."""
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            Z = place_poles(A.T, C.T, poles, method="YT").gain_matrix.T
-        rho = float(np.abs(np.linalg.eigvals(A - Z @ C)).max())
-        if rho > float(np.abs(poles).max()) + 1e-6:
-            raise DesignError(f"UIO pole placement failed (spectral radius {rho:.3g})", "poles")
-        return Z
 
     def reset(self) -> None:
         """Restart with ``X_hat(0) = 0`` and empty data buffers."""

@@ -74,18 +74,19 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     traj = scenario.simulate(rng_for_run(base_seed, run))
     Dd = scenario.increment_set(sys.q)
     X0 = scenario.initial_state_set(sys.n)
-    ref = SMFDO(sys, window=reference_window, increment_set=Dd, initial_state_set=X0,
-                reset="box" if scenario.noise_std > 0 else "raise").run(traj.Y, traj.U)
+    reset = "box" if scenario.noise_std > 0 else "raise"
+
+    def smfdo(window):
+        return SMFDO(sys, window=window, increment_set=Dd, initial_state_set=X0,
+                     reset=reset).run(traj.Y, traj.U)
+
+    ref = smfdo(reference_window)
     rows: list[dict[str, Any]] = []
     for spec in specs:
         if spec.kind == "smfdo":
             window = spec.params.get("window", 10)
-            if window == reference_window:
-                res = ref  # the same deterministic computation: reuse it
-            else:
-                res = SMFDO(sys, window=window, increment_set=Dd, initial_state_set=X0,
-                            reset="box" if scenario.noise_std > 0 else "raise").run(traj.Y,
-                                                                                    traj.U)
+            # The same deterministic computation as the reference: reuse it.
+            res = ref if window == reference_window else smfdo(window)
             est, radius = res.estimate, res.radius
             contained = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
         else:
