@@ -47,6 +47,16 @@ class Box:
         object.__setattr__(self, "_lo", readonly(lo_a))
         object.__setattr__(self, "_hi", readonly(hi_a))
 
+    @classmethod
+    def _trusted(cls, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> Box:
+        """A box from float64 vectors already known to be valid (``lo <= hi``); no copy."""
+        box = object.__new__(cls)
+        lo.flags.writeable = False
+        hi.flags.writeable = False
+        object.__setattr__(box, "_lo", lo)
+        object.__setattr__(box, "_hi", hi)
+        return box
+
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("Box is immutable")
 

@@ -35,6 +35,24 @@ def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.fl
     return out
 
 
+def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Centre and outward-rounded radii of a box (``inf`` radius where ``lo = -inf``).
+
+    The representation used by :meth:`ConstrainedZonotope.from_box`: generators
+    ``I``, factor bounds ``rad``; the radius covers both ends from the rounded
+    centre.
+    """
+    free = np.isinf(lo)
+    anyfree = free.any()
+    lo_f = np.where(free, 0.0, lo) if anyfree else lo
+    hi_f = np.where(free, 0.0, hi) if anyfree else hi
+    c = 0.5 * lo_f + 0.5 * hi_f
+    rad = np.maximum(hi_f - c, c - lo_f)
+    rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
+    return c, (np.where(free, np.inf, rad) if anyfree else rad)
+
+
 class ConstrainedZonotope:
     r"""Extended constrained zonotope ``{G xi + c : A xi = b, |xi_j| <= h_j}``.
 
@@ -166,14 +184,7 @@ class ConstrainedZonotope:
                 "an extended constrained zonotope is a polytope plus a subspace, so "
                 "a coordinate is either bounded on both sides or free (-inf, +inf)"
             )
-        free = np.isinf(lo_a)
-        lo_f = np.where(free, 0.0, lo_a)
-        hi_f = np.where(free, 0.0, hi_a)
-        c = 0.5 * lo_f + 0.5 * hi_f
-        # Outward rounding: the radius must cover both ends from the rounded centre.
-        rad = np.maximum(hi_f - c, c - lo_f)
-        rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
-        rad = np.where(free, np.inf, rad)
+        c, rad = box_center_radius(lo_a, hi_a)
         n = lo_a.size
         return cls._trusted(np.eye(n), c, np.zeros((0, n)), np.zeros(0), rad)
 

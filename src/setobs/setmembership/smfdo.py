@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 import warnings
-from collections import deque
+from collections import OrderedDict, deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -15,7 +16,10 @@ from ..analysis import bounded_do_exists, observability_decomposition
 from ..analysis.existence import BoundedDOReport
 from ..exceptions import DimensionError, EmptySetError, SetobsError
 from ..geometry import Box, ConstrainedZonotope
+from ..geometry.zonotope import box_center_radius
 from ..systems import LinearSystem
+from ..tolerances import UNBOUNDED_RADIUS
+from ._window import WindowModel
 
 __all__ = [
     "SMFDO",
@@ -110,6 +114,11 @@ class SMFDOResult:
 
 IncrementSpec = ConstrainedZonotope | ArrayLike | Callable[[int], ConstrainedZonotope] | None
 
+#: Window structures shared by all SMFDOs of a process (keyed by a digest of
+#: the matrices they depend on), so that a Monte Carlo campaign sets each up once.
+_MODELS: OrderedDict[tuple, WindowModel] = OrderedDict()
+_MODELS_MAX = 256
+
 
 class SMFDO:
     """Set-membership filter-based disturbance observer (Li-Cong-Dong, Algorithm 1).
@@ -146,6 +155,18 @@ class SMFDO:
         certified for the stored sets).
     keep_sets : bool
         Store ``P Z_k`` in each step result.
+    fast : bool
+        Use the fast exact path in windowed mode (default). The window's
+        constraint matrix and generators do not depend on the data, so each
+        structure (one per step count before the window is full, one per
+        window afterwards) is set up once and its interval-hull LPs are solved
+        by a compiled, warm-started dual simplex whose bounds are certified
+        exactly as on the HiGHS path (:mod:`setobs.geometry.fastlp`). Any LP
+        the fast path cannot solve and certify tightly (infeasible,
+        degenerate beyond its tolerances, ambiguous unboundedness), a
+        time-varying increment set, and the steps after a ``reset="box"``
+        go to the reference path (the set operations plus HiGHS). ``False``
+        forces the reference path. ``stats`` counts the steps of each path.
 
     Raises
     ------
@@ -183,6 +204,7 @@ class SMFDO:
         reset_inflation: float = 1.0,
         margin: float = 1e-9,
         keep_sets: bool = False,
+        fast: bool = True,
     ) -> None:
         if not isinstance(sys, LinearSystem):
             raise TypeError(f"sys must be a LinearSystem, got {type(sys).__name__}")
@@ -237,7 +259,11 @@ class SMFDO:
         if D0.dim != q:
             raise DimensionError(f"initial_disturbance_set must have dimension {q}, got {D0.dim}")
         self._Z0_prior = T_o @ X0.cartesian(D0)  # line 2
+        self._inc_fixed: ConstrainedZonotope | None = None
         self._increment = self._increment_fn(increment_set)
+        self.fast = bool(fast)
+        self.stats = {"fast": 0, "reference": 0}
+        self._digest = self._structure_digest() if self.fast else b""
         self.reset_state()
 
     # ------------------------------------------------------------------ setup helpers
@@ -245,31 +271,131 @@ class SMFDO:
         q = self.sys.q
         if spec is None:
             box = ConstrainedZonotope.from_box(-np.ones(q), np.ones(q))
-            return lambda k: box
-        if isinstance(spec, ConstrainedZonotope):
+        elif isinstance(spec, ConstrainedZonotope):
             if spec.dim != q:
                 raise DimensionError(f"increment_set must have dimension {q}, got {spec.dim}")
             if not spec.is_bounded:
                 raise DimensionError("increment_set must be bounded")
-            return lambda k: spec
-        if callable(spec):
+            box = spec
+        elif callable(spec):
             return spec
-        r = as_vector("increment_set", spec, size=q)
-        if (r < 0).any():
-            raise DimensionError("increment_set bounds must be nonnegative")
-        box = ConstrainedZonotope.from_box(-r, r)
+        else:
+            r = as_vector("increment_set", spec, size=q)
+            if (r < 0).any():
+                raise DimensionError("increment_set bounds must be nonnegative")
+            box = ConstrainedZonotope.from_box(-r, r)
+        self._inc_fixed = box
         return lambda k: box
+
+    def _structure_digest(self) -> bytes:
+        """Fingerprint of everything a window structure depends on (shared cache key)."""
+        hsh = hashlib.blake2b(digest_size=20)
+        inc = self._inc_fixed
+        Z0 = self._Z0_prior
+        parts = [self.A_o, self.B_o, self.C_o, self.Gamma_o, self.P, Z0.G, Z0.A,
+                 np.isinf(Z0.h)]
+        if inc is not None:
+            parts += [inc.G, inc.c, inc.A, inc.b, inc.h]
+        for a in parts:
+            a = np.ascontiguousarray(a)
+            hsh.update(str(a.shape).encode())
+            hsh.update(a.tobytes())
+        hsh.update(repr((self._P_coords is None, min(Z0.radius, inc.radius if inc else 0.0),
+                         self.window)).encode())
+        return hsh.digest()
 
     def reset_state(self) -> None:
         """Forget all data and start again at ``k = 0``."""
         self.k = -1
-        self._Z: ConstrainedZonotope | None = None
         win = self.window
         # hulls of Z_(k-delta) .. Z_(k-1) and the data (y_j, u_(j-1), dd_(j-1)) of
         # the same steps: exactly what eq. (24) re-runs.
         self._hulls: deque[Box] = deque(maxlen=win or 1)
         self._hist: deque[tuple[NDArray[np.float64], NDArray[np.float64] | None,
                                 ConstrainedZonotope]] = deque(maxlen=win or 1)
+        # the posterior, either a set or (model, c, b, h) of the fast path (built lazily)
+        self._Z_src: object = None
+        self._from_initial = True  # no reset since k = 0 (the early closed forms apply)
+
+    @property
+    def _Z(self) -> ConstrainedZonotope | None:
+        src = self._Z_src
+        if isinstance(src, tuple):
+            model, c, b, h = src
+            src = model.to_cz(c, b, h)
+            self._Z_src = src
+        return src  # type: ignore[return-value]
+
+    # ------------------------------------------------------------------ fast path
+    def _model(self, key: tuple, build: Callable[[], WindowModel]) -> WindowModel:
+        full = (self._digest, *key)
+        model = _MODELS.get(full)
+        if model is None:
+            model = build()
+            _MODELS[full] = model
+            if len(_MODELS) > _MODELS_MAX:
+                _MODELS.popitem(last=False)
+        else:
+            _MODELS.move_to_end(full)
+        return model
+
+    def _fast_step(self, k: int, yv, uv, dd):
+        """Hulls of ``Z_k`` (and ``P Z_k``) by the closed form, or ``None`` (reference path)."""
+        if not self.fast or self.window is None or self._inc_fixed is None:
+            return None
+        if dd is not None and dd is not self._inc_fixed:
+            return None
+        win, N = self.window, self.A_o.shape[0]
+        P_extra = None if self._P_coords is not None else self.P
+        inc = self._inc_fixed
+        if len(self._hulls) == win:
+            hull0 = self._hulls[0]
+            lo, hi = hull0.lo, hull0.hi
+            free = np.isinf(lo) | np.isinf(hi)  # an outer answer: free both ways
+            if free.any():
+                lo, hi = np.where(free, -np.inf, lo), np.where(free, np.inf, hi)
+            c_S, h_S = box_center_radius(lo, hi)
+            b_S = np.zeros(0)
+            hist = [*list(self._hist)[1:], (yv, uv, dd)]
+            key = ("box", free.tobytes())
+            radius = min(UNBOUNDED_RADIUS, inc.radius)
+
+            def build() -> WindowModel:
+                return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, np.eye(N),
+                                   np.zeros((0, N)), free, win, False, P_extra, radius)
+        elif self._from_initial and len(self._hist) == k:
+            Z0 = self._Z0_prior
+            c_S, b_S, h_S = Z0.c, Z0.b, Z0.h
+            hist = [*list(self._hist), (yv, uv, dd)]
+            key = ("init", k)
+            radius = min(Z0.radius, inc.radius)
+
+            def build() -> WindowModel:
+                return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
+                                   np.isinf(Z0.h), k, True, P_extra, radius)
+        else:
+            return None
+        model = self._model(key, build)
+        if not model.usable:
+            return None
+        Y = np.array([e[0] for e in hist])
+        if self.sys.p:
+            steps = hist if len(hist) == model.s else hist[1:]
+            U = np.array([e[1] for e in steps])
+        else:
+            U = np.zeros((model.s, 0))
+        c, b, h = model.assemble(c_S, b_S, h_S, Y, U)
+        out = model.hull(c, b, h)
+        if out is None:
+            return None
+        lo, hi = out
+        box_o = Box._trusted(lo[:N], hi[:N])
+        if self._P_coords is not None:
+            j = self._P_coords
+            box = Box._trusted(lo[j], hi[j])
+        else:
+            box = Box._trusted(lo[N:], hi[N:])
+        return (model, c, b, h), box, box_o
 
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, dd: ConstrainedZonotope,
@@ -318,13 +444,24 @@ class SMFDO:
         """
         yv, uv = self._check_inputs(y, u_prev)
         k = self.k + 1
-        if k == 0:
-            Zp = self._Z0_prior
-            dd = None
-        else:
+        dd = None
+        if k > 0:
             dd = self._increment(k - 1)
             if dd.dim != self.sys.q:
                 raise DimensionError(f"increment set at k={k - 1} has dimension {dd.dim}")
+        fast = self._fast_step(k, yv, uv, dd)
+        if fast is not None:
+            self.stats["fast"] += 1
+            Z_src, box, box_o = fast
+            Zd = None
+            if self.keep_sets:
+                model, c, b, h = Z_src
+                Zd = self.P @ model.to_cz(c, b, h)
+            return self._commit(k, Z_src, box, box_o, Zd, yv, uv, dd)
+        self.stats["reference"] += 1
+        if k == 0:
+            Zp = self._Z0_prior
+        else:
             if self.window is not None and len(self._hulls) == self.window:
                 # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
                 start = self._box_cz(self._hulls[0])
@@ -350,15 +487,21 @@ class SMFDO:
             # once delta consistent steps have been collected.
             self._hulls.clear()
             self._hist.clear()
+            self._from_initial = False
+        return self._commit(k, Z, box, box_o, Zd if self.keep_sets else None, yv, uv, dd)
+
+    def _commit(self, k, Z_src, box, box_o, Zd, yv, uv, dd) -> SMFDOStep:
         self.k = k
-        self._Z = Z
+        self._Z_src = Z_src
         if self.window is not None:
             self._hulls.append(box_o)
             self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
         lo, hi = self._outward(box.lo, box.hi)
-        est = Box(lo, hi).center
+        with np.errstate(invalid="ignore"):
+            mid = 0.5 * lo + 0.5 * hi  # Box.center
+            est = np.where(np.isfinite(mid), mid, np.nan)
         rad = float(np.max(0.5 * (hi - lo), initial=0.0))
-        return SMFDOStep(k, est, lo, hi, rad, Zd if self.keep_sets else None)
+        return SMFDOStep(k, est, lo, hi, rad, Zd)
 
     def _bounds(self, Z: ConstrainedZonotope):
         """Disturbance set ``P Z``, its hull, and (windowed mode) the hull of ``Z``."""
@@ -370,8 +513,11 @@ class SMFDO:
         return Zd, Zd.interval_hull(), box_o
 
     def _outward(self, lo, hi):
-        scale = np.maximum(1.0, np.maximum(np.abs(np.where(np.isfinite(lo), lo, 0)),
-                                           np.abs(np.where(np.isfinite(hi), hi, 0))))
+        a, b = np.abs(lo), np.abs(hi)
+        if np.isinf(a).any() or np.isinf(b).any():
+            a[np.isinf(a)] = 0.0
+            b[np.isinf(b)] = 0.0
+        scale = np.maximum(1.0, np.maximum(a, b))
         return lo - self.margin * scale, hi + self.margin * scale
 
     def _handle_empty(self, k: int, Zp: ConstrainedZonotope, y: NDArray[np.float64]):

@@ -1,0 +1,202 @@
+"""Fast certified LPs over factor polytopes whose *structure* is fixed.
+
+Many queries share the constraint matrix and the objectives and differ only in
+the right-hand side and the factor bounds: the SMFDO's interval hulls in
+windowed mode (Li-Cong-Dong, eq. (24)) solve ``2 (N_o + q)`` LPs per step over
+``{xi : A xi = b, |xi| <= h}`` with ``A`` and the objectives fixed once the
+window is full; only ``b`` (the data) and ``h`` (the reset box) change.
+
+:class:`FixedStructureLP` exploits that:
+
+* **free factors eliminated once.** For the unbounded factors ``U``
+  (``h = inf``) the objective must satisfy ``w_U = A_U^T y_U`` (otherwise the
+  LP is unbounded below, decided once per direction); the remaining LP is
+  ``min (w_B - A_B^T y_U)^T xi_B`` subject to ``Q2^T A_B xi_B = Q2^T b``,
+  ``|xi_B| <= h_B`` with ``Q2`` an orthonormal basis of ``range(A_U)^perp``;
+* **a compiled bounded dual simplex** (:mod:`setobs.geometry._simplex`,
+  numba) with an explicit basis inverse, **warm-started per direction** from
+  the previous optimal basis: with ``A`` and ``w`` fixed that basis stays dual
+  feasible whatever ``b`` and ``h`` are, so a new right-hand side typically
+  costs zero to three pivots;
+* **the same certificate as the HiGHS path**: the multiplier ``y = y_U + Q2 z``
+  is certified on the original data by the Lagrangian bound of
+  :func:`setobs.geometry.lp.lagrangian_lower_bound` (compiled, same error
+  analysis, exact products and summation for the free factors' reduced costs).
+
+The fast path never decides anything it cannot certify: an LP is reported
+solved (``ok``) only if its certified bound is finite and within ``1e-9 (1 +
+|obj|)`` of the simplex objective. Infeasible, iteration-limited, numerically
+delicate and ambiguous cases are flagged so that the caller can hand them to
+the reference path (:class:`setobs.geometry.lp.FactorPolytope`), which decides
+emptiness with a certified phase-1 LP.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
+from . import _simplex
+
+__all__ = ["FixedStructureLP"]
+
+#: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
+#: direction is unbounded below, and below which it is bounded; in between the
+#: direction is left to the reference path.
+_UNBOUNDED_CLEAR = 1e-6
+_BOUNDED_CLEAR = 1e-12
+#: Accepted gap between the certified bound and the simplex objective.
+GAP_RTOL = 1e-9
+#: Relative size of the singular values that make a structure unusable (rank
+#: decisions between these and 1 would have to be made; the reference path
+#: does not make them, so the fast path does not either).
+_RANK_GREY = 1e-6
+
+
+class FixedStructureLP:
+    """The LPs ``min W[i]^T xi`` over ``{A xi = b, |xi_j| <= h_j}`` for varying ``b``, ``h``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (m, n)
+        Constraint matrix (fixed).
+    W : ndarray, shape (n_lp, n)
+        Objectives (fixed).
+    free : ndarray of bool, shape (n,)
+        Factors with ``h = inf`` (fixed); the others must get finite bounds.
+    radius : float
+        Radius on unbounded factors used in certification (see
+        :mod:`setobs.geometry.lp`).
+
+    Attributes
+    ----------
+    usable : bool
+        False if the structure needs rank decisions the reference path does not
+        make (redundant equality rows, nearly dependent free columns); every
+        :meth:`minimize_all` then reports nothing solved.
+    reason : str
+        Why the structure is not usable ("" if usable).
+    """
+
+    def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
+                 free: NDArray[np.bool_], radius: float = UNBOUNDED_RADIUS) -> None:
+        self.A = np.ascontiguousarray(A, dtype=np.float64)
+        self.W = np.ascontiguousarray(W, dtype=np.float64)
+        self.free = np.asarray(free, dtype=bool)
+        self.radius = float(radius)
+        m, n = self.A.shape
+        self.m, self.n = m, n
+        self.n_lp = self.W.shape[0]
+        self.fidx = np.flatnonzero(self.free).astype(np.int64)
+        self.bidx = np.flatnonzero(~self.free).astype(np.int64)
+        self.usable = True
+        self.reason = ""
+        f = self.fidx.size
+        A_U = self.A[:, self.fidx]
+        A_B = self.A[:, self.bidx]
+        self.pinvU = np.ascontiguousarray(
+            np.linalg.pinv(A_U.T) if (f and m) else np.zeros((m, f)))
+        if f and m:
+            Us, s, _ = np.linalg.svd(A_U, full_matrices=True)
+            smax = float(s.max(initial=0.0))
+            rank = int((s > _RANK_GREY * smax).sum()) if smax > 0 else 0
+            if smax > 0 and ((s > 1e-14 * smax) & (s <= _RANK_GREY * smax)).any():
+                self._unusable("nearly dependent unbounded factor columns")
+            Q2 = Us[:, rank:]
+        else:
+            Q2 = np.eye(m)
+        self.Q2 = np.ascontiguousarray(Q2)
+        W_U = self.W[:, self.fidx]
+        yU = W_U @ self.pinvU.T if f else np.zeros((self.n_lp, m))
+        self.yU = np.ascontiguousarray(yU)
+        self.dirstat = np.zeros(self.n_lp, dtype=np.int64)
+        if f:
+            res = W_U - yU @ A_U
+            scale = np.abs(W_U) + np.abs(yU) @ np.abs(A_U)
+            rel = (np.abs(res) / np.maximum(scale, np.finfo(float).tiny)).max(axis=1)
+            self.dirstat[rel > _BOUNDED_CLEAR] = 2
+            self.dirstat[rel > _UNBOUNDED_CLEAR] = 1
+        self.Wred = np.ascontiguousarray(self.W[:, self.bidx] - yU @ A_B)
+        self.Ared = np.ascontiguousarray(self.Q2.T @ A_B)
+        self.AredT = np.ascontiguousarray(self.Ared.T)
+        mr, nb = self.Ared.shape
+        self.mr = mr
+        basis = np.arange(0, dtype=np.int64)
+        binv = np.zeros((0, 0))
+        if mr:
+            if mr > nb:
+                self._unusable("more independent equality rows than bounded factors")
+            else:
+                sv = np.linalg.svd(self.Ared, compute_uv=False)
+                if sv[-1] <= _RANK_GREY * sv[0]:
+                    self._unusable("redundant or nearly redundant equality rows")
+                else:
+                    _, _, piv = scipy.linalg.qr(self.Ared, pivoting=True, mode="economic")
+                    basis = np.sort(piv[:mr]).astype(np.int64)
+                    binv = np.linalg.inv(self.Ared[:, basis])
+        self.bases = np.ascontiguousarray(np.tile(basis, (self.n_lp, 1)))
+        self.upper = np.zeros((self.n_lp, nb), dtype=np.bool_)
+        self.binv = np.ascontiguousarray(np.tile(binv, (self.n_lp, 1, 1)))
+        self.npiv = np.zeros(self.n_lp, dtype=np.int64)
+        self.maxit = 20 * (mr + 5)
+        self._bounds = np.empty(self.n_lp)
+        self._objs = np.empty(self.n_lp)
+        self._codes = np.empty(self.n_lp, dtype=np.int64)
+        self.calls = 0
+        self.failures = 0
+
+    def _unusable(self, why: str) -> None:
+        self.usable = False
+        self.reason = why
+
+    def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Certified lower bounds of ``min W[i]^T xi`` for all ``i``.
+
+        Parameters
+        ----------
+        b : ndarray, shape (m,)
+        h : ndarray, shape (n,)
+            Factor bounds: ``inf`` exactly on the structure's free factors.
+
+        Returns
+        -------
+        bounds : ndarray, shape (n_lp,)
+            Certified lower bounds (``-inf`` for directions unbounded below);
+            meaningful only where ``ok``.
+        ok : ndarray of bool, shape (n_lp,)
+            Solved and certified tight; the others must go to the reference path.
+        """
+        h = np.asarray(h, dtype=np.float64)
+        if not np.array_equal(np.isinf(h), self.free):
+            raise ValueError("the unbounded factors differ from the structure's")
+        bounds, ok = self._minimize_all(np.ascontiguousarray(b, dtype=np.float64),
+                                        np.ascontiguousarray(h))
+        return bounds.copy(), ok
+
+    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """:meth:`minimize_all` for contiguous float arrays with the right free factors.
+
+        The returned bounds are a buffer reused by the next call.
+        """
+        self.calls += 1
+        bounds, codes = self._bounds, self._codes
+        if not self.usable:
+            self.failures += 1
+            return bounds, np.zeros(self.n_lp, dtype=bool)
+        if self.fidx.size:
+            bred, hB = self.Q2.T @ b, np.ascontiguousarray(h[self.bidx])
+        else:
+            bred, hB = b, h
+        _simplex.solve_batch(
+            self.A, b, h, self.fidx, self.pinvU, self.Ared, self.AredT, bred, hB, self.W, self.Wred,
+            self.yU, self.Q2, self.dirstat, self.bases, self.upper, self.binv, self.npiv,
+            self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, GAP_RTOL, bounds,
+            self._objs, codes)
+        ok = codes == _simplex.OPTIMAL
+        if not ok.all():
+            self.failures += 1
+        return bounds, ok
