@@ -53,6 +53,9 @@ GAP_RTOL = 1e-9
 #: decisions between these and 1 would have to be made; the reference path
 #: does not make them, so the fast path does not either).
 _RANK_GREY = 1e-6
+#: Relative residual of the data on the left null space of ``A`` (redundant rows)
+#: above which the reduced LP is not trusted (the reference path decides emptiness).
+_CONSISTENCY_RTOL = 1e-11
 
 
 class FixedStructureLP:
@@ -98,11 +101,13 @@ class FixedStructureLP:
         A_B = self.A[:, self.bidx]
         self.pinvU = np.ascontiguousarray(
             np.linalg.pinv(A_U.T) if (f and m) else np.zeros((m, f)))
+        # Rank decisions are relative to the norm of the whole matrix A (a block
+        # of rounding-level entries is zero, whatever its own scale).
+        anorm = float(np.linalg.norm(self.A, 2)) if self.A.size else 0.0
         if f and m:
             Us, s, _ = np.linalg.svd(A_U, full_matrices=True)
-            smax = float(s.max(initial=0.0))
-            rank = int((s > _RANK_GREY * smax).sum()) if smax > 0 else 0
-            if smax > 0 and ((s > 1e-14 * smax) & (s <= _RANK_GREY * smax)).any():
+            rank = int((s > _RANK_GREY * anorm).sum())
+            if ((s > 1e-14 * anorm) & (s <= _RANK_GREY * anorm)).any():
                 self._unusable("nearly dependent unbounded factor columns")
             Q2 = Us[:, rank:]
         else:
@@ -119,23 +124,36 @@ class FixedStructureLP:
             self.dirstat[rel > _BOUNDED_CLEAR] = 2
             self.dirstat[rel > _UNBOUNDED_CLEAR] = 1
         self.Wred = np.ascontiguousarray(self.W[:, self.bidx] - yU @ A_B)
-        self.Ared = np.ascontiguousarray(self.Q2.T @ A_B)
+        # Redundant rows (more measurements than new factors, e.g. l > q in the
+        # SMFDO): keep an orthonormal basis U1 of the row space of Q2^T A_B; the
+        # data must then satisfy the left-null-space equations Q0^T b = 0 up to
+        # rounding, which minimize_all checks before trusting the reduced LP.
+        A_red = Q2.T @ A_B
+        Q0 = np.zeros((m, 0))
+        if A_red.size:
+            Ur, sv, _ = np.linalg.svd(A_red, full_matrices=True)
+            rank = int((sv > _RANK_GREY * anorm).sum())
+            if ((sv > 1e-14 * anorm) & (sv <= _RANK_GREY * anorm)).any():
+                self._unusable("nearly redundant equality rows")
+            if rank < A_red.shape[0]:
+                Q0 = Q2 @ Ur[:, rank:]
+                Q2 = Q2 @ Ur[:, :rank]
+                A_red = Ur[:, :rank].T @ A_red
+        elif Q2.shape[1]:
+            Q0, Q2, A_red = Q2, np.zeros((m, 0)), np.zeros((0, A_B.shape[1]))
+        self.Q2 = np.ascontiguousarray(Q2)
+        self.Q0 = np.ascontiguousarray(Q0)
+        self._absAB = np.abs(A_B)
+        self.Ared = np.ascontiguousarray(A_red)
         self.AredT = np.ascontiguousarray(self.Ared.T)
         mr, nb = self.Ared.shape
         self.mr = mr
         basis = np.arange(0, dtype=np.int64)
         binv = np.zeros((0, 0))
-        if mr:
-            if mr > nb:
-                self._unusable("more independent equality rows than bounded factors")
-            else:
-                sv = np.linalg.svd(self.Ared, compute_uv=False)
-                if sv[-1] <= _RANK_GREY * sv[0]:
-                    self._unusable("redundant or nearly redundant equality rows")
-                else:
-                    _, _, piv = scipy.linalg.qr(self.Ared, pivoting=True, mode="economic")
-                    basis = np.sort(piv[:mr]).astype(np.int64)
-                    binv = np.linalg.inv(self.Ared[:, basis])
+        if mr and self.usable:
+            _, _, piv = scipy.linalg.qr(self.Ared, pivoting=True, mode="economic")
+            basis = np.sort(piv[:mr]).astype(np.int64)
+            binv = np.linalg.inv(self.Ared[:, basis])
         self.bases = np.ascontiguousarray(np.tile(basis, (self.n_lp, 1)))
         self.upper = np.zeros((self.n_lp, nb), dtype=np.bool_)
         self.binv = np.ascontiguousarray(np.tile(binv, (self.n_lp, 1, 1)))
@@ -176,10 +194,12 @@ class FixedStructureLP:
                                         np.ascontiguousarray(h))
         return bounds.copy(), ok
 
-    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64]
-                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
+                      b_scale: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """:meth:`minimize_all` for contiguous float arrays with the right free factors.
 
+        ``b_scale`` is the magnitude of the terms ``b`` was computed from (its
+        rounding errors are relative to it, not to ``b`` after cancellation).
         The returned bounds are a buffer reused by the next call.
         """
         self.calls += 1
@@ -187,10 +207,15 @@ class FixedStructureLP:
         if not self.usable:
             self.failures += 1
             return bounds, np.zeros(self.n_lp, dtype=bool)
-        if self.fidx.size:
-            bred, hB = self.Q2.T @ b, np.ascontiguousarray(h[self.bidx])
-        else:
-            bred, hB = b, h
+        hB = np.ascontiguousarray(h[self.bidx]) if self.fidx.size else h
+        if self.Q0.shape[1]:
+            # data consistent with the redundant rows (up to rounding)?
+            scale = max(float(np.abs(b).max(initial=0.0)), b_scale,
+                        float((self._absAB @ hB).max(initial=0.0)), 1e-300)
+            if float(np.abs(self.Q0.T @ b).max()) > _CONSISTENCY_RTOL * scale:
+                self.failures += 1
+                return bounds, np.zeros(self.n_lp, dtype=bool)
+        bred = self.Q2.T @ b
         _simplex.solve_batch(
             self.A, b, h, self.fidx, self.pinvU, self.Ared, self.AredT, bred, hB, self.W, self.Wred,
             self.yU, self.Q2, self.dirstat, self.bases, self.upper, self.binv, self.npiv,

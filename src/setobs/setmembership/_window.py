@@ -136,6 +136,7 @@ class WindowModel:
         W2[1::2] = -W
         self.P = P
         self.radius = radius
+        self._b_scale = 0.0
         self.lp = FixedStructureLP(self.A, W2, self.free, radius)
 
     @property
@@ -151,6 +152,8 @@ class WindowModel:
             b_tail = b_tail + self.b_u @ u
         b_tail[self.y_pos] += Y.reshape(-1)
         b = np.concatenate([b_S, b_tail]) if self.nS_rows else b_tail
+        # magnitude of the terms b is made of (y and C_o c_j cancel in b)
+        self._b_scale = float(np.abs(Y).max(initial=0.0))
         c = self.c_c @ c_S + self.c_const
         if self.p:
             c = c + self.c_u @ u
@@ -163,7 +166,7 @@ class WindowModel:
         Returns ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded
         outward exactly as :meth:`ConstrainedZonotope.interval_hull` does.
         """
-        bounds, ok = self.lp._minimize_all(b, h)
+        bounds, ok = self.lp._minimize_all(b, h, self._b_scale)
         if not ok.all():
             return None
         low, upp = bounds[0::2], -bounds[1::2]

@@ -494,7 +494,11 @@ class SMFDO:
         self.k = k
         self._Z_src = Z_src
         if self.window is not None:
-            self._hulls.append(box_o)
+            # The restart box of eq. (24) gets the same relative margin as the
+            # reported bounds: the set recursion itself rounds (O(eps)), and a
+            # box without margin can make a thin set (states pinned to rounding
+            # level) empty at a later step.
+            self._hulls.append(Box._trusted(*self._outward(box_o.lo, box_o.hi)))
             self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
         lo, hi = self._outward(box.lo, box.hi)
         with np.errstate(invalid="ignore"):

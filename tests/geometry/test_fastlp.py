@@ -1,0 +1,204 @@
+"""The fast fixed-structure LP path against the HiGHS reference, exact optima and its own limits."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from setobs import EmptySetError
+from setobs.geometry import _simplex
+from setobs.geometry.fastlp import FixedStructureLP
+from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
+from tests.conftest import exact_extremes, random_cz
+
+RTOL = 1e-8
+
+
+def _agree(fast: float, ref: float) -> bool:
+    if np.isinf(fast) or np.isinf(ref):
+        return fast == ref
+    return abs(fast - ref) <= RTOL * (1.0 + abs(ref))
+
+
+def _random_structure(rng, free_p=0.15):
+    m = int(rng.integers(0, 13))
+    n = m + int(rng.integers(1, 11))
+    A = rng.normal(size=(m, n)) * 10.0 ** rng.uniform(-1, 1)
+    free = rng.random(n) < free_p
+    W = rng.normal(size=(6, n))
+    return A, np.vstack([W, -W]), free
+
+
+def test_fast_lp_equals_highs_on_12000_random_instances():
+    """>= 10 000 random LPs (with free factors): every fast bound equals HiGHS's to 1e-8."""
+    rng = np.random.default_rng(2026)
+    total = solved = 0
+    for _ in range(200):
+        A, W, free = _random_structure(rng)
+        S = FixedStructureLP(A, W, free)
+        assert S.usable, S.reason
+        for _ in range(5):
+            h = np.where(free, np.inf, rng.uniform(0.0, 3.0, free.size))
+            xi = np.where(free, rng.normal(size=free.size), rng.uniform(-1, 1, free.size) * h)
+            b = A @ xi
+            bounds, ok = S.minimize_all(b, h)
+            fp = FactorPolytope(A, b, h)
+            for i in range(W.shape[0]):
+                total += 1
+                if not ok[i]:
+                    continue
+                solved += 1
+                ref = fp.minimize(W[i]).bound
+                assert _agree(bounds[i], ref), (bounds[i], ref)
+    assert total >= 10_000
+    assert solved >= 0.99 * total  # the fast path is not a fallback in disguise
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_fast_bound_never_exceeds_the_exact_minimum(seed):
+    """Outward after certification: checked against rational vertex enumeration."""
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=5, n_c=2)
+    W = np.vstack([Z.G, -Z.G])
+    S = FixedStructureLP(Z.A, W, np.isinf(Z.h))
+    bounds, ok = S.minimize_all(Z.b, Z.h)
+    for i in range(2):
+        e = np.zeros(2)
+        e[i] = 1.0
+        lo, hi = exact_extremes(Z, e)
+        c = Fraction(float(Z.c[i]))
+        for bnd, good, exact in ((bounds[i], ok[i], lo - c), (bounds[2 + i], ok[2 + i], c - hi)):
+            if good:
+                assert Fraction(bnd) <= exact
+                assert float(exact - Fraction(bnd)) <= RTOL * (1 + abs(float(exact)))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_compiled_certificate_matches_the_reference_formula(seed):
+    """The compiled certificate is the reference's bound (same analysis), for any multiplier."""
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(1, 8))
+    n = m + int(rng.integers(1, 8))
+    A = rng.normal(size=(m, n))
+    h = rng.uniform(0, 2, n)
+    h[rng.random(n) < 0.3] = np.inf
+    xi = np.where(np.isinf(h), rng.normal(size=n), rng.uniform(-1, 1, n) * np.where(
+        np.isinf(h), 0, h))
+    b = A @ xi
+    fidx = np.flatnonzero(np.isinf(h)).astype(np.int64)
+    pinvU = np.ascontiguousarray(np.linalg.pinv(A[:, fidx].T)) if fidx.size else np.zeros((m, 0))
+    # an objective that is bounded (w_U in range(A_U^T)) and an arbitrary one
+    y0 = rng.normal(size=m)
+    for w in (A.T @ y0 + np.where(np.isinf(h), 0.0, rng.normal(size=n)), rng.normal(size=n)):
+        y = y0 + 1e-3 * rng.normal(size=m)
+        ref, _ = lagrangian_lower_bound(w, A, b, h, y)
+        fast = _simplex.certify(w, A, b, h, y, fidx, pinvU, 1e8, 1e-10)
+        if np.isinf(ref) or np.isinf(fast):
+            assert ref == fast
+        else:
+            assert abs(fast - ref) <= 1e-12 * (1 + abs(ref)) + 1e-6 * 1e8 * 1e-16
+            assert fast <= w @ xi + 1e-9 * (1 + abs(w @ xi))  # below a feasible value
+
+
+def test_degenerate_instances_are_exact_or_flagged():
+    rng = np.random.default_rng(4)
+    checked = 0
+    for _ in range(60):
+        m, n = 6, 12
+        A = rng.normal(size=(m, n))
+        A[:, 6:9] = A[:, 0:3]  # duplicated columns (dual degeneracy)
+        h = rng.uniform(0.5, 2.0, n)
+        h[10] = 0.0  # a fixed factor
+        # a vertex of the box: primal degenerate right-hand side
+        xi = np.sign(rng.normal(size=n)) * h
+        b = A @ xi
+        W = np.vstack([rng.normal(size=(3, n)), np.zeros((1, n))])
+        W[1, 6:9] = W[1, 0:3]
+        S = FixedStructureLP(A, np.vstack([W, -W]), np.zeros(n, bool))
+        bounds, ok = S.minimize_all(b, h)
+        fp = FactorPolytope(A, b, h)
+        for i in np.flatnonzero(ok):
+            assert _agree(bounds[i], fp.minimize(S.W[i]).bound)
+            checked += 1
+    assert checked >= 300
+
+
+def test_infeasible_instances_are_handed_to_the_reference():
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(4, 7))
+    h = np.ones(7)
+    b = A @ np.ones(7) * 3.0 + 10.0  # far outside A [-1, 1]^7 in some row
+    W = np.vstack([np.eye(7)[:2], -np.eye(7)[:2]])
+    S = FixedStructureLP(A, W, np.zeros(7, bool))
+    _, ok = S.minimize_all(b, h)
+    assert not ok.any()
+    with pytest.raises(EmptySetError):
+        FactorPolytope(A, b, h).minimize(W[0])
+
+
+def test_unbounded_directions_are_minus_inf_like_the_reference():
+    # x = xi_0 (free), y = xi_1 (free) with xi_0 + xi_1 + xi_2 = 0.5, |xi_2| <= 1.
+    A = np.array([[1.0, 1.0, 1.0]])
+    W = np.array([[1.0, 0, 0], [-1.0, 0, 0], [1.0, 1.0, 0], [-1.0, -1.0, 0]])
+    free = np.array([True, True, False])
+    S = FixedStructureLP(A, W, free)
+    h = np.array([np.inf, np.inf, 1.0])
+    bounds, ok = S.minimize_all(np.array([0.5]), h)
+    assert ok.all()
+    fp = FactorPolytope(A, np.array([0.5]), h)
+    for i in range(4):
+        assert _agree(bounds[i], fp.minimize(W[i]).bound)
+    assert np.isinf(bounds[:2]).all()
+    # xi_0 + xi_1 = 0.5 - xi_2 is in [-0.5, 1.5]
+    assert bounds[2] <= -0.5 and bounds[2] > -0.5 - 1e-12
+    assert bounds[3] <= -1.5 and bounds[3] > -1.5 - 1e-12
+
+
+def test_redundant_rows_need_consistent_data():
+    """More rows than the row rank (more measurements than new factors, l > q)."""
+    A = np.array([[1.0, 2.0, 0.5], [2.0, 4.0, 1.0], [0.0, 1.0, -1.0]])  # row 2 = 2 row 1
+    W = np.vstack([np.eye(3), -np.eye(3)])
+    S = FixedStructureLP(A, W, np.zeros(3, bool))
+    assert S.usable and S.Q0.shape[1] == 1
+    h = np.ones(3)
+    b = A @ np.array([0.2, -0.1, 0.3])
+    bounds, ok = S.minimize_all(b, h)
+    assert ok.all()
+    fp = FactorPolytope(A, b, h)
+    assert all(_agree(bounds[i], fp.minimize(W[i]).bound) for i in range(6))
+    # data off the row space (an outlier): the reference decides (here: empty)
+    _, ok = S.minimize_all(b + np.array([0.0, 1.0, 0.0]), h)
+    assert not ok.any()
+    with pytest.raises(EmptySetError):
+        FactorPolytope(A, b + np.array([0.0, 1.0, 0.0]), h).minimize(W[0])
+
+
+def test_structures_needing_rank_decisions_are_refused():
+    A = np.array([[1.0, 2.0, 0.0], [1.0, 2.0 + 1e-9, 0.0]])  # nearly dependent rows
+    S = FixedStructureLP(A, np.eye(3), np.zeros(3, bool))
+    assert not S.usable and "redundant" in S.reason
+    _, ok = S.minimize_all(np.array([1.0, 1.0]), np.ones(3))
+    assert not ok.any()
+    with pytest.raises(ValueError, match="unbounded factors"):
+        S.minimize_all(np.array([1.0, 2.0]), np.array([1.0, np.inf, 1.0]))
+
+
+def test_warm_start_survives_new_data_and_counts_failures():
+    rng = np.random.default_rng(8)
+    A = rng.normal(size=(5, 9))
+    W = np.vstack([np.eye(9)[:3], -np.eye(9)[:3]])
+    S = FixedStructureLP(A, W, np.zeros(9, bool))
+    for _ in range(200):  # many rhs on the same bases: refactorisations happen
+        h = rng.uniform(0.5, 2, 9)
+        b = A @ (rng.uniform(-1, 1, 9) * h)
+        bounds, ok = S.minimize_all(b, h)
+        assert ok.all()
+        fp = FactorPolytope(A, b, h)
+        assert all(_agree(bounds[i], fp.minimize(W[i]).bound) for i in range(6))
+    assert S.failures == 0 and S.calls == 200
