@@ -150,9 +150,10 @@ class SMFDO:
         :class:`ModelInvalidatedWarning` is issued (as in the set-membership
         filtering literature; the guarantee is lost at that step by construction).
     margin : float
-        Relative outward margin added to reported bounds to cover the
-        ``O(eps)`` rounding of the set recursion itself (the LP bounds are
-        certified for the stored sets).
+        Relative outward margin added to reported bounds, and to the interval
+        hulls that restart the window (eq. (24)), to cover the ``O(eps)``
+        rounding of the set recursion itself (the LP bounds are certified for
+        the stored sets).
     keep_sets : bool
         Store ``P Z_k`` in each step result.
     fast : bool
