@@ -35,7 +35,7 @@ import numpy as np
 
 import setobs as so
 from _common import hull_cvxpy
-from setobs.geometry.fastlp import FixedStructureLP
+from setobs.geometry.fastlp import FixedStructureLP, hull_objectives
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign
 
 
@@ -66,10 +66,7 @@ def hull_PZ_times(sys, sc, trs):
             if k >= 15 and isinstance(obs._Z_src, tuple):
                 inst.append(obs._Z_src)
     model = inst[0][0]
-    PG = obs.P @ model.G
-    W = np.empty((2 * PG.shape[0], PG.shape[1]))
-    W[0::2], W[1::2] = PG, -PG
-    lp = FixedStructureLP(model.A, W, model.free, model.radius)
+    lp = FixedStructureLP(model.A, hull_objectives(obs.P @ model.G), model.free, model.radius)
     fast_t, ref_t, sets, maxdiff = [], [], [], 0.0
     for m, c, b, h in inst:
         if m is not model:

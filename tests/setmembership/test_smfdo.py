@@ -155,21 +155,29 @@ def test_windowed_width_stays_bounded_over_2000_steps():
     assert r[-500:].max() <= 1.5 * r[:500].max()
 
 
-def test_soundness_many_random_runs():
-    rng = np.random.default_rng(21)
+def random_runs(rng, count, N):
+    """Random systems (q + 1 outputs) satisfying Theorem 1, with data and a valid window.
+
+    Yields ``(sys, step, Y, D, window)``; increments are uniform in ``|dd_i| <= step``.
+    """
     runs = 0
-    while runs < 15:
+    while runs < count:
         n, q = int(rng.integers(2, 5)), int(rng.integers(1, 3))
         sys = LinearSystem(rng.normal(size=(n, n)) * 0.5, rng.normal(size=(n, q)),
                            rng.normal(size=(q + 1, n)))
         if not so.analysis.bounded_do_exists(sys).satisfied:
             continue
         step = float(rng.uniform(0.1, 2.0))
-        Y, D = simulate(sys, 80, rng, rng.normal(size=n) * 3, rng.normal(size=q) * 5, step)
+        Y, D = simulate(sys, N, rng, rng.normal(size=n) * 3, rng.normal(size=q) * 5, step)
         w = max(int(rng.integers(1, 6)), so.SMFDO(sys).mu_o - 1)
-        res = so.SMFDO(sys, window=w, increment_set=np.full(q, step)).run(Y)
-        assert res.violations(D) == 0
+        yield sys, step, Y, D, w
         runs += 1
+
+
+def test_soundness_many_random_runs():
+    for sys, step, Y, D, w in random_runs(np.random.default_rng(21), 15, 80):
+        res = so.SMFDO(sys, window=w, increment_set=np.full(sys.q, step)).run(Y)
+        assert res.violations(D) == 0
 
 
 # ------------------------------------------------------------------- estimates

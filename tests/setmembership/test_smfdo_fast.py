@@ -13,7 +13,7 @@ from setobs.geometry.lp import FactorPolytope
 from setobs.setmembership import ModelInvalidatedError, ModelInvalidatedWarning
 from setobs.setmembership import smfdo as smfdo_module
 from setobs.studies import Scenario, rng_for_run
-from tests.setmembership.test_smfdo import simulate
+from tests.setmembership.test_smfdo import random_runs, simulate
 
 RTOL = 1e-8
 
@@ -142,24 +142,13 @@ def test_fast_equals_reference_with_inputs_rotated_basis_and_constrained_increme
 
 
 def test_random_systems_fast_equals_reference():
-    rng = np.random.default_rng(21)
-    runs = 0
-    while runs < 6:
-        n, q = int(rng.integers(2, 5)), int(rng.integers(1, 3))
-        sys = LinearSystem(rng.normal(size=(n, n)) * 0.5, rng.normal(size=(n, q)),
-                           rng.normal(size=(q + 1, n)))
-        if not so.analysis.bounded_do_exists(sys).satisfied:
-            continue
-        step = float(rng.uniform(0.1, 2.0))
-        Y, D = simulate(sys, 60, rng, rng.normal(size=n) * 3, rng.normal(size=q) * 5, step)
-        w = max(int(rng.integers(1, 6)), so.SMFDO(sys).mu_o - 1)
-        kw = dict(window=w, increment_set=np.full(q, step))
+    for sys, step, Y, D, w in random_runs(np.random.default_rng(21), 6, 60):
+        kw = dict(window=w, increment_set=np.full(sys.q, step))
         fast = so.SMFDO(sys, **kw)
         rf, rr = fast.run(Y), so.SMFDO(sys, fast=False, **kw).run(Y)
         _close(rf.lo, rr.lo)
         _close(rf.hi, rr.hi)
         assert rf.violations(D) == 0
-        runs += 1
 
 
 def _with_outlier():

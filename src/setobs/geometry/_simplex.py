@@ -293,6 +293,16 @@ def _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials):
 
 
 @njit(cache=True)
+def _add_pinv(pinvU, v, y):
+    """``y += pinvU @ v`` (refinement step on the unbounded columns)."""
+    for i in range(y.size):
+        s = 0.0
+        for kk in range(v.size):
+            s += pinvU[i, kk] * v[kk]
+        y[i] += s
+
+
+@njit(cache=True)
 def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
     """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any ``y``.
 
@@ -323,11 +333,7 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
                 for i in range(m):
                     s -= A[i, j] * y1[i]
                 res[kk] = s
-            for i in range(m):
-                s = 0.0
-                for kk in range(f):
-                    s += pinvU[i, kk] * res[kk]
-                y1[i] += s
+            _add_pinv(pinvU, res, y1)
         guard = _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials)
         for _ in range(2):
             nz = False
@@ -336,11 +342,7 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
                     nz = True
             if not nz:
                 break
-            for i in range(m):
-                s = 0.0
-                for kk in range(f):
-                    s += pinvU[i, kk] * ru[kk]
-                y2[i] += s
+            _add_pinv(pinvU, ru, y2)
             guard = _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials)
     elif f > 0:
         for kk in range(f):

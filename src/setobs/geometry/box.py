@@ -8,7 +8,14 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import as_vector, readonly
 from ..exceptions import DimensionError
 
-__all__ = ["Box"]
+__all__ = ["Box", "box_center"]
+
+
+def box_center(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded."""
+    with np.errstate(invalid="ignore"):
+        mid = 0.5 * lo + 0.5 * hi
+    return np.where(np.isfinite(mid), mid, np.nan)
 
 
 class Box:
@@ -83,9 +90,7 @@ class Box:
     @property
     def center(self) -> NDArray[np.float64]:
         """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded."""
-        with np.errstate(invalid="ignore"):
-            mid = 0.5 * self._lo + 0.5 * self._hi
-        return np.where(np.isfinite(mid), mid, np.nan)
+        return box_center(self._lo, self._hi)
 
     @property
     def radius(self) -> NDArray[np.float64]:

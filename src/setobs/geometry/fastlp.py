@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 from . import _simplex
 
-__all__ = ["FixedStructureLP"]
+__all__ = ["FixedStructureLP", "hull_from_bounds", "hull_objectives"]
 
 #: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
 #: direction is unbounded below, and below which it is bounded; in between the
@@ -56,6 +56,29 @@ _RANK_GREY = 1e-6
 #: Relative residual of the data on the left null space of ``A`` (redundant rows)
 #: above which the reduced LP is not trusted (the reference path decides emptiness).
 _CONSISTENCY_RTOL = 1e-11
+
+
+def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Objectives ``[W_0, -W_0, W_1, -W_1, ...]`` of the interval hull of ``{W z}``."""
+    W2 = np.empty((2 * W.shape[0], W.shape[1]))
+    W2[0::2] = W
+    W2[1::2] = -W
+    return W2
+
+
+def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """Interval hull ``c + [bounds[0::2], -bounds[1::2]]`` of the objectives of
+    :func:`hull_objectives`, rounded outward as
+    :meth:`ConstrainedZonotope.interval_hull` does; ``None`` if the certified
+    bounds cross (emptiness must then be decided by the reference path)."""
+    low, upp = bounds[0::2], -bounds[1::2]
+    if (low > upp).any():
+        return None
+    with np.errstate(invalid="ignore"):
+        lo = np.where(np.isfinite(low), np.nextafter(low + c, -np.inf), -np.inf)
+        hi = np.where(np.isfinite(upp), np.nextafter(upp + c, np.inf), np.inf)
+    return lo, hi
 
 
 class FixedStructureLP:

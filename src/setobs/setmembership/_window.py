@@ -23,15 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import ConstrainedZonotope
-from ..geometry.fastlp import FixedStructureLP
-
-
-def _down(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.nextafter(x, -np.inf)
-
-
-def _up(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.nextafter(x, np.inf)
+from ..geometry.fastlp import FixedStructureLP, hull_from_bounds, hull_objectives
 
 
 class WindowModel:
@@ -131,13 +123,9 @@ class WindowModel:
         self.free = np.concatenate([np.asarray(free_S, dtype=bool), np.isinf(self.h_D)])
         W = G if P is None else np.vstack([G, P @ G])
         self.n_dir = W.shape[0]
-        W2 = np.empty((2 * self.n_dir, n_g))
-        W2[0::2] = W
-        W2[1::2] = -W
         self.P = P
         self.radius = radius
-        self._b_scale = 0.0
-        self.lp = FixedStructureLP(self.A, W2, self.free, radius)
+        self.lp = FixedStructureLP(self.A, hull_objectives(W), self.free, radius)
 
     @property
     def usable(self) -> bool:
@@ -152,31 +140,25 @@ class WindowModel:
             b_tail = b_tail + self.b_u @ u
         b_tail[self.y_pos] += Y.reshape(-1)
         b = np.concatenate([b_S, b_tail]) if self.nS_rows else b_tail
-        # magnitude of the terms b is made of (y and C_o c_j cancel in b)
-        self._b_scale = float(np.abs(Y).max(initial=0.0))
         c = self.c_c @ c_S + self.c_const
         if self.p:
             c = c + self.c_u @ u
         h = np.concatenate([h_S, self.h_D])
         return c, b, h
 
-    def hull(self, c, b, h):
+    def hull(self, c, b, h, y_scale: float):
         """Certified hull bounds of ``Z`` (and of ``P Z``), or ``None`` if any LP failed.
 
-        Returns ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded
-        outward exactly as :meth:`ConstrainedZonotope.interval_hull` does.
+        ``y_scale`` is the magnitude of the measurements (``b`` is ``y - C_o c_j``,
+        where the two cancel; its rounding is relative to them). Returns
+        ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded outward
+        exactly as :meth:`ConstrainedZonotope.interval_hull` does.
         """
-        bounds, ok = self.lp._minimize_all(b, h, self._b_scale)
+        bounds, ok = self.lp._minimize_all(b, h, y_scale)
         if not ok.all():
             return None
-        low, upp = bounds[0::2], -bounds[1::2]
         cc = c if self.P is None else np.concatenate([c, self.P @ c])
-        if (low > upp).any():
-            return None  # crossing bounds: emptiness must be decided by the reference
-        with np.errstate(invalid="ignore"):
-            lo = np.where(np.isfinite(low), _down(low + cc), -np.inf)
-            hi = np.where(np.isfinite(upp), _up(upp + cc), np.inf)
-        return lo, hi
+        return hull_from_bounds(bounds, cc)
 
     def to_cz(self, c, b, h) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""

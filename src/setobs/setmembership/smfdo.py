@@ -16,6 +16,7 @@ from ..analysis import bounded_do_exists, observability_decomposition
 from ..analysis.existence import BoundedDOReport
 from ..exceptions import DimensionError, EmptySetError, SetobsError
 from ..geometry import Box, ConstrainedZonotope
+from ..geometry.box import box_center
 from ..geometry.zonotope import box_center_radius
 from ..systems import LinearSystem
 from ..tolerances import UNBOUNDED_RADIUS
@@ -350,11 +351,8 @@ class SMFDO:
         P_extra = None if self._P_coords is not None else self.P
         inc = self._inc_fixed
         if len(self._hulls) == win:
-            hull0 = self._hulls[0]
-            lo, hi = hull0.lo, hull0.hi
-            free = np.isinf(lo) | np.isinf(hi)  # an outer answer: free both ways
-            if free.any():
-                lo, hi = np.where(free, -np.inf, lo), np.where(free, np.inf, hi)
+            lo, hi = self._restart_bounds(self._hulls[0])
+            free = np.isinf(lo)
             c_S, h_S = box_center_radius(lo, hi)
             b_S = np.zeros(0)
             hist = [*list(self._hist)[1:], (yv, uv, dd)]
@@ -386,7 +384,7 @@ class SMFDO:
         else:
             U = np.zeros((model.s, 0))
         c, b, h = model.assemble(c_S, b_S, h_S, Y, U)
-        out = model.hull(c, b, h)
+        out = model.hull(c, b, h, float(np.abs(Y).max(initial=0.0)))
         if out is None:
             return None
         lo, hi = out
@@ -412,11 +410,18 @@ class SMFDO:
         return Zp.intersect_affine(self.C_o, y)
 
     @staticmethod
-    def _box_cz(box: Box) -> ConstrainedZonotope:
-        lo, hi = box.lo.copy(), box.hi.copy()
-        free = np.isinf(lo) | np.isinf(hi)  # an outer answer: free both ways
-        lo[free], hi[free] = -np.inf, np.inf
-        return ConstrainedZonotope.from_box(lo, hi)
+    def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Bounds of the restart box: a coordinate unbounded on one side is made
+        free both ways (an outer answer; extended CZs have no one-sided boxes)."""
+        lo, hi = box.lo, box.hi
+        free = np.isinf(lo) | np.isinf(hi)
+        if free.any():
+            lo, hi = np.where(free, -np.inf, lo), np.where(free, np.inf, hi)
+        return lo, hi
+
+    @classmethod
+    def _box_cz(cls, box: Box) -> ConstrainedZonotope:
+        return ConstrainedZonotope.from_box(*cls._restart_bounds(box))
 
     def _check_inputs(self, y: ArrayLike, u_prev: ArrayLike | None):
         yv = as_vector("y", y, size=self.sys.l)
@@ -457,7 +462,8 @@ class SMFDO:
             Zd = None
             if self.keep_sets:
                 model, c, b, h = Z_src
-                Zd = self.P @ model.to_cz(c, b, h)
+                Z_src = model.to_cz(c, b, h)
+                Zd = self.P @ Z_src
             return self._commit(k, Z_src, box, box_o, Zd, yv, uv, dd)
         self.stats["reference"] += 1
         if k == 0:
@@ -502,9 +508,7 @@ class SMFDO:
             self._hulls.append(Box._trusted(*self._outward(box_o.lo, box_o.hi)))
             self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
         lo, hi = self._outward(box.lo, box.hi)
-        with np.errstate(invalid="ignore"):
-            mid = 0.5 * lo + 0.5 * hi  # Box.center
-            est = np.where(np.isfinite(mid), mid, np.nan)
+        est = box_center(lo, hi)
         rad = float(np.max(0.5 * (hi - lo), initial=0.0))
         return SMFDOStep(k, est, lo, hi, rad, Zd)
 
