@@ -124,3 +124,24 @@ def test_plot_returns_artist_on_given_and_current_axes():
     plt.close(fig2)
     with pytest.raises(UnboundedSetError):
         ConstrainedZonotope.full_space(2).plot()
+
+
+def test_vertex_that_float_cdd_redundancy_removal_dropped():
+    """A true vertex 2.3e-4 outside the chord of its neighbours (found by hypothesis in CI):
+    cdd's floating-point canonicalisation removed it; the certified support proves it."""
+    Z = random_cz(np.random.default_rng(1013598), n=2, n_g=5, n_c=1)
+    V = Z.vertices()
+    assert as_set(V, 6) == as_set(polygon_2d(Z), 6)
+    v = np.array([1.514899, -3.210643])
+    k = int(np.argmin(np.linalg.norm(V - v, axis=1)))
+    assert np.linalg.norm(V[k] - v) < 1e-5
+    # neighbours in angular order around the centroid
+    ang = np.arctan2(*(V - V.mean(axis=0)).T[::-1])
+    order = list(np.argsort(ang))
+    i = order.index(k)
+    a, c = V[order[i - 1]], V[order[(i + 1) % len(order)]]
+    e = c - a
+    nrm = np.array([e[1], -e[0]]) / np.linalg.norm(e)
+    if nrm @ (V[k] - a) < 0:
+        nrm = -nrm
+    assert Z.support(nrm) - nrm @ a > 2e-4  # the set reaches past the chord
