@@ -12,13 +12,59 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import DimensionError
 
-__all__ = ["as_matrix", "as_vector", "readonly"]
+__all__ = ["as_matrix", "as_vector", "check_real_scalar", "readonly"]
 
 
 def readonly(a: NDArray[Any]) -> NDArray[Any]:
     """Return ``a`` (already a private copy) marked read-only."""
     a.flags.writeable = False
     return a
+
+
+def _to_float(name: str, value: ArrayLike, what: str) -> NDArray[np.float64]:
+    """A float64 copy of ``value``; complex, non-numeric and ragged input is refused."""
+    if isinstance(value, str | bytes) or value is None:
+        raise DimensionError(f"{name} must be a real numeric {what}, got {value!r}")
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise DimensionError(f"{name} must be a real numeric {what}: {exc}") from None
+    if np.iscomplexobj(raw):
+        if np.any(np.imag(raw) != 0):
+            raise DimensionError(f"{name} must be real, got complex entries")
+        raw = np.real(raw)
+    if raw.dtype.kind not in "biuf":
+        if raw.dtype.kind == "O":
+            try:
+                return np.array(raw.tolist(), dtype=np.float64, copy=True)
+            except (TypeError, ValueError) as exc:
+                raise DimensionError(f"{name} must be a real numeric {what}: {exc}") from None
+        raise DimensionError(f"{name} must be a real numeric {what}, got dtype {raw.dtype}")
+    return np.array(raw, dtype=np.float64, copy=True)
+
+
+def check_real_scalar(name: str, value: object, *, positive: bool = False,
+                      nonnegative: bool = False) -> float:
+    """A finite real number (not a bool), optionally positive or nonnegative.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number.
+    DimensionError
+        If it is NaN, infinite, or out of range.
+    """
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
+                                                             | np.floating):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    v = float(value)
+    if not np.isfinite(v):
+        raise DimensionError(f"{name} must be finite, got {value!r}")
+    if positive and not v > 0:
+        raise DimensionError(f"{name} must be positive, got {value!r}")
+    if nonnegative and v < 0:
+        raise DimensionError(f"{name} must be nonnegative, got {value!r}")
+    return v
 
 
 def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool) -> None:
@@ -60,12 +106,10 @@ def as_matrix(
     Raises
     ------
     DimensionError
-        On a wrong number of dimensions, a wrong shape, NaN, or inf.
+        On a wrong number of dimensions, a wrong shape, NaN, inf, complex or
+        non-numeric entries.
     """
-    try:
-        a = np.array(value, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise DimensionError(f"{name} must be a real numeric matrix: {exc}") from None
+    a = _to_float(name, value, "matrix")
     if a.ndim == 1 and a.size == 0 and rows is not None and cols is not None:
         a = a.reshape(rows, cols) if rows * cols == 0 else a
     if a.ndim == 1:
@@ -101,12 +145,10 @@ def as_vector(
     Raises
     ------
     DimensionError
-        On a wrong size, more than one non-singleton dimension, NaN, or inf.
+        On a wrong size, more than one non-singleton dimension, NaN, inf, complex
+        or non-numeric entries.
     """
-    try:
-        a = np.array(value, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise DimensionError(f"{name} must be a real numeric vector: {exc}") from None
+    a = _to_float(name, value, "vector")
     if a.ndim == 0:
         a = a.reshape(1)
     elif a.ndim == 2 and 1 in a.shape:

@@ -12,6 +12,7 @@ __all__ = [
     "EmptySetError",
     "SetobsError",
     "SolverError",
+    "SolverWarning",
     "UnboundedSetError",
 ]
 
@@ -44,3 +45,11 @@ class SolverError(SetobsError, RuntimeError):
     def __init__(self, message: str, status: str = "") -> None:
         super().__init__(message)
         self.status = status
+
+
+class SolverWarning(RuntimeWarning):
+    """A solver failed on every retry and a wider certified outer answer was returned.
+
+    The answer is still a guaranteed outer bound (it may be ``+-inf``); only its
+    tightness was lost.
+    """

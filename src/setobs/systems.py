@@ -13,7 +13,7 @@ from scipy.linalg import expm
 from ._validation import as_matrix, readonly
 from .exceptions import DimensionError
 
-__all__ = ["AugmentedSystem", "LinearSystem"]
+__all__ = ["AugmentedSystem", "LinearSystem", "require_system"]
 
 
 @dataclass(frozen=True)
@@ -243,3 +243,20 @@ class LinearSystem:
         sy = np.ones(self.l) if output_scale is None else np.asarray(output_scale, float)
         return LinearSystem(T_a @ self.Phi @ Ti, (T_a @ self.G) / sd, (sy[:, None] * self.Xi) @ Ti,
                             T_a @ self.Gamma if self.p else None, dt=self.dt)
+
+
+def require_system(sys: Any, name: str = "sys") -> LinearSystem:
+    """``sys`` if it is a :class:`LinearSystem`; otherwise a ``TypeError`` saying what to do.
+
+    A ``control.StateSpace`` (or anything with ``A, B, C, D``) is refused with
+    a pointer to :meth:`LinearSystem.from_statespace`, which needs to know
+    which inputs are disturbances.
+    """
+    if isinstance(sys, LinearSystem):
+        return sys
+    if all(hasattr(sys, a) for a in ("A", "B", "C", "D")):
+        raise TypeError(
+            f"{name} must be a LinearSystem, got {type(sys).__name__}: convert a state-space "
+            "model with LinearSystem.from_statespace(ss, disturbance_inputs=[...]) (it must "
+            "know which inputs are disturbances)")
+    raise TypeError(f"{name} must be a LinearSystem, got {type(sys).__name__}")

@@ -24,9 +24,15 @@ Policy
 from __future__ import annotations
 
 __all__ = [
+    "DATA_RTOL",
     "FEASIBILITY_TOL",
+    "FRAGILE_MARGIN_DECADES",
+    "PRODUCT_RTOL",
+    "RANK_FLOOR",
+    "RANK_RTOL",
     "UNBOUNDED_RADIUS",
     "UNBOUNDED_REDUCED_COST_TOL",
+    "UNIT_CIRCLE_TOL",
     "ZERO_TOL",
 ]
 
@@ -42,6 +48,11 @@ UNBOUNDED_REDUCED_COST_TOL: float = 1e-10
 #: Relative threshold below which a row/column is treated as numerically zero in reductions.
 ZERO_TOL: float = 1e-12
 
+#: Relative uncertainty of measured data (``y``, ``u``) at rounding level in the SMFDO:
+#: the representation error of a double plus a few roundings in the code that
+#: produced the data (``2 eps``). The certified bounds hold for all data within it.
+DATA_RTOL: float = 2.0 * 2.220446049250313e-16
+
 # ---------------------------------------------------------------------------
 # Structural analysis (setobs.analysis)
 # ---------------------------------------------------------------------------
@@ -55,6 +66,12 @@ ZERO_TOL: float = 1e-12
 
 #: Relative threshold for numerical rank decisions on balanced data.
 RANK_RTOL: float = 1e-9
+
+#: Relative size below which a singular value is zero at the precision of the
+#: data (a few hundred ``eps``: what rounding alone leaves of a structural zero).
+#: Between ``RANK_FLOOR`` and ``RANK_RTOL`` a rank is *undecidable* at this
+#: precision: verdicts that depend on it say so rather than guess.
+RANK_FLOOR: float = 1e-14
 
 #: Relative threshold for computed products ``C A^k E`` (relative degrees, UIO
 #: delay), measured against their rounding-error scale

@@ -47,7 +47,7 @@ def _lp_instances(obs, Y, U=None):
         before = obs.stats["fast"]
         obs.update(y, None if U is None or j == 0 else U[j - 1])
         if obs.stats["fast"] > before:
-            model, _, b, h = obs._Z_src
+            model, _, b, h, _, _ = obs._Z_src
             yield model, b, h
 
 
@@ -93,7 +93,7 @@ def test_fast_equals_reference_on_the_paper_example(window):
         _close(rf.lo, rr.lo)
         _close(rf.hi, rr.hi)
         assert rf.violations(tr.D) == 0
-        assert fast.stats == {"fast": 100, "reference": 0}
+        assert fast.stats == {"fast": 100, "reference": 0, "fallback": 0}
 
 
 def test_fast_equals_reference_with_inputs_rotated_basis_and_constrained_increments():
@@ -130,15 +130,49 @@ def test_fast_equals_reference_with_inputs_rotated_basis_and_constrained_increme
         v = rng.uniform(-1, 1, 2)
         d = d + v / max(1.0, np.abs(v).sum())
     kw = dict(window=5, increment_set=diamond)
-    fast = so.SMFDO(sys, **kw)
-    rf, rr = fast.run(np.array(Ys)), so.SMFDO(sys, fast=False, **kw).run(np.array(Ys))
-    # Run-level: HiGHS's bounds on these sets sit up to a few 1e-7 below the fast
-    # path's (tighter, certified) ones at some steps, and the window carries that on;
-    # LP by LP the two agree to 1e-8 (the 10 000-instance test).
-    _close(rf.lo, rr.lo, 1e-6)
-    _close(rf.hi, rr.hi, 1e-6)
+    fast = so.SMFDO(sys, keep_sets=True, **kw)
+    rf = fast.run(np.array(Ys))
+    # The windowed recursion with this increment set amplifies perturbations of
+    # the restart boxes enormously (a margin of 0 instead of 1e-9 moves bounds by
+    # O(0.1) after 60 steps; see test_windowed_recursion_amplifies_rounding), so
+    # the two paths, which round differently, are compared step by step on the
+    # same set instead of run against run: every fast step's hull equals HiGHS's
+    # hull of the set it describes.
+    for k in range(5, 80, 7):
+        S = rf.steps[k].disturbance_set
+        hull = ConstrainedZonotope(S.G, S.c, S.A, S.b, S.h).interval_hull()  # HiGHS path
+        _close(rf.lo[k], hull.lo, 1e-8)
+        _close(rf.hi[k], hull.hi, 1e-8)
     assert rf.violations(np.array(Ds)) == 0
+    assert so.SMFDO(sys, fast=False, **kw).run(np.array(Ys)).violations(np.array(Ds)) == 0
     assert fast.stats["fast"] >= 75
+
+
+def test_windowed_recursion_amplifies_rounding():
+    """A finding pinned: the window's restart (eq. (24)) is not contractive.
+
+    Chang 2006 with the diamond increment set and delta = 5: changing the outward
+    margin of the restart boxes from 1e-9 to 0 moves the bounds by more than 1e-3
+    within 80 steps. (Both runs stay sound.) Run-level comparisons of windowed
+    results therefore need tolerances far above the rounding level.
+    """
+    sys = so.examples.chang2006()
+    diamond = ConstrainedZonotope.from_hpolytope(
+        [[1, 1], [1, -1], [-1, 1], [-1, -1]], [1, 1, 1, 1])
+    rng = np.random.default_rng(4)
+    x, d, Ys, Ds = np.zeros(3), np.array([0.5, -1.0]), [], []
+    for _ in range(80):
+        Ys.append(sys.Xi @ x)
+        Ds.append(d.copy())
+        x = sys.Phi @ x + sys.G @ d
+        v = rng.uniform(-1, 1, 2)
+        d = d + v / max(1.0, np.abs(v).sum())
+    Y = np.array(Ys)
+    a = so.SMFDO(sys, window=5, increment_set=diamond).run(Y)
+    b = so.SMFDO(sys, window=5, increment_set=diamond, margin=0.0).run(Y)
+    fin = np.isfinite(a.lo) & np.isfinite(b.lo)
+    assert np.abs(a.lo[fin] - b.lo[fin]).max() > 1e-3
+    assert a.violations(np.array(Ds)) == 0 and b.violations(np.array(Ds)) == 0
 
 
 def test_random_systems_fast_equals_reference():
@@ -185,8 +219,13 @@ def test_outlier_reset_goes_through_the_reference_path_and_agrees():
             # until it is full again, then the fast path resumes
             assert obs.stats["reference"] >= 10 and obs.stats["fast"] >= 40
     assert msgs[True] == msgs[False]  # the same resets at the same steps
-    _close(out[True].lo, out[False].lo)
-    _close(out[True].hi, out[False].hi)
+    assert np.array_equal(out[True].status, out[False].status)
+    assert list(out[True].status[[40, 42]]) == ["reset", "reset"]
+    # The two paths bound their rounding differently (closed form vs set operations)
+    # and the windowed recursion amplifies such differences (see
+    # test_windowed_recursion_amplifies_rounding): 1e-7 after two resets.
+    _close(out[True].lo, out[False].lo, 1e-7)
+    _close(out[True].hi, out[False].hi, 1e-7)
 
 
 def test_time_varying_increment_set_uses_the_reference_path():
@@ -195,7 +234,7 @@ def test_time_varying_increment_set_uses_the_reference_path():
     box = ConstrainedZonotope.from_box(-np.ones(2), np.ones(2))
     obs = so.SMFDO(sys, window=5, increment_set=lambda k: box)
     r1 = obs.run(trs[0].Y)
-    assert obs.stats == {"fast": 0, "reference": 100}
+    assert obs.stats == {"fast": 0, "reference": 100, "fallback": 0}
     r2 = so.SMFDO(sys, window=5).run(trs[0].Y)
     _close(r1.lo, r2.lo)
     _close(r1.hi, r2.hi)

@@ -155,9 +155,13 @@ def observability(A: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RTOL) -> Obs
 class ObservabilityDecomposition:
     """Orthonormal observability decomposition of the augmented system (Li-Cong-Dong, (12)-(14)).
 
-    ``T = [T_o; T_obar]`` is orthogonal, ``z_tilde = T z`` with ``z = [x; d]``;
-    ``A_tilde = T A T^T = [[A_o, 0], [A_21, A_obar]]``, ``B_tilde = T [0; I_q]``,
-    ``Gamma_tilde = T [Gamma; 0]``, ``C_tilde = C T^T = [C_o, 0]``.
+    ``T = [T_o; T_obar]`` is orthogonal, ``z_tilde = T D^-1 z`` with ``z = [x; d]``
+    and ``D = diag(state_scale)`` (identity unless a balanced decomposition was
+    asked for); with ``A_b = D^-1 A D``, ``C_b = diag(output_scale)^-1 C D``:
+    ``A_tilde = T A_b T^T = [[A_o, 0], [A_21, A_obar]]``,
+    ``B_tilde = T D^-1 [0; I_q]``, ``Gamma_tilde = T D^-1 [Gamma; 0]``,
+    ``C_tilde = C_b T^T = [C_o, 0]``; measurements enter as
+    ``y_b = diag(output_scale)^-1 y``.
     """
 
     T_o: NDArray[np.float64]
@@ -171,6 +175,8 @@ class ObservabilityDecomposition:
     Gamma_obar: NDArray[np.float64]
     C_o: NDArray[np.float64]
     report: ObservabilityReport
+    state_scale: NDArray[np.float64] | None = None
+    output_scale: NDArray[np.float64] | None = None
 
     @property
     def T(self) -> NDArray[np.float64]:
@@ -189,20 +195,46 @@ def augmented_observability(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Ob
     return observability(aug.A, aug.C, rtol=rtol)
 
 
-def observability_decomposition(sys: LinearSystem, *, rtol: float = RANK_RTOL
+def observability_decomposition(sys: LinearSystem, *, rtol: float = RANK_RTOL,
+                                balance: bool = False,
+                                disturbance_scale: ArrayLike | None = None
                                 ) -> ObservabilityDecomposition:
-    """Orthonormal observability decomposition of the augmented system, eqs. (12)-(14)."""
+    """Orthonormal observability decomposition of the augmented system, eqs. (12)-(14).
+
+    Parameters
+    ----------
+    balance : bool
+        Decompose a balanced realisation (diagonal power-of-two scaling of the
+        augmented states and of the outputs, LAPACK ``gebal`` on
+        ``[[A, E S], [C, 0]]``): the decomposition is then orthogonal in
+        balanced coordinates (``state_scale``, ``output_scale`` record the
+        scaling). Badly scaled models (entries from ``1e-9`` to ``1e7``) give
+        well-conditioned observable coordinates this way.
+    disturbance_scale : array_like, shape (q,), optional
+        Magnitudes ``S`` of the disturbance increments, used by the balancing.
+    """
     aug = sys.augmented()
-    rep = observability(aug.A, aug.C, rtol=rtol)
+    A, E, C, Gam = aug.A, aug.E, aug.C, aug.Gamma
+    dz = dy = None
+    if balance:
+        S = np.ones(sys.q) if disturbance_scale is None else np.asarray(disturbance_scale,
+                                                                        dtype=float)
+        S = np.where(np.isfinite(S) & (S > 0), S, 1.0)
+        _, _, _, dz, _, dy = balance_system(A, E * S, C)
+        A = A / dz[:, None] * dz[None, :]
+        E = E / dz[:, None]
+        Gam = Gam / dz[:, None]
+        C = C / dy[:, None] * dz[None, :]
+    rep = observability(A, C, rtol=rtol)
     T_o, T_ob = rep.observable_rows, rep.unobservable_rows
     N_o = T_o.shape[0]
     T = np.vstack([T_o, T_ob])
-    At = T @ aug.A @ T.T
-    Bt = T @ aug.E
-    Gt = T @ aug.Gamma
-    Ct = aug.C @ T.T
+    At = T @ A @ T.T
+    Bt = T @ E
+    Gt = T @ Gam
+    Ct = C @ T.T
     return ObservabilityDecomposition(
         T_o, T_ob, At[:N_o, :N_o], At[N_o:, :N_o], At[N_o:, N_o:], Bt[:N_o], Bt[N_o:],
-        Gt[:N_o], Gt[N_o:], Ct[:, :N_o], rep,
+        Gt[:N_o], Gt[N_o:], Ct[:, :N_o], rep, dz, dy,
     )
 

@@ -87,20 +87,19 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
     reassociation).
 
     On return ``x`` is the basic solution and ``y = B^{-T} w_B`` the row
-    multiplier (the code is ``OPTIMAL`` when ``x`` is primal feasible within
-    ``1e-9 (1 + max h)``).
+    multiplier (the code is ``OPTIMAL`` when every basic ``x_j`` is within
+    ``1e-9 (1 + h_j)`` of its range; the leaving row is the largest violation
+    relative to that tolerance).
     """
     m, n = A.shape
     isb = np.zeros(n, np.bool_)
     for i in range(m):
         isb[basis[i]] = True
     wmax = 0.0
-    hmax = 0.0
     for j in range(n):
         wmax = max(wmax, abs(w[j]))
-        hmax = max(hmax, h[j])
     dtol = 1e-12 * wmax
-    ptol = 1e-9 * (1.0 + hmax)
+    ptol = 1e-9
     d = np.empty(n)
     alpha = np.empty(n)
     rhs = np.empty(m)
@@ -146,7 +145,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
             x[basis[i]] = s
         # leaving row: largest bound violation
         r = -1
-        worst = ptol
+        worst = 0.0
         for i in range(m):
             j = basis[i]
             v = x[j]
@@ -156,7 +155,9 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
                 viol = v - h[j]
             else:
                 continue
-            if viol > worst:
+            # relative to the variable's own range (columns are equilibrated)
+            viol = viol / (ptol * (1.0 + h[j]))
+            if viol > 1.0 and viol > worst:
                 worst = viol
                 r = i
         if r < 0:
@@ -244,7 +245,8 @@ def _two_prod_terms(a, b, terms, k):
 
 @njit(cache=True)
 def _exact_sum_bound(terms, nterms, partials):
-    """Shewchuk's exact summation; returns ``(s, bound)`` with ``|sum| <= bound``.
+    """Shewchuk's exact summation; returns ``(s, bound, err)`` with ``|sum| <= bound``
+    and ``|sum - s| <= err``.
 
     The partials are an exact, non-overlapping representation of the sum; ``s``
     is their floating-point sum and ``bound = |s| + gamma_k sum |partials|``.
@@ -270,7 +272,8 @@ def _exact_sum_bound(terms, nterms, partials):
     for k in range(npart):
         s += partials[k]
         sabs += abs(partials[k])
-    return s, abs(s) + _gamma(npart + 1) * sabs
+    err = _gamma(npart + 1) * sabs
+    return s, abs(s) + err, err
 
 
 @njit(cache=True)
@@ -286,7 +289,7 @@ def _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials):
         for i in range(m):
             nt = _two_prod_terms(-A[i, j], y1[i], terms, nt)
             nt = _two_prod_terms(-A[i, j], y2[i], terms, nt)
-        s, bnd = _exact_sum_bound(terms, nt, partials)
+        s, bnd, _ = _exact_sum_bound(terms, nt, partials)
         ru[kk] = s
         ru_bound[kk] = bnd + guard
     return guard
@@ -303,7 +306,7 @@ def _add_pinv(pinvU, v, y):
 
 
 @njit(cache=True)
-def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
+def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb, b_err):
     """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any ``y``.
 
     The same bound and error analysis as
@@ -313,7 +316,14 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
     costs are refined in double-double form and evaluated with exact products
     and exact (Shewchuk) summation, so the radius term is ``O(eps^2)``.
     Returns ``-inf`` when those reduced costs cannot be made negligible
-    (relative residual above ``tol_unb``).
+    (residual above ``tol_unb`` relative to ``max_j |w_j| + |A_j|^T |y|``).
+    ``y^T b`` is summed exactly and rounded once; ``b_err`` (zeros for none)
+    bounds the uncertainty of ``b`` and costs ``tb = sum |y_i| b_err_i``. On
+    return ``y`` holds the refined multiplier ``y1 + y2`` (rounded). Returns
+    ``(bound, slack)``: ``slack`` is the part of ``objective - bound`` that
+    precision alone explains (``tb``, the rounding-error terms, and the
+    reduced costs at rounding level, which are zero for an exact optimal
+    multiplier but cannot be below ``eps |A_j|^T |y|`` for a double one).
     """
     m, n = A.shape
     f = fidx.size
@@ -322,10 +332,10 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
     ru = np.zeros(f)
     ru_bound = np.zeros(f)
     guard = 0.0
+    terms = np.empty(4 * m + 1)
+    partials = np.empty(4 * m + 1)
     if f > 0 and m > 0:
         res = np.empty(f)
-        terms = np.empty(4 * m + 1)
-        partials = np.empty(4 * m + 1)
         for _ in range(2):
             for kk in range(f):
                 j = fidx[kk]
@@ -348,21 +358,6 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
         for kk in range(f):
             ru[kk] = w[fidx[kk]]
             ru_bound[kk] = abs(ru[kk])
-    g2 = 2.0 * _gamma(2 * m + 2)
-    t2 = 0.0
-    if f > 0:
-        for kk in range(f):
-            j = fidx[kk]
-            sc = abs(w[j])
-            for i in range(m):
-                sc += abs(A[i, j]) * (abs(y1[i]) + abs(y2[i]))
-            rel = (ru_bound[kk] - guard) / max(sc, _TINY)
-            if rel > tol_unb:
-                return -np.inf
-        su = 0.0
-        for kk in range(f):
-            su += ru_bound[kk]
-        t2 += radius * su * (1.0 + _gamma(f + 1))
     # r = w - A^T y1 - A^T y2 and its scale |w| + |A|^T (|y1| + |y2|), row by row
     # (any summation order is covered by the gamma bounds)
     r = w.copy()
@@ -379,33 +374,57 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb):
                 r[j] -= A[i, j] * a2
         for j in range(n):
             sc[j] += abs(A[i, j]) * ay
+    g2 = 2.0 * _gamma(2 * m + 2)
+    t2 = 0.0
+    if f > 0:
+        scale_all = _TINY
+        for j in range(n):
+            scale_all = max(scale_all, sc[j])
+        for kk in range(f):
+            rel = (ru_bound[kk] - guard) / scale_all
+            if rel > tol_unb:
+                return -np.inf, np.inf
+        su = 0.0
+        for kk in range(f):
+            su += ru_bound[kk]
+        t2 += radius * su * (1.0 + _gamma(f + 1))
+    slack = t2
     for j in range(n):
         if h[j] == np.inf or h[j] == 0.0:
             continue
-        t2 += h[j] * (abs(r[j]) + g2 * sc[j])
-    t1 = 0.0
-    yb = 0.0
+        rj = abs(r[j])
+        t2 += h[j] * (rj + g2 * sc[j])
+        slack += h[j] * (min(rj, 64.0 * _U * sc[j]) + g2 * sc[j])
+    # t1 = y^T b, exact products summed exactly (error <= gamma * sum |partials|)
+    nt = 0
     for i in range(m):
-        t1 += y1[i] * b[i]
+        nt = _two_prod_terms(y1[i], b[i], terms, nt)
+        nt = _two_prod_terms(y2[i], b[i], terms, nt)
+    t1, _, t1_err = _exact_sum_bound(terms, nt, partials)
+    t1_err += 4.0 * (m + 1) * _TINY
+    tb = 0.0
     for i in range(m):
-        t1 += y2[i] * b[i]
-        yb += (abs(y1[i]) + abs(y2[i])) * abs(b[i])
-    err = 2.0 * (_gamma(2 * m + 2) * yb + _gamma(n + 3) * t2 + _U * (abs(t1) + t2))
-    return np.nextafter(t1 - t2 - err, -np.inf)
+        tb += (abs(y1[i]) + abs(y2[i])) * b_err[i]
+    tb *= 1.0 + _gamma(m + 2)
+    for i in range(m):
+        y[i] = y1[i] + y2[i]
+    err = t1_err * (1.0 + 4.0 * _U) + 2.0 * (_gamma(n + 3) * t2 + _U * (abs(t1) + t2 + tb))
+    return np.nextafter(t1 - t2 - tb - err, -np.inf), slack + tb + 2.0 * err
 
 
 @njit(cache=True)
-def solve_batch(A, b, h, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred, yU, Q2, dirstat,
-                bases, upper, binv, npiv, maxit, radius, tol_unb, gap_rtol,
-                bounds, objs, codes):
+def solve_batch(A, b, h, b_err, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred, yU, Q2, R,
+                dirstat, bases, upper, binv, npiv, maxit, radius, tol_unb, gap_rtol,
+                bounds, objs, codes, ys):
     """All LPs ``min Wfull[i]^T xi`` of one set: reduced simplex, then certification.
 
     ``dirstat[i]``: 0 solve, 1 unbounded below (decided at set-up), 2 ambiguous.
-    The reduced LP (free factors eliminated, rows projected on ``Q2``) is solved
-    warm from ``bases[i]``; its multiplier ``z`` lifts to ``y = yU[i] + Q2 z``,
-    which is certified on the *original* data. ``codes[i] = OPTIMAL`` only if the
+    The reduced LP (of the equilibrated copy ``R A S``: free factors
+    eliminated, rows projected on ``Q2``) is solved warm from ``bases[i]``; its
+    multiplier ``z`` lifts to ``y = R (yU[i] + Q2 z)``, which is certified on
+    the *original* data. ``codes[i] = OPTIMAL`` only if the
     certified bound is finite and within ``gap_rtol (1 + |obj|)`` of the
-    simplex objective.
+    simplex objective. ``ys[i]`` receives the certified multiplier.
     """
     n_lp = Wfull.shape[0]
     mr, nb = Ared.shape
@@ -428,18 +447,29 @@ def solve_batch(A, b, h, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred, yU, Q2
             codes[i] = code
             continue
         obj = 0.0
+        oabs = 0.0
         for j in range(nb):
-            obj += Wred[i, j] * x[j]
+            t = Wred[i, j] * x[j]
+            obj += t
+            oabs += abs(t)
         for k in range(m):
-            obj += yU[i, k] * b[k]
+            t = yU[i, k] * (R[k] * b[k])
+            obj += t
+            oabs += abs(t)
             s = yU[i, k]
-            for t in range(mr):
-                s += Q2[k, t] * z[t]
-            y[k] = s
-        bnd = certify(Wfull[i], A, b, h, y, fidx, pinvU, radius, tol_unb)
+            for t2 in range(mr):
+                s += Q2[k, t2] * z[t2]
+            y[k] = R[k] * s
+        bnd, slack = certify(Wfull[i], A, b, h, y, fidx, pinvU, radius, tol_unb, b_err)
+        ys[i, :] = y
         bounds[i] = bnd
         objs[i] = obj
-        if not np.isfinite(bnd) or obj - bnd > gap_rtol * (1.0 + abs(obj)):
+        # accepted gap: the tolerance, what precision alone explains (the b_err
+        # term, rounding terms, reduced costs at rounding level: see certify),
+        # and the objective's own rounding (large b cancel in it). A wrong basis
+        # leaves a gap well above these.
+        allowed = gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * _gamma(nb + m + 2) * oabs
+        if not np.isfinite(bnd) or obj - bnd > allowed:
             codes[i] = NOT_CERTIFIED
         else:
             codes[i] = OPTIMAL

@@ -23,6 +23,12 @@ window is full; only ``b`` (the data) and ``h`` (the reset box) change.
   :func:`setobs.geometry.lp.lagrangian_lower_bound` (compiled, same error
   analysis, exact products and summation for the free factors' reduced costs).
 
+The structure is immutable once built and can be shared (across SMFDOs,
+processes' caches, threads); the warm-start state (bases, basis inverses,
+buffers) lives in an :class:`LPState` owned by the caller, so concurrent users
+of one structure never see each other's state and a result never depends on
+what else ran before it.
+
 The fast path never decides anything it cannot certify: an LP is reported
 solved (``ok``) only if its certified bound is finite and within ``1e-9 (1 +
 |obj|)`` of the simplex objective. Infeasible, iteration-limited, numerically
@@ -40,7 +46,7 @@ from numpy.typing import NDArray
 from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 from . import _simplex
 
-__all__ = ["FixedStructureLP", "hull_from_bounds", "hull_objectives"]
+__all__ = ["FixedStructureLP", "LPState", "hull_from_bounds", "hull_objectives"]
 
 #: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
 #: direction is unbounded below, and below which it is bounded; in between the
@@ -58,6 +64,26 @@ _RANK_GREY = 1e-6
 _CONSISTENCY_RTOL = 1e-11
 
 
+def _pow2_inverse(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Powers of two ``s`` with ``s v`` in ``[0.5, 1)`` (1 where ``v`` is zero)."""
+    out = np.ones(v.size)
+    pos = v > 0
+    out[pos] = np.ldexp(1.0, -np.frexp(v[pos])[1])
+    return out
+
+
+#: Norms below this fraction of the largest are rounding level: equilibration
+#: leaves them at the scale of the largest instead of blowing them up (a column
+#: of 1e-17 entries left by a rotated basis must not become a unit column, whose
+#: factor would then have a range of 1e-17 and an objective weight of 1e17).
+_EQUILIBRATION_FLOOR = 1e-10
+
+
+def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
+    top = float(norms.max(initial=0.0))
+    return np.where(norms < _EQUILIBRATION_FLOOR * top, top, norms)
+
+
 def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
     """Objectives ``[W_0, -W_0, W_1, -W_1, ...]`` of the interval hull of ``{W z}``."""
     W2 = np.empty((2 * W.shape[0], W.shape[1]))
@@ -66,19 +92,48 @@ def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
     return W2
 
 
-def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64]
+def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64],
+                     c_err: NDArray[np.float64] | None = None
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
     """Interval hull ``c + [bounds[0::2], -bounds[1::2]]`` of the objectives of
     :func:`hull_objectives`, rounded outward as
-    :meth:`ConstrainedZonotope.interval_hull` does; ``None`` if the certified
-    bounds cross (emptiness must then be decided by the reference path)."""
+    :meth:`ConstrainedZonotope.interval_hull` does (and widened by ``c_err``,
+    a bound on the error of ``c``); ``None`` if the certified bounds cross
+    (emptiness must then be decided by the reference path)."""
     low, upp = bounds[0::2], -bounds[1::2]
     if (low > upp).any():
         return None
+    c_lo, c_hi = c, c
+    if c_err is not None:
+        c_lo = np.nextafter(c - c_err, -np.inf)
+        c_hi = np.nextafter(c + c_err, np.inf)
     with np.errstate(invalid="ignore"):
-        lo = np.where(np.isfinite(low), np.nextafter(low + c, -np.inf), -np.inf)
-        hi = np.where(np.isfinite(upp), np.nextafter(upp + c, np.inf), np.inf)
+        lo = np.where(np.isfinite(low), np.nextafter(low + c_lo, -np.inf), -np.inf)
+        hi = np.where(np.isfinite(upp), np.nextafter(upp + c_hi, np.inf), np.inf)
     return lo, hi
+
+
+class LPState:
+    """Warm-start state of one user of a :class:`FixedStructureLP` (mutable, not shared).
+
+    Holds, per objective, the simplex basis, the nonbasic bound flags, the
+    explicit basis inverse and the pivot counter, plus the output buffers.
+    Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
+    structure it uses, so its results depend only on its own data.
+    """
+
+    __slots__ = ("bases", "binv", "bounds", "codes", "npiv", "objs", "upper", "ys")
+
+    def __init__(self, lp: FixedStructureLP) -> None:
+        n_lp = lp.n_lp
+        self.bases = np.ascontiguousarray(np.tile(lp.basis0, (n_lp, 1)))
+        self.upper = np.zeros((n_lp, lp.bidx.size), dtype=np.bool_)
+        self.binv = np.ascontiguousarray(np.tile(lp.binv0, (n_lp, 1, 1)))
+        self.npiv = np.zeros(n_lp, dtype=np.int64)
+        self.bounds = np.empty(n_lp)
+        self.objs = np.empty(n_lp)
+        self.codes = np.empty(n_lp, dtype=np.int64)
+        self.ys = np.empty((n_lp, lp.m))
 
 
 class FixedStructureLP:
@@ -95,7 +150,6 @@ class FixedStructureLP:
     radius : float
         Radius on unbounded factors used in certification (see
         :mod:`setobs.geometry.lp`).
-
     Attributes
     ----------
     usable : bool
@@ -104,6 +158,20 @@ class FixedStructureLP:
         :meth:`minimize_all` then reports nothing solved.
     reason : str
         Why the structure is not usable ("" if usable).
+
+    Notes
+    -----
+    The reduced LP is built and solved on an equilibrated copy ``R A S``
+    (power-of-two scalings to unit column, then unit row norms): the rank
+    decisions (redundant rows, dependent free columns) and the simplex then
+    see the structure, not the units. On a badly scaled model (increments of
+    ``7980`` and ``0.0185``, outputs from ``1e-9`` to ``1e2``) the unscaled
+    reduced matrix has singular values down to ``1e-13`` of its norm where the
+    equilibrated one has ``2e-2``. The multiplier maps back exactly
+    (``y = R y'``) and is certified on the original data.
+
+    Immutable after construction (thread-safe to share); the warm-start state
+    is an :class:`LPState` passed to :meth:`minimize_all`.
     """
 
     def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
@@ -120,13 +188,25 @@ class FixedStructureLP:
         self.usable = True
         self.reason = ""
         f = self.fidx.size
-        A_U = self.A[:, self.fidx]
-        A_B = self.A[:, self.bidx]
+        # Equilibration by powers of two (exact): unit column norms, then unit
+        # row norms. Working copy A' = R A S, W' = W S, factor bounds h / S; the
+        # multiplier of the working LP maps back as y = R y'.
+        S = _pow2_inverse(_floored(np.linalg.norm(self.A, axis=0)))
+        R = _pow2_inverse(_floored(np.linalg.norm(self.A * S, axis=1)))
+        self.S_B = np.ascontiguousarray(S[self.bidx])
+        self.R = np.ascontiguousarray(R)
+        As = R[:, None] * self.A * S
+        Ws = self.W * S
+        A_U = As[:, self.fidx]
+        A_B = As[:, self.bidx]
+        # pinv(A'_U^T) for the working copy; the certificate refines y on the
+        # original columns with pinv(A_U^T) = R pinv(A'_U^T) S_U (A_U of full
+        # column rank; any approximation only affects tightness, not validity)
         self.pinvU = np.ascontiguousarray(
             np.linalg.pinv(A_U.T) if (f and m) else np.zeros((m, f)))
-        # Rank decisions are relative to the norm of the whole matrix A (a block
-        # of rounding-level entries is zero, whatever its own scale).
-        anorm = float(np.linalg.norm(self.A, 2)) if self.A.size else 0.0
+        self.pinvU_orig = np.ascontiguousarray(R[:, None] * self.pinvU * S[self.fidx][None, :])
+        # Rank decisions relative to the norm of the whole (equilibrated) matrix.
+        anorm = float(np.linalg.norm(As, 2)) if As.size else 0.0
         if f and m:
             Us, s, _ = np.linalg.svd(A_U, full_matrices=True)
             rank = int((s > _RANK_GREY * anorm).sum())
@@ -135,18 +215,20 @@ class FixedStructureLP:
             Q2 = Us[:, rank:]
         else:
             Q2 = np.eye(m)
-        self.Q2 = np.ascontiguousarray(Q2)
-        W_U = self.W[:, self.fidx]
+        W_U = Ws[:, self.fidx]
         yU = W_U @ self.pinvU.T if f else np.zeros((self.n_lp, m))
         self.yU = np.ascontiguousarray(yU)
         self.dirstat = np.zeros(self.n_lp, dtype=np.int64)
         if f:
+            # Residual of w_U on range(A_U^T), relative to the whole reduced-cost
+            # computation |W| + |yU| |A| (norm-wise: a column of rounding-level
+            # entries must not make its own residual look large).
             res = W_U - yU @ A_U
-            scale = np.abs(W_U) + np.abs(yU) @ np.abs(A_U)
-            rel = (np.abs(res) / np.maximum(scale, np.finfo(float).tiny)).max(axis=1)
+            scale = (np.abs(Ws) + np.abs(yU) @ np.abs(As)).max(axis=1)
+            rel = np.abs(res).max(axis=1) / np.maximum(scale, np.finfo(float).tiny)
             self.dirstat[rel > _BOUNDED_CLEAR] = 2
             self.dirstat[rel > _UNBOUNDED_CLEAR] = 1
-        self.Wred = np.ascontiguousarray(self.W[:, self.bidx] - yU @ A_B)
+        self.Wred = np.ascontiguousarray(Ws[:, self.bidx] - yU @ A_B)
         # Redundant rows (more measurements than new factors, e.g. l > q in the
         # SMFDO): keep an orthonormal basis U1 of the row space of Q2^T A_B; the
         # data must then satisfy the left-null-space equations Q0^T b = 0 up to
@@ -167,9 +249,10 @@ class FixedStructureLP:
         self.Q2 = np.ascontiguousarray(Q2)
         self.Q0 = np.ascontiguousarray(Q0)
         self._absAB = np.abs(A_B)
+        self._absQ0 = np.abs(self.Q0)
         self.Ared = np.ascontiguousarray(A_red)
         self.AredT = np.ascontiguousarray(self.Ared.T)
-        mr, nb = self.Ared.shape
+        mr = self.Ared.shape[0]
         self.mr = mr
         basis = np.arange(0, dtype=np.int64)
         binv = np.zeros((0, 0))
@@ -177,23 +260,21 @@ class FixedStructureLP:
             _, _, piv = scipy.linalg.qr(self.Ared, pivoting=True, mode="economic")
             basis = np.sort(piv[:mr]).astype(np.int64)
             binv = np.linalg.inv(self.Ared[:, basis])
-        self.bases = np.ascontiguousarray(np.tile(basis, (self.n_lp, 1)))
-        self.upper = np.zeros((self.n_lp, nb), dtype=np.bool_)
-        self.binv = np.ascontiguousarray(np.tile(binv, (self.n_lp, 1, 1)))
-        self.npiv = np.zeros(self.n_lp, dtype=np.int64)
+        self.basis0 = basis
+        self.binv0 = binv
         self.maxit = 20 * (mr + 5)
-        self._bounds = np.empty(self.n_lp)
-        self._objs = np.empty(self.n_lp)
-        self._codes = np.empty(self.n_lp, dtype=np.int64)
-        self.calls = 0
-        self.failures = 0
 
     def _unusable(self, why: str) -> None:
         self.usable = False
         self.reason = why
 
-    def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64]
-                     ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def new_state(self) -> LPState:
+        """A fresh warm-start state (initial basis from QR with pivoting)."""
+        return LPState(self)
+
+    def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
+                     state: LPState | None = None, *, b_err: NDArray[np.float64] | None = None,
+                     return_duals: bool = False):
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i``.
 
         Parameters
@@ -201,6 +282,15 @@ class FixedStructureLP:
         b : ndarray, shape (m,)
         h : ndarray, shape (n,)
             Factor bounds: ``inf`` exactly on the structure's free factors.
+        state : LPState, optional
+            Warm-start state, updated in place (default: a fresh one, i.e. a
+            cold start).
+        b_err : ndarray, shape (m,), optional
+            Bound on the uncertainty of ``b``; the bounds hold for every
+            right-hand side within it.
+        return_duals : bool
+            Also return the certified multipliers (one row per objective) and
+            the simplex objectives.
 
         Returns
         -------
@@ -209,42 +299,50 @@ class FixedStructureLP:
             meaningful only where ``ok``.
         ok : ndarray of bool, shape (n_lp,)
             Solved and certified tight; the others must go to the reference path.
+        ys : ndarray, shape (n_lp, m)
+            The multipliers (only with ``return_duals``).
+        objectives : ndarray, shape (n_lp,)
+            The simplex objectives (only with ``return_duals``).
         """
         h = np.asarray(h, dtype=np.float64)
         if not np.array_equal(np.isinf(h), self.free):
             raise ValueError("the unbounded factors differ from the structure's")
+        st = self.new_state() if state is None else state
         bounds, ok = self._minimize_all(np.ascontiguousarray(b, dtype=np.float64),
-                                        np.ascontiguousarray(h))
+                                        np.ascontiguousarray(h), st, b_err=b_err)
+        if return_duals:
+            return bounds.copy(), ok, st.ys.copy(), st.objs.copy()
         return bounds.copy(), ok
 
-    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
-                      b_scale: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64], st: LPState,
+                      b_scale: float = 0.0, b_err: NDArray[np.float64] | None = None
+                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """:meth:`minimize_all` for contiguous float arrays with the right free factors.
 
         ``b_scale`` is the magnitude of the terms ``b`` was computed from (its
         rounding errors are relative to it, not to ``b`` after cancellation).
-        The returned bounds are a buffer reused by the next call.
+        The returned bounds are the state's buffer, reused by the next call.
         """
-        self.calls += 1
-        bounds, codes = self._bounds, self._codes
+        bounds, codes = st.bounds, st.codes
         if not self.usable:
-            self.failures += 1
             return bounds, np.zeros(self.n_lp, dtype=bool)
-        hB = np.ascontiguousarray(h[self.bidx]) if self.fidx.size else h
+        hB = np.ascontiguousarray(h[self.bidx] / self.S_B)
+        berr = np.zeros(self.m) if b_err is None else np.ascontiguousarray(b_err,
+                                                                           dtype=np.float64)
+        bs = self.R * b  # exact (powers of two)
         if self.Q0.shape[1]:
-            # data consistent with the redundant rows (up to rounding)?
-            scale = max(float(np.abs(b).max(initial=0.0)), b_scale,
+            # data consistent with the redundant rows (up to rounding and b_err)?
+            scale = max(float(np.abs(bs).max(initial=0.0)),
+                        b_scale * float(self.R.max(initial=0.0)),
                         float((self._absAB @ hB).max(initial=0.0)), 1e-300)
-            if float(np.abs(self.Q0.T @ b).max()) > _CONSISTENCY_RTOL * scale:
-                self.failures += 1
+            slack = _CONSISTENCY_RTOL * scale + (self._absQ0.T @ (self.R * berr)
+                                                 if b_err is not None else 0.0)
+            if (np.abs(self.Q0.T @ bs) > slack).any():
                 return bounds, np.zeros(self.n_lp, dtype=bool)
-        bred = self.Q2.T @ b
+        bred = self.Q2.T @ bs
         _simplex.solve_batch(
-            self.A, b, h, self.fidx, self.pinvU, self.Ared, self.AredT, bred, hB, self.W, self.Wred,
-            self.yU, self.Q2, self.dirstat, self.bases, self.upper, self.binv, self.npiv,
-            self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, GAP_RTOL, bounds,
-            self._objs, codes)
-        ok = codes == _simplex.OPTIMAL
-        if not ok.all():
-            self.failures += 1
-        return bounds, ok
+            self.A, b, h, berr, self.fidx, self.pinvU_orig, self.Ared, self.AredT, bred, hB,
+            self.W, self.Wred, self.yU, self.Q2, self.R, self.dirstat, st.bases, st.upper,
+            st.binv, st.npiv, self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, GAP_RTOL,
+            bounds, st.objs, codes, st.ys)
+        return bounds, codes == _simplex.OPTIMAL

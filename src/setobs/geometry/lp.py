@@ -33,21 +33,39 @@ unbounded factors (the term ``radius * (|r_j| + err_j)`` is added); when the
 relative residual stays above ``UNBOUNDED_REDUCED_COST_TOL`` the objective is
 declared unbounded below (``-inf``), which is always an outer answer.
 
+Whether the residual counts as negligible is decided relative to the size of
+the whole reduced-cost computation (``max_j |w_j| + |A_j|^T |y|``), not to the
+unbounded column itself: a column of rounding-level entries (``1e-16`` where
+a model has a structural zero) is then as well determined as any other.
+
+A right-hand side known only to within ``|b - b_stored| <= b_err`` (rounding
+of the operations that formed it, representation error of measured data) is
+covered by the term ``sum_i |y_i| b_err_i``: the bound then holds for every
+such ``b``.
+
 Infeasibility reported by the solver is never trusted either: emptiness is
 decided by a phase-1 LP whose dual gives a certified lower bound on the
 smallest constraint violation (see :meth:`FactorPolytope.emptiness`).
+
+A solver's bad day never aborts a query: an undecided HiGHS status is retried
+with other settings (a fresh unscaled model, default tolerances with the
+primal simplex, the interior-point method) and with the compiled simplex of
+:mod:`setobs.geometry.fastlp`; if every attempt fails, the best certified
+bound of any multiplier seen (at worst ``y = 0``, i.e. ``-sum h_j |w_j|`` or
+``-inf``) is returned with status ``"fallback"``: wider, still outer.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 
 import highspy
 import numpy as np
 from numpy.typing import NDArray
 
-from ..exceptions import EmptySetError, SolverError
+from ..exceptions import EmptySetError
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 
 __all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_bound"]
@@ -89,7 +107,9 @@ class LPOutcome:
         The solver's minimiser (``None`` if unbounded or no LP was needed and no
         point is meaningful).
     status : str
-        ``"optimal"`` or ``"unbounded"``.
+        ``"optimal"``, ``"unbounded"``, or ``"fallback"`` (every solver attempt
+        failed; ``bound`` is the best certified bound of the multipliers seen,
+        possibly ``-inf``).
     """
 
     bound: float
@@ -175,6 +195,17 @@ def _exact_residual(
     return out
 
 
+def _exact_dot(ys: list[NDArray[np.float64]], b: NDArray[np.float64]) -> float:
+    """Correctly rounded ``(y_1 + y_2 + ...)^T b`` (exact Dekker products, :func:`math.fsum`)."""
+    if b.size == 0:
+        return 0.0
+    terms: list[float] = []
+    for y in ys:
+        p, e = _two_prod(b[:, None], y)
+        terms += p[:, 0].tolist() + e[:, 0].tolist()
+    return math.fsum(terms)
+
+
 def lagrangian_lower_bound(
     w: NDArray[np.float64],
     A: NDArray[np.float64],
@@ -186,6 +217,7 @@ def lagrangian_lower_bound(
     radius: float = UNBOUNDED_RADIUS,
     unbounded_pinv: NDArray[np.float64] | None = None,
     w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    b_err: NDArray[np.float64] | None = None,
 ) -> tuple[float, NDArray[np.float64]]:
     """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any multiplier ``y``.
 
@@ -208,6 +240,9 @@ def lagrangian_lower_bound(
         When ``w`` was computed as ``M^T v``, the exact objective on unbounded
         columns is taken from ``(M[:, unbounded], v)`` (no rounding of ``w``
         enters the radius term).
+    b_err : ndarray, optional
+        Elementwise bound on the uncertainty of ``b``: the bound then holds for
+        every right-hand side within ``b +- b_err``.
 
     Returns
     -------
@@ -223,7 +258,9 @@ def lagrangian_lower_bound(
     ``y1 + y2``: ``y1`` is refined in floating point, then the residual reduced
     costs on the unbounded columns are evaluated exactly (correctly rounded)
     and corrected by ``y2``. This brings them to ``O(eps^2)`` relative size, so
-    that the radius term is negligible.
+    that the radius term is negligible. ``y^T b`` is evaluated exactly and
+    rounded once, so that a large right-hand side (measurements of size
+    ``1e8`` whose differences carry the information) costs no accuracy.
     """
     n_c, n_g = A.shape
     unb = np.isinf(h)
@@ -259,19 +296,26 @@ def lagrangian_lower_bound(
         ru_bound = np.abs(ru) / (1.0 - _U) + 2.0 * (2 * n_c + 1) * _TINY
         if w_err is not None and w_pair is None:
             ru_bound = ru_bound + w_err[unb] * (1.0 + 4.0 * _U)
-        rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / np.maximum(scale_r[unb], _TINY)
+        # Negligible relative to the whole reduced-cost computation (norm-wise),
+        # not to the unbounded column alone.
+        scale_all = max(float(scale_r.max(initial=0.0)), _TINY)
+        rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / scale_all
         if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
             return -np.inf, y1
         t2 += radius * float(ru_bound.sum()) * (1.0 + _gamma(ru_bound.size + 1))
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
-    t1 = float(y1 @ b + y2 @ b) if n_c else 0.0
-    err = 2.0 * (
-        _gamma(2 * n_c + 2) * (float(abs_y @ np.abs(b)) if n_c else 0.0)
-        + _gamma(n_g + 3) * t2
-        + _U * (abs(t1) + t2)
+    # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
+    t1 = _exact_dot([y1, y2], b) if n_c else 0.0
+    tb = 0.0
+    if b_err is not None and n_c:
+        tb = float(abs_y @ b_err) * (1.0 + _gamma(n_c + 2))
+    err = _U * abs(t1) + 2.0 * (
+        _gamma(n_g + 3) * t2
+        + _U * (abs(t1) + t2 + tb)
+        + 4.0 * (2 * n_c + 1) * _TINY
     )
-    return _down(t1 - t2 - err), y1 + y2
+    return _down(t1 - t2 - tb - err), y1 + y2
 
 
 def _status_name(h: highspy.Highs) -> str:
@@ -288,6 +332,16 @@ class FactorPolytope:
     h : ndarray, shape (n_g,), entries in ``[0, inf]``
     radius : float
         Radius on unbounded factors used in certification.
+    b_err : ndarray, shape (n_c,), optional
+        Bound on the uncertainty of ``b`` (see :func:`lagrangian_lower_bound`);
+        every bound and emptiness verdict then holds for all ``b`` within it.
+
+    Attributes
+    ----------
+    fallbacks : int
+        Number of queries on which every solver attempt failed and the best
+        certified bound of the multipliers seen was returned (status
+        ``"fallback"``).
 
     Notes
     -----
@@ -297,8 +351,10 @@ class FactorPolytope:
     interval-hull LPs (``benchmarks/interval_hull.py``) it measured faster than
     the primal simplex at every size (e.g. 374 ms vs 558 ms for the 20 LPs of
     ``(n, n_gen, n_con) = (10, 200, 150)``), although only the objective changes.
-    If a solve ends without a decided status, a fresh model with the dual
-    simplex is tried once before :class:`~setobs.SolverError` is raised.
+    If a solve ends without a decided status, it is retried (see the module
+    notes) before a ``"fallback"`` answer is returned. Queries on one instance
+    are serialised by a lock (the HiGHS model is stateful), so a set shared by
+    threads stays correct.
     """
 
     def __init__(
@@ -307,17 +363,31 @@ class FactorPolytope:
         b: NDArray[np.float64],
         h: NDArray[np.float64],
         radius: float = UNBOUNDED_RADIUS,
+        b_err: NDArray[np.float64] | None = None,
     ) -> None:
         self.A = A
         self.b = b
         self.h = h
         self.radius = radius
+        self.b_err = None if b_err is None or not np.any(b_err) else b_err
         self.n_c, self.n_g = A.shape
         self._unb = np.isinf(h)
         self._unb_pinv: NDArray[np.float64] | None = None
         self._model: highspy.Highs | None = None
-        self._phase1: highspy.Highs | None = None
         self._emptiness: dict[float, EmptinessReport] = {}
+        self._lock = threading.RLock()
+        self.fallbacks = 0
+
+    def __getstate__(self) -> dict:
+        # HiGHS models and locks do not pickle; they are rebuilt on demand.
+        state = self.__dict__.copy()
+        state["_model"] = None
+        del state["_lock"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.RLock()
 
     # -- model construction ------------------------------------------------
     @staticmethod
@@ -335,7 +405,8 @@ class FactorPolytope:
         return hs
 
     @staticmethod
-    def _pass(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> None:
+    def _pass(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> bool:
+        """Pass the LP to HiGHS; ``False`` if HiGHS rejects the model."""
         lp = highspy.HighsLp()
         n_r, n_col = A.shape
         lp.num_col_ = n_col
@@ -356,25 +427,31 @@ class FactorPolytope:
         lp.a_matrix_.value_ = np.ascontiguousarray(A.T[rows, cols])
         lp.a_matrix_.num_col_ = n_col
         lp.a_matrix_.num_row_ = n_r
-        status = hs.passModel(lp)
-        if status == highspy.HighsStatus.kError:
-            raise SolverError("HiGHS rejected the LP model", status=str(status))
+        return hs.passModel(lp) != highspy.HighsStatus.kError
 
     def _col_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         up = np.where(self._unb, _INF, self.h)
         return -up, up
 
-    def _build(self, row_lo, row_hi, cost, *, unscaled: bool = False) -> highspy.Highs:
+    #: Settings of the retries after an undecided status (see the module notes).
+    _RETRIES: tuple[dict[str, object], ...] = (
+        {"simplex_strategy": 1, "simplex_scale_strategy": 0},
+        {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-7,
+         "dual_feasibility_tolerance": 1e-7},
+        {"solver": "ipm", "run_crossover": "on"},
+    )
+
+    def _build(self, row_lo, row_hi, cost, options: dict[str, object] | None = None
+               ) -> highspy.Highs | None:
         """A HiGHS model of ``min cost^T xi, row_lo <= A xi <= row_hi, |xi| <= h``."""
         hs = self._new_highs()
         hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
-        if unscaled:
-            hs.setOptionValue("simplex_scale_strategy", 0)
+        for key, val in (options or {}).items():
+            hs.setOptionValue(key, val)
         lo, up = self._col_bounds()
-        self._pass(hs, self.A, lo, up, row_lo, row_hi, cost)
-        return hs
+        return hs if self._pass(hs, self.A, lo, up, row_lo, row_hi, cost) else None
 
-    def _get_model(self) -> highspy.Highs:
+    def _get_model(self) -> highspy.Highs | None:
         if self._model is None:
             self._model = self._build(self.b, self.b, np.zeros(self.n_g))
         return self._model
@@ -400,6 +477,7 @@ class FactorPolytope:
         return lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
             unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
+            b_err=self.b_err,
         )
 
     @staticmethod
@@ -432,15 +510,23 @@ class FactorPolytope:
         w_pair : (M, v), optional
             ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
 
+        Returns
+        -------
+        LPOutcome
+            Status ``"optimal"``, ``"unbounded"`` or ``"fallback"`` (every
+            solver attempt failed: the best certified bound of the multipliers
+            seen, possibly ``-inf``; counted in :attr:`fallbacks`).
+
         Raises
         ------
         EmptySetError
             If the polytope is certified empty (see :meth:`emptiness`).
-        SolverError
-            If HiGHS ends in any status other than optimal/unbounded/infeasible
-            twice (a fresh model with the dual simplex is tried once).
         """
         w = np.asarray(w, dtype=np.float64)
+        with self._lock:
+            return self._minimize(w, w_err, w_pair)
+
+    def _minimize(self, w, w_err, w_pair) -> LPOutcome:
         if self.n_c == 0:
             # No constraints: the minimum over the box is analytic and exact.
             bound = self.certify(w, np.zeros(0), w_err, w_pair)
@@ -451,38 +537,65 @@ class FactorPolytope:
         # HiGHS sees the objective divided by a power of two (exact), so that its
         # tolerances act on a unit-size problem; certification uses the true w.
         scale = self._pow2_scale(w)
-        hs = self._get_model()
-        st = self._solve(hs, w, scale)
-        if st not in _DECIDED:
-            hs = self._build(self.b, self.b, np.zeros(self.n_g), unscaled=True)
+        best = -np.inf  # best certified bound of any multiplier (fallback answer)
+        attempts = [None, *self._RETRIES]
+        for i, options in enumerate(attempts):
+            hs = self._get_model() if i == 0 else self._build(
+                self.b, self.b, np.zeros(self.n_g), options)
+            if hs is None:
+                continue
             st = self._solve(hs, w, scale)
-        if st == highspy.HighsModelStatus.kOptimal:
-            sol = hs.getSolution()
-            y = np.asarray(sol.row_dual, dtype=np.float64) * scale
-            x = np.asarray(sol.col_value, dtype=np.float64)
-            bound = self.certify(w, y, w_err, w_pair)
-            obj = float(w @ x)
-            if np.isfinite(bound) and obj - bound > _REFINE_GAP * (1.0 + abs(obj)):
-                y_ref = self._basis_duals(hs, w)
-                if y_ref is not None:
-                    bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
-            if np.isinf(bound):
-                return LPOutcome(-np.inf, obj, x, "unbounded")
-            return LPOutcome(bound, obj, x, "optimal")
-        if st == highspy.HighsModelStatus.kUnbounded:
-            return LPOutcome(-np.inf, -np.inf, None, "unbounded")
-        if st in (highspy.HighsModelStatus.kInfeasible,
-                  highspy.HighsModelStatus.kUnboundedOrInfeasible):
-            rep = self.emptiness()
-            if rep.empty:
-                raise EmptySetError(
-                    "the set is empty (certified: every point violates a normalised "
-                    f"constraint by at least {rep.violation_lower_bound:.3g})"
-                )
-            return self.minimize_relaxed(w, w_err, w_pair)
-        raise SolverError(
-            f"HiGHS did not solve the LP (status: {_status_name(hs)})", status=_status_name(hs)
-        )
+            if st == highspy.HighsModelStatus.kOptimal:
+                sol = hs.getSolution()
+                y = np.asarray(sol.row_dual, dtype=np.float64) * scale
+                x = np.asarray(sol.col_value, dtype=np.float64)
+                bound = self.certify(w, y, w_err, w_pair)
+                obj = float(w @ x)
+                if np.isfinite(bound) and obj - bound > _REFINE_GAP * (1.0 + abs(obj)):
+                    y_ref = self._basis_duals(hs, w)
+                    if y_ref is not None:
+                        bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
+                if np.isinf(bound):
+                    return LPOutcome(-np.inf, obj, x, "unbounded")
+                return LPOutcome(bound, obj, x, "optimal")
+            if st == highspy.HighsModelStatus.kUnbounded:
+                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+            if st in (highspy.HighsModelStatus.kInfeasible,
+                      highspy.HighsModelStatus.kUnboundedOrInfeasible):
+                rep = self.emptiness()
+                if rep.empty:
+                    raise EmptySetError(
+                        "the set is empty (certified: every point violates a normalised "
+                        f"constraint by at least {rep.violation_lower_bound:.3g})"
+                    )
+                return self.minimize_relaxed(w, w_err, w_pair)
+            # Undecided: keep whatever multiplier the solver left (certified, it
+            # is a valid bound however poor), then retry with other settings.
+            y = np.asarray(hs.getSolution().row_dual, dtype=np.float64)
+            if y.size == self.n_c and np.isfinite(y).all():
+                best = max(best, self.certify(w, y * scale, w_err, w_pair))
+        out = self._compiled(w, w_err, w_pair)
+        if out is not None:
+            return out
+        best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
+        self.fallbacks += 1
+        return LPOutcome(best, np.nan, None, "fallback")
+
+    def _compiled(self, w, w_err, w_pair) -> LPOutcome | None:
+        """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here."""
+        from .fastlp import FixedStructureLP
+
+        lp = FixedStructureLP(self.A, w[None, :], self._unb, self.radius)
+        if not lp.usable:
+            return None
+        bounds, ok, ys, objs = lp.minimize_all(self.b, self.h, b_err=self.b_err,
+                                               return_duals=True)
+        if not ok[0] or not np.isfinite(bounds[0]):
+            return None
+        bound = self.certify(w, ys[0], w_err, w_pair)
+        if not np.isfinite(bound):
+            return None
+        return LPOutcome(bound, float(objs[0]), None, "optimal")
 
     def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """Duals recomputed from HiGHS's optimal basis, with one refinement step.
@@ -519,31 +632,39 @@ class FactorPolytope:
         or its certified bounds cross: the relaxed feasible set contains every
         point that satisfies the normalised constraints within the emptiness
         tolerance, so its certified bound is an outer bound in the sense of
-        :meth:`emptiness` (and a valid bound for the exact set).
+        :meth:`emptiness` (and a valid bound for the exact set). If the relaxed
+        LP does not solve either, the ``"fallback"`` answer of :meth:`minimize`
+        is returned.
         """
-        rep = self.emptiness()
-        delta = self._row_scale() * max(2.0 * rep.violation_found, 2.0 * rep.tol)
-        scale = self._pow2_scale(w)
-        hs = self._build(self.b - delta, self.b + delta, w / scale)
-        hs.run()
-        st = hs.getModelStatus()
-        if st == highspy.HighsModelStatus.kUnbounded:
-            return LPOutcome(-np.inf, -np.inf, None, "unbounded")
-        if st != highspy.HighsModelStatus.kOptimal:
-            raise SolverError(
-                "HiGHS reported infeasibility that could not be certified, and the relaxed "
-                f"LP did not solve (status: {_status_name(hs)})",
-                status=_status_name(hs),
-            )
-        sol = hs.getSolution()
-        y = np.asarray(sol.row_dual, dtype=np.float64) * scale
-        x = np.asarray(sol.col_value, dtype=np.float64)
-        bound, y = self._certify(w, y, w_err, w_pair)
-        if np.isinf(bound):
-            return LPOutcome(-np.inf, float(w @ x), x, "unbounded")
-        # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
-        relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * _gamma(self.n_c + 1))
-        return LPOutcome(_down(bound - relax), float(w @ x), x, "optimal")
+        with self._lock:
+            rep = self.emptiness()
+            found = rep.violation_found if np.isfinite(rep.violation_found) else 1.0
+            delta = self._row_scale() * max(2.0 * found, 2.0 * rep.tol)
+            scale = self._pow2_scale(w)
+            y = None
+            for options in (None, *self._RETRIES):
+                hs = self._build(self.b - delta, self.b + delta, w / scale, options)
+                if hs is None:
+                    continue
+                hs.run()
+                st = hs.getModelStatus()
+                if st == highspy.HighsModelStatus.kUnbounded:
+                    return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+                if st == highspy.HighsModelStatus.kOptimal:
+                    y = np.asarray(hs.getSolution().row_dual, dtype=np.float64) * scale
+                    x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
+                    break
+            if y is None:
+                self.fallbacks += 1
+                y, x = np.zeros(self.n_c), None
+            bound, y = self._certify(w, y, w_err, w_pair)
+            obj = float(w @ x) if x is not None else np.nan
+            status = "optimal" if x is not None else "fallback"
+            if np.isinf(bound):
+                return LPOutcome(-np.inf, obj, x, "unbounded" if x is not None else status)
+            # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
+            relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * _gamma(self.n_c + 1))
+            return LPOutcome(_down(bound - relax), obj, x, status)
 
     def _row_scale(self) -> NDArray[np.float64]:
         """Power-of-two row scales (so that scaling is exact in floating point)."""
@@ -557,39 +678,54 @@ class FactorPolytope:
         Solves ``min sum(s+ + s-)`` subject to ``D(A xi - b) + s+ - s- = 0``,
         ``|xi| <= h``, ``s+-  >= 0``, with ``D`` scaling each row to unit
         infinity norm. For any multiplier ``y``, ``L(y) / ||y||_1`` (with
-        ``L`` the Lagrangian bound of the zero objective) is a certified lower
-        bound on the smallest infinity-norm violation of the normalised rows.
+        ``L`` the Lagrangian bound of the zero objective, covering ``b_err``)
+        is a certified lower bound on the smallest infinity-norm violation of
+        the normalised rows.
 
         Parameters
         ----------
         tol : float
             The set is reported empty only if that lower bound exceeds ``tol``.
+
+        Notes
+        -----
+        If the phase-1 LP does not solve under any setting, the set is reported
+        non-empty (``violation_lower_bound = 0``, ``violation_found = nan``):
+        the conservative answer.
         """
-        if tol in self._emptiness:
-            return self._emptiness[tol]
-        if self.n_c == 0:
-            rep = EmptinessReport(False, 0.0, 0.0, tol)
+        with self._lock:
+            if tol in self._emptiness:
+                return self._emptiness[tol]
+            rep = self._phase1(tol)
             self._emptiness[tol] = rep
             return rep
+
+    def _phase1(self, tol: float) -> EmptinessReport:
+        if self.n_c == 0:
+            return EmptinessReport(False, 0.0, 0.0, tol)
         scale = self._row_scale()
         As = self.A / scale[:, None]
         bs = self.b / scale
         n_c, n_g = self.n_c, self.n_g
-        hs = self._new_highs()
-        hs.setOptionValue("simplex_strategy", 1)  # dual simplex
         lo, up = self._col_bounds()
         big = np.hstack([As, np.eye(n_c), -np.eye(n_c)])
         lo_c = np.concatenate([lo, np.zeros(2 * n_c)])
         up_c = np.concatenate([up, np.full(2 * n_c, _INF)])
         cost = np.concatenate([np.zeros(n_g), np.ones(2 * n_c)])
-        self._pass(hs, big, lo_c, up_c, bs, bs, cost)
-        hs.run()
-        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-            raise SolverError(
-                f"phase-1 LP did not solve (status: {_status_name(hs)})",
-                status=_status_name(hs),
-            )
-        sol = hs.getSolution()
+        sol = None
+        for options in ({"simplex_strategy": 1}, *self._RETRIES):
+            hs = self._new_highs()
+            for key, val in options.items():
+                hs.setOptionValue(key, val)
+            if not self._pass(hs, big, lo_c, up_c, bs, bs, cost):
+                continue
+            hs.run()
+            if hs.getModelStatus() == highspy.HighsModelStatus.kOptimal:
+                sol = hs.getSolution()
+                break
+        if sol is None:
+            self.fallbacks += 1
+            return EmptinessReport(False, 0.0, np.nan, tol)
         y = np.asarray(sol.row_dual, dtype=np.float64)
         x = np.asarray(sol.col_value, dtype=np.float64)[:n_g]
         # Certified bound with the scaled data (exact: power-of-two scales); the
@@ -597,6 +733,7 @@ class FactorPolytope:
         lower, y = lagrangian_lower_bound(
             np.zeros(n_g), As, bs, self.h, y, radius=self.radius,
             unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
+            b_err=None if self.b_err is None else self.b_err / scale,
         )
         norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * _gamma(n_c + 1))
         if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
@@ -605,6 +742,4 @@ class FactorPolytope:
             lower_inf = 0.0  # no positive certificate
         xc = np.clip(x, -self.h, self.h)
         found = float(np.abs(As @ xc - bs).max())
-        rep = EmptinessReport(bool(lower_inf > tol), lower_inf, found, tol)
-        self._emptiness[tol] = rep
-        return rep
+        return EmptinessReport(bool(lower_inf > tol), lower_inf, found, tol)

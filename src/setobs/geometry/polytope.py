@@ -17,6 +17,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .._validation import as_matrix, as_vector
 from ..exceptions import EmptySetError, SolverError, UnboundedSetError
+from .lp import _gamma
 from .zonotope import ConstrainedZonotope
 
 __all__ = ["HRep", "cz_from_hpolytope", "to_hrep", "vertices"]
@@ -172,7 +173,9 @@ def _scott_cz(H, k, lo, hi) -> ConstrainedZonotope:
     G = np.hstack([np.diag(dx), np.zeros((n, m))])
     A = np.hstack([H * dx, np.diag(dsig / 2.0)])
     b = k - H @ c - dsig / 2.0
-    return ConstrainedZonotope._trusted(G, c, A, b, np.ones(n + m))
+    g = _gamma(n + 3) * (1.0 + _gamma(n + 4))
+    berr = g * (np.abs(k) + np.abs(H) @ np.abs(c) + dsig / 2.0)
+    return ConstrainedZonotope._trusted(G, c, A, b, np.ones(n + m), berr=berr)
 
 
 def cz_from_hpolytope(H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:

@@ -23,6 +23,7 @@ from scipy.linalg import qr
 
 from ..exceptions import DimensionError
 from ..tolerances import ZERO_TOL
+from .lp import _gamma
 from .zonotope import ConstrainedZonotope
 
 __all__ = ["reduce_order", "remove_redundancy", "rescale"]
@@ -46,21 +47,22 @@ def remove_redundancy(Z: ConstrainedZonotope, tol: float = ZERO_TOL) -> Constrai
         dropped rows are exactly dependent.
     """
     G, c, A, b, h = Z.G, Z.c, Z.A, Z.b, Z.h
+    berr = Z.b_err
     # Factors fixed at zero, or appearing nowhere, are unused.
     keep_f = (h > 0) & (G.any(axis=0) | A.any(axis=0))
     G, A, h = G[:, keep_f], A[:, keep_f], h[keep_f]
     # Constraint rows: drop the all-zero consistent ones, then dependent ones.
     aug = np.hstack([A, b[:, None]])
     nz = aug.any(axis=1)
-    aug, A, b = aug[nz], A[nz], b[nz]
+    aug, A, b, berr = aug[nz], A[nz], b[nz], berr[nz]
     if A.shape[0] > 1:
         norms = np.linalg.norm(aug, axis=1)
         _, R, piv = qr((aug / norms[:, None]).T, mode="economic", pivoting=True)
         d = np.abs(np.diag(R))
         rank = int((d > tol * d[0]).sum()) if d.size else 0
         rows = np.sort(piv[:rank])
-        A, b = A[rows], b[rows]
-    return ConstrainedZonotope._trusted(G, c, A, b, h, Z.radius)
+        A, b, berr = A[rows], b[rows], berr[rows]
+    return ConstrainedZonotope._trusted(G, c, A, b, h, Z.radius, Z.c_err, berr)
 
 
 def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
@@ -99,8 +101,13 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     r = np.maximum(r, 0.0)
     c = Z.c + Z.G @ m
     b = Z.b - Z.A @ m
+    # rounding of the recentring (Higham's bounds), on top of what Z carried
+    g = _gamma(n_g + 2) * (1.0 + _gamma(n_g + 3))
+    cerr = Z.c_err + g * (np.abs(Z.c) + np.abs(Z.G) @ np.abs(m))
+    berr = Z.b_err + g * (np.abs(Z.b) + np.abs(Z.A) @ np.abs(m))
     keep = r > 0
-    return ConstrainedZonotope._trusted(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.radius)
+    return ConstrainedZonotope._trusted(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.radius,
+                                        cerr, berr)
 
 
 def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZonotope:
@@ -159,5 +166,5 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     G = np.hstack([Z.G[:, cols], box[:n]])
     A = np.hstack([Z.A[:, cols], box[n:]])
     h = np.concatenate([Z.h[cols], np.ones(rows.size)])
-    return ConstrainedZonotope._trusted(G, Z.c, A, Z.b, h, Z.radius)
+    return ConstrainedZonotope._trusted(G, Z.c, A, Z.b, h, Z.radius, Z.c_err, Z.b_err)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -9,7 +10,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, readonly
-from ..exceptions import DimensionError, EmptySetError, UnboundedSetError
+from ..exceptions import (
+    DimensionError,
+    EmptySetError,
+    SolverError,
+    SolverWarning,
+    UnboundedSetError,
+)
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
 from .box import Box
 from .lp import _U, EmptinessReport, FactorPolytope, _down, _gamma
@@ -33,6 +40,62 @@ def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.fl
     out[: X.shape[0], : X.shape[1]] = X
     out[X.shape[0] :, X.shape[1] :] = Y
     return out
+
+
+# ---------------------------------------------------------------------- rounding bounds
+# Elementwise bounds on the rounding errors of centres and right-hand sides
+# (None means exact, so that exact sets cost nothing). Each helper returns the
+# bound of the new vector: carried errors plus the rounding of the operation
+# (Higham's gamma bounds), inflated once more for the rounding of the bound.
+
+def _add(e1: NDArray[np.float64] | None, e2: NDArray[np.float64] | None
+         ) -> NDArray[np.float64] | None:
+    if e1 is None:
+        return e2
+    if e2 is None:
+        return e1
+    return (e1 + e2) * (1.0 + 2.0 * _U)
+
+
+def _cat(e1, n1: int, e2, n2: int) -> NDArray[np.float64] | None:
+    """Concatenated bounds of two stacked vectors (``None``: exact)."""
+    if e1 is None and e2 is None:
+        return None
+    return np.concatenate([np.zeros(n1) if e1 is None else e1,
+                           np.zeros(n2) if e2 is None else e2])
+
+
+def _sum_err(a, v, err) -> NDArray[np.float64] | None:
+    """Bound for ``fl(a + v)`` given the bound ``err`` carried by ``a``."""
+    new = _gamma(2) * (np.abs(a) + np.abs(v))
+    return _add(err, new) if new.any() else err
+
+
+def _map_err(M, c, err) -> NDArray[np.float64] | None:
+    """Bound for ``fl(M c)`` given the bound ``err`` carried by ``c``."""
+    k = M.shape[1]
+    base = _gamma(k + 1) * np.abs(c)
+    if err is not None:
+        base = base + err
+    if not base.any():
+        return None
+    return (np.abs(M) @ base) * (1.0 + _gamma(k + 2))
+
+
+def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
+    """Bound for ``fl(y - C c)`` given the bounds carried by ``c`` and ``y``."""
+    k = C.shape[1]
+    base = _gamma(k + 1) * (np.abs(y) + np.abs(C) @ np.abs(c))
+    if cerr is not None:
+        base = base + np.abs(C) @ cerr
+    if yerr is not None:
+        base = base + yerr
+    return base * (1.0 + _gamma(k + 3)) if base.any() else None
+
+
+def _rebuild(G, c, A, b, h, radius, cerr, berr) -> ConstrainedZonotope:
+    """Unpickling helper of :class:`ConstrainedZonotope`."""
+    return ConstrainedZonotope._trusted(G, c, A, b, h, radius, cerr, berr)
 
 
 def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
@@ -88,8 +151,14 @@ class ConstrainedZonotope:
     *Exactness.* The set operations (``+``, ``@``, products, intersections,
     projection) are the exact formulas of Scott et al. (2016), Sec. 3; only
     their matrix products are rounded, an ``O(eps)`` perturbation of the data.
-    Every LP query (interval hull, support function, emptiness, containment) is
-    certified for the stored data; see :mod:`setobs.geometry.lp`.
+    The rounding of the centre and of the constraint right-hand side, which
+    is what matters when large centres and data cancel (measurements of size
+    ``1e8`` whose differences carry the information), is tracked: :attr:`c_err`
+    and :attr:`b_err` bound it elementwise, and every LP query (interval hull,
+    support function, emptiness, containment) is certified for all centres and
+    right-hand sides within those bounds; see :mod:`setobs.geometry.lp`. The
+    rounding of ``G`` and ``A`` (relative to the factor magnitudes) is not
+    tracked.
 
     Objects are immutable; expensive predicates (interval hull, emptiness) are
     cached on the instance.
@@ -103,7 +172,7 @@ class ConstrainedZonotope:
     True
     """
 
-    __slots__ = ("_A", "_G", "_b", "_c", "_cache", "_h", "radius")
+    __slots__ = ("_A", "_G", "_b", "_berr", "_c", "_cache", "_cerr", "_h", "radius")
     __array_ufunc__ = None  # so that ndarray @ Z calls Z.__rmatmul__
 
     def __init__(
@@ -148,20 +217,37 @@ class ConstrainedZonotope:
         for name, val in (("_G", G_a), ("_c", c_a), ("_A", A_a), ("_b", b_a), ("_h", h_a)):
             object.__setattr__(self, name, readonly(val))
         object.__setattr__(self, "radius", float(radius))
+        object.__setattr__(self, "_cerr", None)
+        object.__setattr__(self, "_berr", None)
         object.__setattr__(self, "_cache", {})
 
     @classmethod
-    def _trusted(cls, G, c, A, b, h, radius: float = UNBOUNDED_RADIUS) -> ConstrainedZonotope:
-        """Build from arrays already validated (internal fast path)."""
+    def _trusted(cls, G, c, A, b, h, radius: float = UNBOUNDED_RADIUS, cerr=None,
+                 berr=None) -> ConstrainedZonotope:
+        """Build from arrays already validated (internal fast path).
+
+        ``cerr``, ``berr``: elementwise bounds on the rounding errors of ``c``
+        and ``b`` (``None``: exact).
+        """
         self = object.__new__(cls)
         for name, val in (("_G", G), ("_c", c), ("_A", A), ("_b", b), ("_h", h)):
             object.__setattr__(self, name, readonly(np.array(val, dtype=np.float64)))
+        for name, val in (("_cerr", cerr), ("_berr", berr)):
+            arr = None
+            if val is not None and np.any(val):
+                arr = readonly(np.array(val, dtype=np.float64))
+            object.__setattr__(self, name, arr)
         object.__setattr__(self, "radius", radius)
         object.__setattr__(self, "_cache", {})
         return self
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("ConstrainedZonotope is immutable; operations return new objects")
+
+    def __reduce__(self):
+        # Pickling and deepcopy rebuild from the data (the LP cache is dropped).
+        return (_rebuild, (self._G, self._c, self._A, self._b, self._h, self.radius,
+                           self._cerr, self._berr))
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -252,6 +338,16 @@ class ConstrainedZonotope:
         return self._h
 
     @property
+    def c_err(self) -> NDArray[np.float64]:
+        """Bound on the accumulated rounding error of :attr:`c`, shape ``(n,)`` (read-only)."""
+        return self._cerr if self._cerr is not None else readonly(np.zeros(self.dim))
+
+    @property
+    def b_err(self) -> NDArray[np.float64]:
+        """Bound on the accumulated rounding error of :attr:`b`, shape ``(n_c,)`` (read-only)."""
+        return self._berr if self._berr is not None else readonly(np.zeros(self.n_con))
+
+    @property
     def dim(self) -> int:
         """Dimension ``n`` of the ambient space."""
         return int(self._c.size)
@@ -299,11 +395,25 @@ class ConstrainedZonotope:
                 f"{what}: dimensions differ ({self.dim} vs {other.dim})"
             )
 
-    def minkowski_sum(self, other: ConstrainedZonotope | ArrayLike) -> ConstrainedZonotope:
-        """Minkowski sum with a set or a vector (Scott et al. 2016, eq. (12))."""
+    def minkowski_sum(self, other: ConstrainedZonotope | ArrayLike, *,
+                      err: ArrayLike | None = None) -> ConstrainedZonotope:
+        """Minkowski sum with a set or a vector (Scott et al. 2016, eq. (12)).
+
+        ``err`` (vectors only): elementwise bound on the uncertainty of the
+        vector (e.g. the representation error of a measured input); it is
+        carried in :attr:`c_err`, so every certified query covers it.
+        """
         if not isinstance(other, ConstrainedZonotope):
             v = as_vector("vector", other, size=self.dim)
-            return self._same_factors(self._G, self._c + v)
+            cerr = _sum_err(self._c, v, self._cerr)
+            if err is not None:
+                e = as_vector("err", err, size=self.dim)
+                if (e < 0).any():
+                    raise DimensionError("err must be nonnegative")
+                cerr = _add(cerr, e)
+            return self._same_factors(self._G, self._c + v, cerr)
+        if err is not None:
+            raise TypeError("err applies to a vector summand only")
         self._check_same_dim(other, "Minkowski sum")
         return ConstrainedZonotope._trusted(
             np.hstack([self._G, other._G]),
@@ -312,6 +422,8 @@ class ConstrainedZonotope:
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
             min(self.radius, other.radius),
+            _sum_err(self._c, other._c, _add(self._cerr, other._cerr)),
+            _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
 
     def __add__(self, other: Any) -> ConstrainedZonotope:
@@ -332,12 +444,14 @@ class ConstrainedZonotope:
     def linear_map(self, M: ArrayLike) -> ConstrainedZonotope:
         """Image under ``x -> M x`` for any ``m x n`` matrix ``M`` (Scott et al. 2016, eq. (11))."""
         M_a = as_matrix("M", M, cols=self.dim)
-        return self._same_factors(M_a @ self._G, M_a @ self._c)
+        return self._same_factors(M_a @ self._G, M_a @ self._c,
+                                  _map_err(M_a, self._c, self._cerr))
 
-    def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64]
-                      ) -> ConstrainedZonotope:
+    def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64],
+                      cerr: NDArray[np.float64] | None) -> ConstrainedZonotope:
         """A set with the same factor polytope; shares its LP model (and emptiness cache)."""
-        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.radius)
+        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.radius,
+                                           cerr, self._berr)
         if "lp" in self._cache:
             out._cache["lp"] = self._cache["lp"]
         return out
@@ -359,17 +473,33 @@ class ConstrainedZonotope:
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
             min(self.radius, other.radius),
+            _cat(self._cerr, self.dim, other._cerr, other.dim),
+            _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
 
-    def intersect_affine(self, C: ArrayLike, y: ArrayLike) -> ConstrainedZonotope:
-        """Intersection with the affine set ``{z : C z = y}`` (Li-Cong-Dong, eq. (21))."""
+    def intersect_affine(self, C: ArrayLike, y: ArrayLike, *,
+                         y_err: ArrayLike | None = None) -> ConstrainedZonotope:
+        """Intersection with the affine set ``{z : C z = y}`` (Li-Cong-Dong, eq. (21)).
+
+        ``y_err``: elementwise bound on the uncertainty of ``y`` at rounding
+        level (e.g. the representation error of a measurement); it is carried
+        in :attr:`b_err`, so every certified query holds for all ``y`` within
+        it. (Measurement *noise* is a set: use :meth:`intersect`.)
+        """
         C_a = as_matrix("C", C, cols=self.dim)
         y_a = as_vector("y", y, size=C_a.shape[0])
+        ye = None
+        if y_err is not None:
+            ye = as_vector("y_err", y_err, size=C_a.shape[0])
+            if (ye < 0).any():
+                raise DimensionError("y_err must be nonnegative")
         return ConstrainedZonotope._trusted(
             self._G, self._c,
             np.vstack([self._A, C_a @ self._G]),
             np.concatenate([self._b, y_a - C_a @ self._c]),
-            self._h, self.radius,
+            self._h, self.radius, self._cerr,
+            _cat(self._berr, self.n_con, _diff_err(y_a, C_a, self._c, self._cerr, ye),
+                 C_a.shape[0]),
         )
 
     def intersect(self, other: ConstrainedZonotope, R: ArrayLike | None = None
@@ -392,9 +522,12 @@ class ConstrainedZonotope:
         A[n_c1 + n_c2 :, : self.n_gen] = R_a @ self._G
         A[n_c1 + n_c2 :, self.n_gen :] = -other._G
         b = np.concatenate([self._b, other._b, other._c - R_a @ self._c])
+        new_err = _diff_err(other._c, R_a, self._c, self._cerr, other._cerr)
+        berr = _cat(_cat(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err, other.dim)
         return ConstrainedZonotope._trusted(
             np.hstack([self._G, np.zeros((self.dim, other.n_gen))]), self._c, A, b,
             np.concatenate([self._h, other._h]), min(self.radius, other.radius),
+            self._cerr, berr,
         )
 
     def project(self, dims: Sequence[int]) -> ConstrainedZonotope:
@@ -404,13 +537,15 @@ class ConstrainedZonotope:
             raise DimensionError(
                 f"dims must be indices in [0, {self.dim - 1}], got {list(np.atleast_1d(dims))}"
             )
-        return self._same_factors(self._G[idx], self._c[idx])
+        return self._same_factors(self._G[idx], self._c[idx],
+                                  None if self._cerr is None else self._cerr[idx])
 
     # ------------------------------------------------------------------ LP queries
     def _lp(self) -> FactorPolytope:
         fp = self._cache.get("lp")
         if fp is None:
-            fp = FactorPolytope(self._A, self._b, self._h, radius=self.radius)
+            fp = FactorPolytope(self._A, self._b, self._h, radius=self.radius,
+                                b_err=self._berr)
             self._cache["lp"] = fp
         return fp
 
@@ -425,23 +560,41 @@ class ConstrainedZonotope:
         ------
         EmptySetError
             If the set is certified empty.
-        SolverError
-            If the LP solver fails.
+
+        Warns
+        -----
+        SolverWarning
+            If an LP failed under every solver setting: the box is then still a
+            certified outer bound, but wider (possibly infinite) in that
+            coordinate.
         """
-        box = self._cache.get("hull")
-        if box is not None:
-            return box
+        box, fallback = self._interval_hull()
+        if fallback:
+            warnings.warn("an LP of the interval hull failed under every solver setting; "
+                          "the returned box is a wider certified outer bound",
+                          SolverWarning, stacklevel=2)
+        return box
+
+    def _interval_hull(self) -> tuple[Box, bool]:
+        """:meth:`interval_hull` without the warning: ``(box, any_fallback)``."""
+        cached = self._cache.get("hull")
+        if cached is not None:
+            return cached
         n = self.dim
         lo = np.empty(n)
         hi = np.empty(n)
         fp = self._lp()
+        before = fp.fallbacks
         zero_rows = ~self._G.any(axis=1)
         if self.n_con and zero_rows.any() and fp.emptiness().empty:
             raise EmptySetError("the set is empty (certified by the phase-1 LP)")
+        cerr = np.zeros(n) if self._cerr is None else self._cerr
         for i in range(n):
             g = self._G[i]
+            ce = float(cerr[i])
             if zero_rows[i]:
-                lo[i] = hi[i] = self._c[i]
+                lo[i] = _down(self._c[i] - ce) if ce else self._c[i]
+                hi[i] = _up(self._c[i] + ce) if ce else self._c[i]
                 continue
             low = fp.minimize(g).bound
             upp = -fp.minimize(-g).bound
@@ -452,11 +605,11 @@ class ConstrainedZonotope:
                     raise EmptySetError("the set is empty (certified by the phase-1 LP)")
                 low = fp.minimize_relaxed(g).bound
                 upp = -fp.minimize_relaxed(-g).bound
-            lo[i] = _down(low + self._c[i]) if np.isfinite(low) else -np.inf
-            hi[i] = _up(upp + self._c[i]) if np.isfinite(upp) else np.inf
-        box = Box(lo, hi)
-        self._cache["hull"] = box
-        return box
+            lo[i] = _down(_down(self._c[i] - ce) + low) if np.isfinite(low) else -np.inf
+            hi[i] = _up(_up(self._c[i] + ce) + upp) if np.isfinite(upp) else np.inf
+        out = (Box(lo, hi), fp.fallbacks > before)
+        self._cache["hull"] = out
+        return out
 
     def support(self, direction: ArrayLike) -> float:
         """Certified support function ``max_{z in Z} d^T z`` (``+inf`` if unbounded).
@@ -465,15 +618,26 @@ class ConstrainedZonotope:
         ------
         EmptySetError
             If the set is certified empty.
+
+        Warns
+        -----
+        SolverWarning
+            If the LP failed under every solver setting (the value is then a
+            wider certified bound, possibly ``inf``).
         """
         d = as_vector("direction", direction, size=self.dim)
         w = self._G.T @ d
         w_err = 2.0 * _gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
         out = self._lp().minimize(-w, w_err=w_err, w_pair=(self._G, -d))
+        if out.status == "fallback":
+            warnings.warn("the support LP failed under every solver setting; the value is a "
+                          "wider certified bound", SolverWarning, stacklevel=2)
         if not np.isfinite(out.bound):
             return np.inf
         dc = float(d @ self._c)
         err = 2.0 * _gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
+        if self._cerr is not None:
+            err += float(np.abs(d) @ self._cerr) * (1.0 + _gamma(self.dim + 1))
         s = -out.bound + dc
         return _up(s + err + _U * abs(s))
 
@@ -484,9 +648,13 @@ class ConstrainedZonotope:
         ------
         UnboundedSetError
             If the support function is infinite in this direction.
+        SolverError
+            If no solver setting produced a point.
         """
         d = as_vector("direction", direction, size=self.dim)
         out = self._lp().minimize(-(self._G.T @ d))
+        if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
+            raise SolverError("no LP solver setting produced a maximiser", status=out.status)
         if out.point is None or not np.isfinite(out.bound):
             raise UnboundedSetError("the set is unbounded in this direction")
         return self._G @ out.point + self._c

@@ -15,6 +15,16 @@ set's generators and ``s``; the data enter only ``b`` and ``c`` (affinely) and
 the reset box enters only ``c_S`` and ``h_S``. So the LPs of the interval hull
 have a fixed structure and go through
 :class:`setobs.geometry.fastlp.FixedStructureLP`.
+
+Rounding. ``c`` and ``b`` are affine in the data with coefficient matrices
+computed once (``-C_o A_o^j``, ...). Their rounding errors, and those of
+assembling ``c`` and ``b``, are bounded elementwise by Higham's ``gamma``
+bounds on the matching products of absolute values (``|C_o| |A_o|^j |c_S|``,
+...), computed alongside; the representation error of the data (a relative
+``data_rtol`` on every ``y`` and ``u``) is added. The LP certificate covers
+the resulting ``b_err`` and the hull covers ``c_err``, so the bounds contain
+the set for the exact data even when large states cancel against large
+measurements (``|y| ~ 1e15``).
 """
 
 from __future__ import annotations
@@ -23,11 +33,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import ConstrainedZonotope
-from ..geometry.fastlp import FixedStructureLP, hull_from_bounds, hull_objectives
+from ..geometry.fastlp import FixedStructureLP, LPState, hull_from_bounds, hull_objectives
+from ..geometry.lp import _U, _gamma
 
 
 class WindowModel:
     """``s`` prior/posterior steps of Algorithm 1 from a start set, in closed form.
+
+    Immutable after construction (shared by all SMFDOs of a process with the
+    same structure); the LP warm-start state is passed to :meth:`hull`.
 
     Parameters
     ----------
@@ -63,29 +77,30 @@ class WindowModel:
         self.s, self.first_posterior, self.N = s, first_posterior, N
         self.l, self.p = l, p
         n_y = s + int(first_posterior)
+        absA, absB, absC, absGam = np.abs(A_o), np.abs(B_o), np.abs(C_o), np.abs(Gamma_o)
         # Rows: start constraints, then per posterior: increment rows (for steps
         # >= 1) and C_o rows. b = b0 + Bc c_S + Bu u + scatter(y); the start set's
-        # own b_S enters through b0 (set per call by the caller's b_S).
+        # own b_S enters through b0 (set per call by the caller's b_S). Each
+        # coefficient has an absolute-value twin (the rounding-error scale).
         rows_A = [np.hstack([A_S, np.zeros((A_S.shape[0], n_g - nS))])]
         self.nS_rows = A_S.shape[0]
-        const_rows: list[NDArray[np.float64]] = []   # constant b part per row block
-        c_rows: list[NDArray[np.float64]] = []       # coefficient of c_S
-        u_rows: list[NDArray[np.float64]] = []       # coefficient of u_flat
+        blocks: list[tuple[NDArray[np.float64], ...]] = []  # (b0, Bc, Bu, |b0|, |Bc|, |Bu|)
         y_pos: list[int] = []
         G = np.zeros((N, n_g))
         G[:, :nS] = G_S
         Mc = np.eye(N)                 # c_j = Mc c_S + Mu u_flat + kappa
         Mu = np.zeros((N, s * p))
         kappa = np.zeros(N)
+        Mc_a, Mu_a, kappa_a = np.eye(N), np.zeros((N, s * p)), np.zeros(N)
         row = self.nS_rows
         BcD = B_o @ cD
+        BcD_a = absB @ np.abs(cD)
 
         def posterior() -> None:
             nonlocal row
             rows_A.append(C_o @ G)
-            const_rows.append(-C_o @ kappa)
-            c_rows.append(-C_o @ Mc)
-            u_rows.append(-C_o @ Mu)
+            blocks.append((-C_o @ kappa, -C_o @ Mc, -C_o @ Mu,
+                           absC @ kappa_a, absC @ Mc_a, absC @ Mu_a))
             y_pos.extend(range(row, row + l))
             row += l
 
@@ -95,35 +110,43 @@ class WindowModel:
             blk = slice(nS + (j - 1) * nD, nS + j * nD)
             G = A_o @ G
             G[:, blk] += B_o @ GD
-            Mc = A_o @ Mc
-            Mu = A_o @ Mu
+            Mc, Mc_a = A_o @ Mc, absA @ Mc_a
+            Mu, Mu_a = A_o @ Mu, absA @ Mu_a
             if p:
                 Mu[:, (j - 1) * p:j * p] += Gamma_o
-            kappa = A_o @ kappa + BcD
+                Mu_a[:, (j - 1) * p:j * p] += absGam
+            kappa, kappa_a = A_o @ kappa + BcD, absA @ kappa_a + BcD_a
             if AD.shape[0]:
                 Arow = np.zeros((AD.shape[0], n_g))
                 Arow[:, blk] = AD
                 rows_A.append(Arow)
-                const_rows.append(increment.b.copy())
-                c_rows.append(np.zeros((AD.shape[0], N)))
-                u_rows.append(np.zeros((AD.shape[0], s * p)))
+                zN, zU = np.zeros((AD.shape[0], N)), np.zeros((AD.shape[0], s * p))
+                blocks.append((increment.b.copy(), zN, zU, increment.b_err.copy(), zN, zU))
                 row += AD.shape[0]
             posterior()
         self.A = np.vstack(rows_A) if rows_A else np.zeros((0, n_g))
         m = self.A.shape[0]
         nz = m - self.nS_rows
-        self.b_const = np.concatenate(const_rows) if nz else np.zeros(0)
-        self.b_c = np.vstack(c_rows) if nz else np.zeros((0, N))
-        self.b_u = np.vstack(u_rows) if nz else np.zeros((0, s * p))
+        parts = [np.concatenate([blk[i] for blk in blocks]) if nz else None for i in range(6)]
+        self.b_const = parts[0] if nz else np.zeros(0)
+        self.b_c = parts[1] if nz else np.zeros((0, N))
+        self.b_u = parts[2] if nz else np.zeros((0, s * p))
+        self._b_const_a = parts[3] if nz else np.zeros(0)
+        self._b_c_a = parts[4] if nz else np.zeros((0, N))
+        self._b_u_a = parts[5] if nz else np.zeros((0, s * p))
         self.y_pos = np.asarray(y_pos, dtype=np.int64) - self.nS_rows
         self.n_y = n_y
         self.G = G
         self.c_c, self.c_u, self.c_const = Mc, Mu, kappa
+        self._c_c_a, self._c_u_a, self._c_const_a = Mc_a, Mu_a, kappa_a
+        # Depth of the products (s steps of N-term sums, plus assembly) for gamma.
+        self._gK = 2.0 * _gamma((s + 2) * (N + p + nD + 3) + 8)
         self.h_D = np.tile(increment.h, s)
         self.free = np.concatenate([np.asarray(free_S, dtype=bool), np.isinf(self.h_D)])
         W = G if P is None else np.vstack([G, P @ G])
         self.n_dir = W.shape[0]
         self.P = P
+        self._absP = None if P is None else np.abs(P)
         self.radius = radius
         self.lp = FixedStructureLP(self.A, hull_objectives(W), self.free, radius)
 
@@ -132,34 +155,90 @@ class WindowModel:
         """Whether the fast LP path can be used for this structure."""
         return self.lp.usable
 
-    def assemble(self, c_S, b_S, h_S, Y, U):
-        """Centre, ``b`` and ``h`` of the set for data ``Y`` (``n_y x l``), ``U`` (``s x p``)."""
+    def new_state(self) -> LPState:
+        """A fresh LP warm-start state for one user of this structure."""
+        return self.lp.new_state()
+
+    def assemble(self, c_S, b_S, h_S, Y, U, *, c_S_err=None, b_S_err=None,
+                 data_rtol: float = 0.0):
+        """Centre, ``b``, ``h`` and the error bounds of ``c`` and ``b`` for the data.
+
+        Parameters
+        ----------
+        c_S, b_S, h_S : ndarray
+            The start set's centre, constraint right-hand side and factor bounds.
+        Y : ndarray, shape (n_y, l)
+            Measurements (in the coordinates of ``C_o``).
+        U : ndarray, shape (s, p)
+            Inputs.
+        c_S_err, b_S_err : ndarray, optional
+            Error bounds carried by the start set.
+        data_rtol : float
+            Relative uncertainty of every ``y`` and ``u`` (representation error).
+
+        Returns
+        -------
+        c, b, h, c_err, b_err : ndarray
+        """
         u = U.reshape(-1) if self.p else np.zeros(0)
+        yflat = Y.reshape(-1)
         b_tail = self.b_const + self.b_c @ c_S
         if self.p:
             b_tail = b_tail + self.b_u @ u
-        b_tail[self.y_pos] += Y.reshape(-1)
+        b_tail[self.y_pos] += yflat
         b = np.concatenate([b_S, b_tail]) if self.nS_rows else b_tail
         c = self.c_c @ c_S + self.c_const
         if self.p:
             c = c + self.c_u @ u
         h = np.concatenate([h_S, self.h_D])
-        return c, b, h
+        # Error bounds: rounding of the precomputed coefficients and of their
+        # products with the data (gamma on the absolute-value products), the three
+        # additions (3u on the magnitudes of the terms), the data's
+        # representation error, and the errors carried by the start set.
+        acS = np.abs(c_S)
+        ya = np.abs(yflat)
+        eb = self._b_const_a + self._b_c_a @ acS
+        ec = self._c_const_a + self._c_c_a @ acS
+        if self.p:
+            au = np.abs(u)
+            eb = eb + self._b_u_a @ au
+            ec = ec + self._c_u_a @ au
+        g = self._gK + 3.0 * _U
+        eb = g * eb
+        ec = g * ec
+        eb[self.y_pos] += (3.0 * _U + data_rtol) * ya
+        if self.p and data_rtol:
+            eb = eb + data_rtol * (self._b_u_a @ au)
+            ec = ec + data_rtol * (self._c_u_a @ au)
+        if c_S_err is not None and c_S_err.any():
+            eb = eb + self._b_c_a @ c_S_err
+            ec = ec + self._c_c_a @ c_S_err
+        if self.nS_rows:
+            eb = np.concatenate([np.zeros(self.nS_rows) if b_S_err is None else b_S_err, eb])
+        g = 1.0 + self._gK  # rounding of the bounds themselves
+        return c, b, h, ec * g, eb * g
 
-    def hull(self, c, b, h, y_scale: float):
+    def hull(self, c, b, h, y_scale: float, state: LPState, b_err, c_err):
         """Certified hull bounds of ``Z`` (and of ``P Z``), or ``None`` if any LP failed.
 
         ``y_scale`` is the magnitude of the measurements (``b`` is ``y - C_o c_j``,
-        where the two cancel; its rounding is relative to them). Returns
-        ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded outward
-        exactly as :meth:`ConstrainedZonotope.interval_hull` does.
+        where the two cancel; its rounding is relative to them). The bounds hold
+        for every ``b`` within ``b_err`` and every centre within ``c_err``.
+        Returns ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded
+        outward exactly as :meth:`ConstrainedZonotope.interval_hull` does.
         """
-        bounds, ok = self.lp._minimize_all(b, h, y_scale)
+        bounds, ok = self.lp._minimize_all(b, h, state, y_scale, b_err)
         if not ok.all():
             return None
-        cc = c if self.P is None else np.concatenate([c, self.P @ c])
-        return hull_from_bounds(bounds, cc)
+        if self.P is None:
+            cc, cc_err = c, c_err
+        else:
+            Pc = self.P @ c
+            k = self.P.shape[1]
+            pe = (self._absP @ (c_err + _gamma(k + 1) * np.abs(c))) * (1.0 + _gamma(k + 2))
+            cc, cc_err = np.concatenate([c, Pc]), np.concatenate([c_err, pe])
+        return hull_from_bounds(bounds, cc, cc_err)
 
-    def to_cz(self, c, b, h) -> ConstrainedZonotope:
+    def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""
-        return ConstrainedZonotope._trusted(self.G, c, self.A, b, h, self.radius)
+        return ConstrainedZonotope._trusted(self.G, c, self.A, b, h, self.radius, c_err, b_err)

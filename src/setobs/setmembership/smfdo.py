@@ -3,33 +3,39 @@
 from __future__ import annotations
 
 import hashlib
+import numbers
+import threading
 import warnings
 from collections import OrderedDict, deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import as_matrix, as_vector
+from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
 from ..analysis.existence import BoundedDOReport
-from ..exceptions import DimensionError, EmptySetError, SetobsError
+from ..exceptions import DimensionError, EmptySetError, SetobsError, SolverWarning
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center
 from ..geometry.zonotope import box_center_radius
-from ..systems import LinearSystem
-from ..tolerances import UNBOUNDED_RADIUS
+from ..systems import LinearSystem, require_system
+from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
 from ._window import WindowModel
 
 __all__ = [
     "SMFDO",
+    "STEP_STATUSES",
     "ExistenceError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
     "SMFDOResult",
     "SMFDOStep",
 ]
+
+#: Values of :attr:`SMFDOStep.status`.
+STEP_STATUSES = ("ok", "unbounded", "fallback", "reset")
 
 
 class ExistenceError(SetobsError, ValueError):
@@ -45,6 +51,9 @@ class ExistenceError(SetobsError, ValueError):
         super().__init__(message)
         self.report = report
 
+    def __reduce__(self):
+        return (type(self), (str(self), self.report))
+
 
 class ModelInvalidatedError(SetobsError, RuntimeError):
     """The data are inconsistent with the model: the posterior set is (certified) empty.
@@ -58,6 +67,9 @@ class ModelInvalidatedError(SetobsError, RuntimeError):
     def __init__(self, message: str, step: int) -> None:
         super().__init__(message)
         self.step = step
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.step))
 
 
 class ModelInvalidatedWarning(RuntimeWarning):
@@ -81,6 +93,12 @@ class SMFDOStep:
         Worst-case infinity-norm error of ``estimate`` over the set.
     disturbance_set : ConstrainedZonotope or None
         ``P Z_k`` when requested (``keep_sets=True``).
+    status : str
+        ``"ok"``; ``"unbounded"`` (some bound is infinite, e.g. before the data
+        pin the disturbance down); ``"fallback"`` (an LP failed under every
+        solver setting: the bounds are still certified, but wider); ``"reset"``
+        (the posterior was empty and ``reset="box"`` restarted the filter: the
+        guarantee is lost at this step).
     """
 
     k: int
@@ -89,36 +107,137 @@ class SMFDOStep:
     hi: NDArray[np.float64]
     radius: float
     disturbance_set: ConstrainedZonotope | None = None
+    status: str = "ok"
 
     def contains(self, d: ArrayLike) -> bool:
         """Whether ``d`` lies in ``[lo, hi]``."""
-        dv = np.asarray(d, dtype=float)
+        dv = as_vector("d", d, size=self.lo.size)
         return bool(np.all((dv >= self.lo) & (dv <= self.hi)))
 
 
 @dataclass(frozen=True)
 class SMFDOResult:
-    """Batch result of :meth:`SMFDO.run`: arrays of shape ``(N, q)`` (``radius``: ``(N,)``)."""
+    """Batch result of :meth:`SMFDO.run`: arrays of shape ``(N, q)`` (``radius``,
+    ``status``: ``(N,)``)."""
 
     estimate: NDArray[np.float64]
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
     radius: NDArray[np.float64]
     steps: list[SMFDOStep]
+    status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
 
     def violations(self, D: ArrayLike) -> int:
-        """Number of steps at which the true disturbance ``D[k]`` is outside ``[lo, hi]``."""
-        Da = np.asarray(D, dtype=float)
+        """Number of steps at which the true disturbance ``D[k]`` is outside ``[lo, hi]``.
+
+        Raises
+        ------
+        DimensionError
+            If ``D`` does not have the shape ``(N, q)`` of the result.
+        """
+        N, q = self.lo.shape
+        Da = as_matrix("D", D, cols=q)
+        if Da.shape[0] != N:
+            raise DimensionError(f"D must have shape ({N}, {q}) like the result, "
+                                 f"got {Da.shape}")
         out = (Da < self.lo) | (Da > self.hi)
         return int(out.any(axis=1).sum())
 
 
-IncrementSpec = ConstrainedZonotope | ArrayLike | Callable[[int], ConstrainedZonotope] | None
+IncrementSpec = (ConstrainedZonotope | Box | ArrayLike | Callable[[int], ConstrainedZonotope]
+                 | None)
 
-#: Window structures shared by all SMFDOs of a process (keyed by a digest of
-#: the matrices they depend on), so that a Monte Carlo campaign sets each up once.
-_MODELS: OrderedDict[tuple, WindowModel] = OrderedDict()
-_MODELS_MAX = 256
+
+class _ModelCache:
+    """Window structures shared by all SMFDOs of a process (keyed by a digest of the
+    matrices they depend on), so that a Monte Carlo campaign sets each up once.
+
+    The structures are immutable (each SMFDO keeps its own LP warm-start state);
+    the cache is locked, and bounded by the memory of its entries.
+    """
+
+    def __init__(self, max_bytes: int = 256 * 2**20) -> None:
+        self._items: OrderedDict[tuple, tuple[WindowModel, int]] = OrderedDict()
+        self._lock = threading.Lock()
+        self._bytes = 0
+        self.max_bytes = max_bytes
+
+    @staticmethod
+    def _size(model: WindowModel) -> int:
+        lp = model.lp
+        return int(model.A.nbytes + model.G.nbytes + model.b_c.nbytes + lp.Ared.nbytes
+                   + lp.Q2.nbytes + lp.Q0.nbytes + lp.binv0.nbytes + lp.W.nbytes
+                   + lp.Wred.nbytes + lp.yU.nbytes + lp.pinvU.nbytes)
+
+    def get(self, key: tuple, build: Callable[[], WindowModel]) -> WindowModel:
+        with self._lock:
+            hit = self._items.get(key)
+            if hit is not None:
+                self._items.move_to_end(key)
+                return hit[0]
+        model = build()  # outside the lock: building takes a while
+        size = self._size(model)
+        with self._lock:
+            if key not in self._items:
+                self._items[key] = (model, size)
+                self._bytes += size
+                while self._bytes > self.max_bytes and len(self._items) > 1:
+                    _, (_, sz) = self._items.popitem(last=False)
+                    self._bytes -= sz
+        return model
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+
+_MODELS = _ModelCache()
+
+
+def _check_window(window: object) -> int | None:
+    if window is None:
+        return None
+    if isinstance(window, bool | np.bool_) or not isinstance(window, numbers.Real):
+        raise TypeError(f"window must be a positive integer or None (exact mode), "
+                        f"got {window!r}")
+    w = float(window)
+    if not np.isfinite(w) or w != int(w) or w < 1:
+        raise DimensionError(f"window must be a positive integer or None (exact mode), "
+                             f"got {window!r}")
+    return int(w)
+
+
+def _as_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
+    """A ConstrainedZonotope from a CZ, a Box, or None; anything else is refused."""
+    if value is None:
+        return None
+    if isinstance(value, Box):
+        return ConstrainedZonotope.from_box(value.lo, value.hi)
+    if not isinstance(value, ConstrainedZonotope):
+        raise TypeError(
+            f"{name} must be a ConstrainedZonotope or a Box (e.g. Box(lo, hi)), got "
+            f"{type(value).__name__}")
+    if value.dim != dim:
+        raise DimensionError(f"{name} must have dimension {dim}, got {value.dim}")
+    return value
+
+
+def _normalize_free_columns(Z: ConstrainedZonotope) -> ConstrainedZonotope:
+    """The same set with every unbounded factor's column ``[G; A]`` scaled to unit norm.
+
+    An unbounded factor's scale is arbitrary (``h = inf``), but it sets the
+    conditioning of every LP over the set: ``R^n`` mapped into balanced
+    coordinates has columns of norms from ``1e-4`` to ``1e4`` on badly scaled
+    models. Powers of two keep the scaling exact.
+    """
+    free = np.isinf(Z.h)
+    if not free.any():
+        return Z
+    norms = np.linalg.norm(np.vstack([Z.G, Z.A]), axis=0)
+    s = np.ones(Z.n_gen)
+    ok = free & (norms > 0)
+    s[ok] = np.ldexp(1.0, -np.frexp(norms[ok])[1])
+    return ConstrainedZonotope._trusted(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.radius, Z.c_err,
+                                        Z.b_err)
 
 
 class SMFDO:
@@ -131,44 +250,63 @@ class SMFDO:
     window : int or None
         Filtering interval ``delta``. ``None`` selects the **exact mode**: no
         reset, so the posterior is exactly ``[[d_k | u_0:k-1, y_0:k]]`` when the
-        uncertainty sets are exact (Theorem 3). Its cost grows linearly with
-        ``k`` (``q`` generators and ``l`` constraints per step, so every LP grows);
+        uncertainty sets are exact (Theorem 3). Its cost grows with ``k``
+        (``q`` generators and ``l`` constraints per step, so every LP grows);
         use it as the worst-case-optimal reference on bounded horizons.
-    increment_set : ConstrainedZonotope, array_like, callable or None
-        Bounded set containing ``dd_k``: a CZ, a vector ``r`` meaning the box
-        ``|dd_i| <= r_i``, or a callable ``k -> CZ`` for a time-varying set.
-        Default: the unit box ``|dd_i| <= 1`` (Li-Cong-Dong, eqs. (27)-(28)).
-    initial_state_set : ConstrainedZonotope, optional
+    increment_set : ConstrainedZonotope, Box, array_like, callable or None
+        Bounded set containing ``dd_k``: a CZ, a :class:`Box`, a vector ``r``
+        meaning the box ``|dd_i| <= r_i``, or a callable ``k -> CZ`` for a
+        time-varying set. Default: the unit box ``|dd_i| <= 1``
+        (Li-Cong-Dong, eqs. (27)-(28)).
+    initial_state_set : ConstrainedZonotope or Box, optional
         Set containing ``x_0`` (default ``R^n``).
-    initial_disturbance_set : ConstrainedZonotope, optional
+    initial_disturbance_set : ConstrainedZonotope or Box, optional
         Set containing ``d_0`` (default ``R^q``, as in Algorithm 1, line 1).
     reset : {"raise", "box"}
         On an empty posterior (data inconsistent with the model, e.g. a
         measurement outlier): ``"raise"`` raises :class:`ModelInvalidatedError`;
         ``"box"`` restarts from the interval hull of the prior, inflated by
         ``reset_inflation`` (times 4 until the measurement is explainable),
-        intersected with the measurement; the window restarts from that set, and
-        :class:`ModelInvalidatedWarning` is issued (as in the set-membership
-        filtering literature; the guarantee is lost at that step by construction).
+        intersected with the measurement; the window restarts from that set, the
+        step's status is ``"reset"`` and :class:`ModelInvalidatedWarning` is
+        issued (as in the set-membership filtering literature; the guarantee is
+        lost at that step by construction).
+    reset_inflation : float
+        Positive initial inflation factor of the reset box.
     margin : float
-        Relative outward margin added to reported bounds, and to the interval
-        hulls that restart the window (eq. (24)), to cover the ``O(eps)``
-        rounding of the set recursion itself (the LP bounds are certified for
-        the stored sets).
+        Nonnegative relative outward margin added to reported bounds, and to the
+        interval hulls that restart the window (eq. (24)), to cover the
+        ``O(eps)`` rounding of the generator and constraint matrices of the set
+        recursion (the rounding of centres and right-hand sides is tracked and
+        certified; see :mod:`setobs.geometry.zonotope`).
+    data_rtol : float
+        Relative uncertainty of every measurement ``y`` and input ``u`` at
+        rounding level (default ``2 eps``: the representation error plus a few
+        roundings in the code that produced the data). The bounds hold for all
+        data within it, so large measurements (``|y| ~ 1e15``, where one ulp
+        exceeds the disturbance's effect) widen the bands instead of excluding
+        the truth. Measurement noise is not rounding: bound it with a set.
     keep_sets : bool
         Store ``P Z_k`` in each step result.
     fast : bool
-        Use the fast exact path in windowed mode (default). The window's
-        constraint matrix and generators do not depend on the data, so each
-        structure (one per step count before the window is full, one per
-        window afterwards) is set up once and its interval-hull LPs are solved
-        by a compiled, warm-started dual simplex whose bounds are certified
-        exactly as on the HiGHS path (:mod:`setobs.geometry.fastlp`). Any LP
-        the fast path cannot solve and certify tightly (infeasible,
-        degenerate beyond its tolerances, ambiguous unboundedness), a
-        time-varying increment set, and the steps after a ``reset="box"``
-        go to the reference path (the set operations plus HiGHS). ``False``
-        forces the reference path. ``stats`` counts the steps of each path.
+        Use the fast exact path (default). The closed form of the recursion
+        (the window's (24), or the whole history from ``Z_0^-`` in exact mode
+        and before the window is full) has a constraint matrix and generators
+        that do not depend on the data, so each structure is set up once per
+        process and its interval-hull LPs are solved by a compiled,
+        warm-started dual simplex whose bounds are certified exactly as on the
+        HiGHS path (:mod:`setobs.geometry.fastlp`). Any LP the fast path
+        cannot solve and certify tightly (infeasible, degenerate beyond its
+        tolerances, ambiguous unboundedness), a time-varying increment set,
+        and the steps after a ``reset="box"`` go to the reference path (the set
+        operations plus HiGHS, with retries). ``False`` forces the reference
+        path. ``stats`` counts the steps of each path.
+
+    Attributes
+    ----------
+    stats : dict
+        Steps on the ``"fast"`` and ``"reference"`` paths, and ``"fallback"``
+        steps (an LP failed under every solver setting).
 
     Raises
     ------
@@ -176,22 +314,38 @@ class SMFDO:
         If Theorem 1 fails (carries the analysis report).
     DimensionError
         If ``window < mu_o - 1`` (observability index of the augmented pair),
-        or on badly shaped sets.
+        on badly shaped sets or out-of-range parameters.
+    TypeError
+        On arguments of the wrong kind (e.g. a ``control.StateSpace``: convert
+        it with :meth:`LinearSystem.from_statespace`).
 
     Notes
     -----
-    Implementation of Algorithm 1 in the observable coordinates
-    ``z_o = T_o z`` of the augmented system (9)-(14):
+    Implementation of Algorithm 1 in observable coordinates of the augmented
+    system (9)-(14). The coordinates are those of an orthogonal observability
+    staircase of a *balanced* realisation (diagonal power-of-two scaling of
+    states and outputs, :func:`setobs.analysis.observability_decomposition`
+    with ``balance=True``): ``z_o = T_o D^-1 z``. For a well-scaled model
+    (the paper's example) ``D = I``; for a badly scaled one (entries from
+    ``1e-9`` to ``1e7``) the LPs stay well conditioned. Then:
 
-    * line 2: ``Z_0^- = T_o ([[x_0]] x [[d_0]])``;
-    * line 3: ``P T_o = [0 I]``; with orthonormal rows ``T_o``,
-      ``P = [0 I] T_o^T`` (verified);
+    * line 2: ``Z_0^- = T_o D^-1 ([[x_0]] x [[d_0]])``;
+    * line 3: ``P T_o D^-1 = [0 I]`` on the observable part, so
+      ``P = [0 I] D T_o^T`` (verified);
     * lines 5-11, eqs. (20)-(21): prior
       ``Z_k^- = A_o Z_(k-1) + B_o Z_(k-1)^Delta + Gamma_o u_(k-1)`` and posterior
       ``Z_k = Z_k^- ∩ {z : C_o z = y_k}``;
     * lines 12-13, eq. (24): for ``k >= delta``, the same ``delta`` steps re-run
-      from the interval hull of ``Z_(k-delta)`` (equivalent to the closed form (24));
+      from the interval hull of ``Z_(k-delta)``. One deviation, needed for the
+      documented minimum ``delta = mu_o - 1``: while that hull is unbounded
+      (``Z_j`` is bounded only from ``j = mu_o - 1`` on), the recursion keeps
+      running from ``Z_0^-`` (the exact set, tighter than any restart), so the
+      window restarts only from a bounded hull;
     * lines 14-15: ``Z_k^d = P Z_k``, estimate = centre of its interval hull.
+
+    One SMFDO is not meant to be used from two threads at once; different
+    SMFDOs (of the same system or not) run safely in different threads: each
+    keeps its own warm-start state, and only immutable structures are shared.
     """
 
     def __init__(
@@ -199,17 +353,27 @@ class SMFDO:
         sys: LinearSystem,
         window: int | None = 10,
         increment_set: IncrementSpec = None,
-        initial_state_set: ConstrainedZonotope | None = None,
+        initial_state_set: ConstrainedZonotope | Box | None = None,
         *,
-        initial_disturbance_set: ConstrainedZonotope | None = None,
+        initial_disturbance_set: ConstrainedZonotope | Box | None = None,
         reset: str = "raise",
         reset_inflation: float = 1.0,
         margin: float = 1e-9,
+        data_rtol: float = DATA_RTOL,
         keep_sets: bool = False,
         fast: bool = True,
     ) -> None:
-        if not isinstance(sys, LinearSystem):
-            raise TypeError(f"sys must be a LinearSystem, got {type(sys).__name__}")
+        sys = require_system(sys, "sys")
+        window = _check_window(window)
+        if reset not in ("raise", "box"):
+            raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
+        self.reset_inflation = check_real_scalar("reset_inflation", reset_inflation,
+                                                 positive=True)
+        self.margin = check_real_scalar("margin", margin, nonnegative=True)
+        self.data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
+        if self.data_rtol > 1e-6:
+            raise DimensionError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
+                                 f"{data_rtol!r}; bound measurement noise with a set")
         report = bounded_do_exists(sys)
         if not report.satisfied:
             raise ExistenceError(
@@ -218,30 +382,33 @@ class SMFDO:
                 f"{report.rank_O + report.q}", report)
         self.sys = sys
         self.existence = report
-        dec = observability_decomposition(sys)
+        n, q = sys.n, sys.q
+        X0 = _as_set("initial_state_set", initial_state_set, n)
+        D0 = _as_set("initial_disturbance_set", initial_disturbance_set, q)
+        self._inc_spec = increment_set
+        self._inc_fixed = self._fixed_increment(increment_set)
+        inc_scale = None
+        if self._inc_fixed is not None:
+            inc_scale = 0.5 * self._inc_fixed.interval_hull().width
+        dec = observability_decomposition(sys, balance=True, disturbance_scale=inc_scale)
         self.decomposition = dec
         self.mu_o = dec.report.index
-        if window is not None:
-            if int(window) != window or window < 1:
-                raise DimensionError(f"window must be a positive integer or None, got {window!r}")
-            if window < self.mu_o - 1:
-                raise DimensionError(
-                    f"window (delta) = {window} is too small: Algorithm 1 needs "
-                    f"delta >= mu_o - 1 = {self.mu_o - 1} (mu_o = observability index "
-                    "of the augmented pair)")
-            window = int(window)
+        if window is not None and window < self.mu_o - 1:
+            raise DimensionError(
+                f"window (delta) = {window} is too small: Algorithm 1 needs "
+                f"delta >= mu_o - 1 = {self.mu_o - 1} (mu_o = observability index "
+                "of the augmented pair)")
         self.window = window
-        if reset not in ("raise", "box"):
-            raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
         self.reset = reset
-        self.reset_inflation = float(reset_inflation)
-        self.margin = float(margin)
-        self.keep_sets = keep_sets
-        n, q = sys.n, sys.q
+        self.keep_sets = bool(keep_sets)
         T_o = dec.T_o
+        dz, dy = dec.state_scale, dec.output_scale
+        self._dy = dy
         target = np.hstack([np.zeros((q, n)), np.eye(q)])
-        P = target @ T_o.T
-        if np.abs(P @ T_o - target).max() > 1e-8:
+        P = target @ (dz[:, None] * T_o.T)
+        # d must not depend on the unobservable coordinates: [0 I] D T_obar^T = 0.
+        leak = np.abs(target @ (dz[:, None] * dec.T_obar.T)).max(initial=0.0)
+        if leak > 1e-8 * np.abs(dz[n:]).max():
             raise ExistenceError("P T_o = [0 I] has no solution (fragile Theorem 1 verdict)",
                                  report)
         self.P = P
@@ -253,41 +420,53 @@ class SMFDO:
         self._P_coords = np.argmax(P, axis=1) if sel.all() else None
         self.T_o = T_o
         self.A_o, self.B_o, self.Gamma_o, self.C_o = dec.A_o, dec.B_o, dec.Gamma_o, dec.C_o
-        X0 = ConstrainedZonotope.full_space(n) if initial_state_set is None else initial_state_set
-        D0 = (ConstrainedZonotope.full_space(q) if initial_disturbance_set is None
-              else initial_disturbance_set)
-        if X0.dim != n:
-            raise DimensionError(f"initial_state_set must have dimension {n}, got {X0.dim}")
-        if D0.dim != q:
-            raise DimensionError(f"initial_disturbance_set must have dimension {q}, got {D0.dim}")
-        self._Z0_prior = T_o @ X0.cartesian(D0)  # line 2
-        self._inc_fixed: ConstrainedZonotope | None = None
-        self._increment = self._increment_fn(increment_set)
+        X0 = ConstrainedZonotope.full_space(n) if X0 is None else X0
+        D0 = ConstrainedZonotope.full_space(q) if D0 is None else D0
+        self._Z0_prior = _normalize_free_columns((T_o / dz[None, :]) @ X0.cartesian(D0))
         self.fast = bool(fast)
-        self.stats = {"fast": 0, "reference": 0}
+        self.stats = {"fast": 0, "reference": 0, "fallback": 0}
         self._digest = self._structure_digest() if self.fast else b""
+        # Window restart from a bounded hull only; after this many steps of
+        # growth from Z_0^- (numerically unbounded hulls), restart anyway.
+        self._grow_limit = 4 * ((window or 0) + self.mu_o) + 16
+        self._warned_fallback = False
         self.reset_state()
 
     # ------------------------------------------------------------------ setup helpers
-    def _increment_fn(self, spec: IncrementSpec) -> Callable[[int], ConstrainedZonotope]:
+    def _fixed_increment(self, spec: IncrementSpec) -> ConstrainedZonotope | None:
+        """The increment set when it does not depend on ``k`` (validated), else None."""
         q = self.sys.q
         if spec is None:
-            box = ConstrainedZonotope.from_box(-np.ones(q), np.ones(q))
-        elif isinstance(spec, ConstrainedZonotope):
+            return ConstrainedZonotope.from_box(-np.ones(q), np.ones(q))
+        if isinstance(spec, Box):
+            spec = ConstrainedZonotope.from_box(spec.lo, spec.hi)
+        if isinstance(spec, ConstrainedZonotope):
             if spec.dim != q:
                 raise DimensionError(f"increment_set must have dimension {q}, got {spec.dim}")
             if not spec.is_bounded:
                 raise DimensionError("increment_set must be bounded")
-            box = spec
-        elif callable(spec):
             return spec
-        else:
-            r = as_vector("increment_set", spec, size=q)
-            if (r < 0).any():
-                raise DimensionError("increment_set bounds must be nonnegative")
-            box = ConstrainedZonotope.from_box(-r, r)
-        self._inc_fixed = box
-        return lambda k: box
+        if callable(spec):
+            return None
+        r = as_vector("increment_set", spec, size=q)
+        if (r < 0).any():
+            raise DimensionError("increment_set bounds must be nonnegative")
+        return ConstrainedZonotope.from_box(-r, r)
+
+    def _increment(self, k: int) -> ConstrainedZonotope:
+        """The increment set ``[[dd_k]]``."""
+        if self._inc_fixed is not None:
+            return self._inc_fixed
+        dd = self._inc_spec(k)  # type: ignore[operator]
+        if isinstance(dd, Box):
+            dd = ConstrainedZonotope.from_box(dd.lo, dd.hi)
+        if not isinstance(dd, ConstrainedZonotope):
+            raise TypeError(f"increment_set({k}) must return a ConstrainedZonotope or a Box, "
+                            f"got {type(dd).__name__}")
+        if dd.dim != self.sys.q:
+            raise DimensionError(f"increment_set({k}) has dimension {dd.dim}, "
+                                 f"expected {self.sys.q}")
+        return dd
 
     def _structure_digest(self) -> bytes:
         """Fingerprint of everything a window structure depends on (shared cache key)."""
@@ -297,7 +476,7 @@ class SMFDO:
         parts = [self.A_o, self.B_o, self.C_o, self.Gamma_o, self.P, Z0.G, Z0.A,
                  np.isinf(Z0.h)]
         if inc is not None:
-            parts += [inc.G, inc.c, inc.A, inc.b, inc.h]
+            parts += [inc.G, inc.c, inc.A, inc.b, inc.h, inc.b_err]
         for a in parts:
             a = np.ascontiguousarray(a)
             hsh.update(str(a.shape).encode())
@@ -310,81 +489,91 @@ class SMFDO:
         """Forget all data and start again at ``k = 0``."""
         self.k = -1
         win = self.window
-        # hulls of Z_(k-delta) .. Z_(k-1) and the data (y_j, u_(j-1), dd_(j-1)) of
-        # the same steps: exactly what eq. (24) re-runs.
+        # hulls of Z_(k-delta) .. Z_(k-1): the restart boxes of eq. (24)
         self._hulls: deque[Box] = deque(maxlen=win or 1)
-        self._hist: deque[tuple[NDArray[np.float64], NDArray[np.float64] | None,
-                                ConstrainedZonotope]] = deque(maxlen=win or 1)
-        # the posterior, either a set or (model, c, b, h) of the fast path (built lazily)
+        # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
+        # runs from Z_0^-) or of the last delta steps (once the window restarts)
+        self._hist: list[tuple[NDArray[np.float64], NDArray[np.float64] | None,
+                               ConstrainedZonotope]] = []
+        # the posterior, either a set or (model, c, b, h, c_err, b_err) of the fast path
         self._Z_src: object = None
-        self._from_initial = True  # no reset since k = 0 (the early closed forms apply)
+        self._from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
+        self._windowing = False  # the window has restarted from a hull at least once
+        self._u_pending: NDArray[np.float64] | None = None
+        self._states: dict[tuple, object] = {}  # LP warm-start states, one per structure
 
     @property
     def _Z(self) -> ConstrainedZonotope | None:
         src = self._Z_src
         if isinstance(src, tuple):
-            model, c, b, h = src
-            src = model.to_cz(c, b, h)
+            model, c, b, h, c_err, b_err = src
+            src = model.to_cz(c, b, h, c_err, b_err)
             self._Z_src = src
         return src  # type: ignore[return-value]
 
-    # ------------------------------------------------------------------ fast path
-    def _model(self, key: tuple, build: Callable[[], WindowModel]) -> WindowModel:
-        full = (self._digest, *key)
-        model = _MODELS.get(full)
-        if model is None:
-            model = build()
-            _MODELS[full] = model
-            if len(_MODELS) > _MODELS_MAX:
-                _MODELS.popitem(last=False)
-        else:
-            _MODELS.move_to_end(full)
-        return model
+    def _start_mode(self, k: int) -> str:
+        """How step ``k`` is computed: ``"box"`` (eq. (24), restart from IH(Z_(k-delta))),
+        ``"init"`` (the whole history from Z_0^-), or ``"recursive"`` (one more step)."""
+        win = self.window
+        if win is not None and len(self._hulls) == win:
+            lo, _ = self._restart_bounds(self._hulls[0])
+            if (self._windowing or not self._from_initial or k > self._grow_limit
+                    or np.isfinite(lo).all()):
+                return "box"
+        return "init" if self._from_initial else "recursive"
 
-    def _fast_step(self, k: int, yv, uv, dd):
+    # ------------------------------------------------------------------ fast path
+    def _fast_step(self, k: int, mode: str, yv, uv, dd):
         """Hulls of ``Z_k`` (and ``P Z_k``) by the closed form, or ``None`` (reference path)."""
-        if not self.fast or self.window is None or self._inc_fixed is None:
+        if not self.fast or self._inc_fixed is None or mode == "recursive":
             return None
-        if dd is not None and dd is not self._inc_fixed:
-            return None
-        win, N = self.window, self.A_o.shape[0]
+        N = self.A_o.shape[0]
         P_extra = None if self._P_coords is not None else self.P
         inc = self._inc_fixed
-        if len(self._hulls) == win:
+        if mode == "box":
+            win = self.window
             lo, hi = self._restart_bounds(self._hulls[0])
             free = np.isinf(lo)
             c_S, h_S = box_center_radius(lo, hi)
             b_S = np.zeros(0)
-            hist = [*list(self._hist)[1:], (yv, uv, dd)]
+            c_S_err = b_S_err = None
+            hist = [*self._hist[-(win - 1):], (yv, uv, dd)] if win > 1 else [(yv, uv, dd)]
             key = ("box", free.tobytes())
             radius = min(UNBOUNDED_RADIUS, inc.radius)
 
             def build() -> WindowModel:
                 return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, np.eye(N),
                                    np.zeros((0, N)), free, win, False, P_extra, radius)
-        elif self._from_initial and len(self._hist) == k:
+        else:  # "init": the whole history from Z_0^-
             Z0 = self._Z0_prior
             c_S, b_S, h_S = Z0.c, Z0.b, Z0.h
-            hist = [*list(self._hist), (yv, uv, dd)]
+            c_S_err, b_S_err = Z0.c_err, Z0.b_err
+            hist = [*self._hist, (yv, uv, dd)]
             key = ("init", k)
             radius = min(Z0.radius, inc.radius)
 
             def build() -> WindowModel:
                 return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
                                    np.isinf(Z0.h), k, True, P_extra, radius)
-        else:
-            return None
-        model = self._model(key, build)
+        model = _MODELS.get((self._digest, *key), build)
         if not model.usable:
             return None
+        if key[0] == "box":
+            state = self._states.get(key)
+            if state is None:
+                state = self._states[key] = model.new_state()
+        else:  # each "init" structure is used once per run: a cold start
+            state = model.new_state()
         Y = np.array([e[0] for e in hist])
         if self.sys.p:
             steps = hist if len(hist) == model.s else hist[1:]
             U = np.array([e[1] for e in steps])
         else:
             U = np.zeros((model.s, 0))
-        c, b, h = model.assemble(c_S, b_S, h_S, Y, U)
-        out = model.hull(c, b, h, float(np.abs(Y).max(initial=0.0)))
+        c, b, h, c_err, b_err = model.assemble(c_S, b_S, h_S, Y, U, c_S_err=c_S_err,
+                                               b_S_err=b_S_err, data_rtol=self.data_rtol)
+        y_scale = float(np.abs(Y).max(initial=0.0))
+        out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
         lo, hi = out
@@ -394,7 +583,7 @@ class SMFDO:
             box = Box._trusted(lo[j], hi[j])
         else:
             box = Box._trusted(lo[N:], hi[N:])
-        return (model, c, b, h), box, box_o
+        return (model, c, b, h, c_err, b_err), box, box_o
 
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, dd: ConstrainedZonotope,
@@ -402,12 +591,16 @@ class SMFDO:
         """Eq. (20): ``A_o Z + B_o Z^Delta + Gamma_o u``."""
         Zp = self.A_o @ Z + self.B_o @ dd
         if u is not None and self.sys.p:
-            Zp = Zp + self.Gamma_o @ u
+            v = self.Gamma_o @ u
+            err = self.data_rtol * (np.abs(self.Gamma_o) @ np.abs(u)) if self.data_rtol \
+                else None
+            Zp = Zp.minkowski_sum(v, err=err)
         return Zp
 
     def _posterior(self, Zp: ConstrainedZonotope, y: NDArray[np.float64]) -> ConstrainedZonotope:
-        """Eq. (21): intersection with ``{z : C_o z = y}``."""
-        return Zp.intersect_affine(self.C_o, y)
+        """Eq. (21): intersection with ``{z : C_o z = y}`` (``y`` in balanced units)."""
+        return Zp.intersect_affine(self.C_o, y, y_err=self.data_rtol * np.abs(y)
+                                   if self.data_rtol else None)
 
     @staticmethod
     def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -424,13 +617,16 @@ class SMFDO:
         return ConstrainedZonotope.from_box(*cls._restart_bounds(box))
 
     def _check_inputs(self, y: ArrayLike, u_prev: ArrayLike | None):
-        yv = as_vector("y", y, size=self.sys.l)
+        yv = as_vector("y", y, size=self.sys.l) / self._dy
         uv = None
         if u_prev is not None:
             uv = as_vector("u_prev", u_prev, size=self.sys.p)
         elif self.sys.p and self.k >= 0:
-            raise DimensionError(f"u_prev (length {self.sys.p}) is required after the first step "
-                                 "of a system with inputs")
+            if self._u_pending is None:
+                raise DimensionError(
+                    f"u_prev (length {self.sys.p}) is required after the first step of a "
+                    "system with inputs")
+            uv = self._u_pending
         return yv, uv
 
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None) -> SMFDOStep:
@@ -441,7 +637,9 @@ class SMFDO:
         y : array_like, shape (l,)
             Measurement at step ``k``.
         u_prev : array_like, shape (p,), optional
-            Known input ``u_(k-1)`` (ignored at ``k = 0``).
+            Known input ``u_(k-1)`` (ignored at ``k = 0``). May be omitted right
+            after :meth:`run` was given ``U`` with ``N`` rows: its last row is
+            ``u_(k-1)``.
 
         Raises
         ------
@@ -449,77 +647,100 @@ class SMFDO:
             If no state and disturbance history explains the data (``reset="raise"``).
         """
         yv, uv = self._check_inputs(y, u_prev)
+        self._u_pending = None
         k = self.k + 1
-        dd = None
-        if k > 0:
-            dd = self._increment(k - 1)
-            if dd.dim != self.sys.q:
-                raise DimensionError(f"increment set at k={k - 1} has dimension {dd.dim}")
-        fast = self._fast_step(k, yv, uv, dd)
+        dd = self._increment(k - 1) if k > 0 else None
+        mode = "init" if k == 0 else self._start_mode(k)
+        fast = self._fast_step(k, mode, yv, uv, dd)
         if fast is not None:
             self.stats["fast"] += 1
             Z_src, box, box_o = fast
             Zd = None
             if self.keep_sets:
-                model, c, b, h = Z_src
-                Z_src = model.to_cz(c, b, h)
+                model, c, b, h, c_err, b_err = Z_src
+                Z_src = model.to_cz(c, b, h, c_err, b_err)
                 Zd = self.P @ Z_src
-            return self._commit(k, Z_src, box, box_o, Zd, yv, uv, dd)
+            return self._commit(k, mode, Z_src, box, box_o, Zd, yv, uv, dd, "ok")
         self.stats["reference"] += 1
         if k == 0:
             Zp = self._Z0_prior
+        elif mode == "box":
+            # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
+            win = self.window
+            Z = self._box_cz(self._hulls[0])
+            Zp = None
+            hist = [*self._hist[-(win - 1):], (yv, uv, dd)] if win > 1 else [(yv, uv, dd)]
+            for i, (yy, uu, ddi) in enumerate(hist):
+                Zp = self._prior(Z, ddi, uu)
+                if i < len(hist) - 1:
+                    Z = self._posterior(Zp, yy)
         else:
-            if self.window is not None and len(self._hulls) == self.window:
-                # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
-                start = self._box_cz(self._hulls[0])
-                Zp = None
-                Z = start
-                hist = [*list(self._hist)[1:], (yv, uv, dd)]
-                for i, (yy, uu, ddi) in enumerate(hist):
-                    Zp = self._prior(Z, ddi, uu)
-                    if i < len(hist) - 1:
-                        Z = self._posterior(Zp, yy)
-            else:
-                Zp = self._prior(self._Z, dd, uv)
+            Zp = self._prior(self._Z, dd, uv)
         Z = self._posterior(Zp, yv)
+        status = "ok"
         try:
-            Zd, box, box_o = self._bounds(Z)
+            Zd, box, box_o, fell_back = self._bounds(Z)
         except EmptySetError:
             # One-step prior from the last valid posterior (the windowed re-run may
             # pass through the same inconsistency again).
             Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, dd, uv)
             Z = self._handle_empty(k, Zp1, yv)
-            Zd, box, box_o = self._bounds(Z)
+            Zd, box, box_o, fell_back = self._bounds(Z)
             # The window restarts from the reset set: eq. (24) is applied again only
             # once delta consistent steps have been collected.
             self._hulls.clear()
             self._hist.clear()
             self._from_initial = False
-        return self._commit(k, Z, box, box_o, Zd if self.keep_sets else None, yv, uv, dd)
+            self._windowing = False
+            status = "reset"
+        if fell_back:
+            status = "fallback" if status == "ok" else status
+            self.stats["fallback"] += 1
+            if not self._warned_fallback:
+                self._warned_fallback = True
+                warnings.warn(
+                    f"SMFDO step k={k}: an LP failed under every solver setting; the bounds "
+                    "of this step are wider (still certified) and flagged status='fallback' "
+                    "(warned once per observer)", SolverWarning, stacklevel=2)
+        return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, yv, uv,
+                            dd, status)
 
-    def _commit(self, k, Z_src, box, box_o, Zd, yv, uv, dd) -> SMFDOStep:
+    def _commit(self, k, mode, Z_src, box, box_o, Zd, yv, uv, dd, status) -> SMFDOStep:
         self.k = k
         self._Z_src = Z_src
+        if mode == "box":
+            self._windowing = True
+        self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
         if self.window is not None:
             # The restart box of eq. (24) gets the same relative margin as the
             # reported bounds: the set recursion itself rounds (O(eps)), and a
             # box without margin can make a thin set (states pinned to rounding
             # level) empty at a later step.
             self._hulls.append(Box._trusted(*self._outward(box_o.lo, box_o.hi)))
-            self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
+            if self._windowing and len(self._hist) > self.window:
+                del self._hist[:len(self._hist) - self.window]
+        elif not self._from_initial:
+            self._hist.clear()  # exact mode after a reset: plain recursion, no history
         lo, hi = self._outward(box.lo, box.hi)
         est = box_center(lo, hi)
         rad = float(np.max(0.5 * (hi - lo), initial=0.0))
-        return SMFDOStep(k, est, lo, hi, rad, Zd)
+        if status == "ok" and not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            status = "unbounded"
+        return SMFDOStep(k, est, lo, hi, rad, Zd, status)
 
     def _bounds(self, Z: ConstrainedZonotope):
-        """Disturbance set ``P Z``, its hull, and (windowed mode) the hull of ``Z``."""
-        box_o = Z.interval_hull() if self.window is not None else None
+        """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, and
+        whether an LP fell back."""
+        fb_o = False
+        box_o = None
+        if self.window is not None:
+            box_o, fb_o = Z._interval_hull()
         Zd = self.P @ Z
         if box_o is not None and self._P_coords is not None:
             j = self._P_coords
-            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o
-        return Zd, Zd.interval_hull(), box_o
+            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o
+        box_d, fb_d = Zd._interval_hull()
+        return Zd, box_d, box_o, fb_o or fb_d
 
     def _outward(self, lo, hi):
         a, b = np.abs(lo), np.abs(hi)
@@ -537,7 +758,7 @@ class SMFDO:
         warnings.warn(msg + "; resetting from an inflated box", ModelInvalidatedWarning,
                       stacklevel=3)
         try:
-            hull = Zp.interval_hull()
+            hull, _ = Zp._interval_hull()
         except EmptySetError:
             raise ModelInvalidatedError(msg + " (the prior itself is empty)", k) from None
         w = np.where(np.isfinite(hull.width), hull.width, 0.0)
@@ -557,14 +778,19 @@ class SMFDO:
         Parameters
         ----------
         Y : array_like, shape (N, l)
-            Measurements ``y_0 .. y_(N-1)``.
+            Measurements ``y_0 .. y_(N-1)`` (continuing from the current step
+            when the observer has already seen data).
         U : array_like, shape (N, p) or (N-1, p), optional
-            Inputs ``u_0 ..``; ``U[k-1]`` is used at step ``k``.
+            Inputs aligned with ``Y``: ``U[j]`` is applied at the time of
+            ``Y[j]``, so ``U[j-1]`` is used at record step ``j``. When a record
+            is split into consecutive calls, pass ``U`` with ``N`` rows: its
+            last row is the input before the first step of the next call.
 
         Returns
         -------
         SMFDOResult
-            ``estimate``, ``lo``, ``hi`` of shape ``(N, q)`` and ``radius`` ``(N,)``.
+            ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``radius`` and
+            ``status`` ``(N,)``.
         """
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
@@ -575,16 +801,25 @@ class SMFDO:
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] not in (N, N - 1):
                 raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
+            if self.k >= 0 and self._u_pending is None and N:
+                raise DimensionError(
+                    "the input applied before the first step of this record is unknown: "
+                    "give the previous run() its U with N rows (the last row is that "
+                    "input), or continue with update(y, u_prev)")
         steps = []
         for j in range(N):
-            u = Ua[j - 1] if (Ua is not None and self.k >= 0) else None
+            u = Ua[j - 1] if (Ua is not None and j >= 1) else None
             steps.append(self.update(Ya[j], u))
+        if Ua is not None and Ua.shape[0] == N and N:
+            self._u_pending = Ua[N - 1].copy()
+        q = self.sys.q
         return SMFDOResult(
-            np.array([s.estimate for s in steps]).reshape(N, self.sys.q),
-            np.array([s.lo for s in steps]).reshape(N, self.sys.q),
-            np.array([s.hi for s in steps]).reshape(N, self.sys.q),
+            np.array([s.estimate for s in steps]).reshape(N, q),
+            np.array([s.lo for s in steps]).reshape(N, q),
+            np.array([s.hi for s in steps]).reshape(N, q),
             np.array([s.radius for s in steps]),
             steps,
+            np.array([s.status for s in steps], dtype="<U9"),
         )
 
     def __repr__(self) -> str:

@@ -1,0 +1,203 @@
+"""Independent oracles for the SMFDO tests: an exact rational LP and the whole-history LP.
+
+Nothing here imports setobs. :func:`exact_lp_min` solves a small LP exactly
+(``fractions.Fraction``, two-phase dense simplex with Bland's rule), so that
+"does the certified bound contain the optimum, and how close is it" is decided
+without floating point. :func:`history_lp` builds the whole-history LP of the
+SMFDO in the *original* coordinates: variables ``x_0``, ``d_0`` and every
+increment, the system matrices and the data taken as the exact rationals they
+are in floating point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from fractions import Fraction
+
+import numpy as np
+
+
+def _F(v: float) -> Fraction:
+    return Fraction(float(v))
+
+
+def exact_lp_min(c: Sequence[Fraction], A: Sequence[Sequence[Fraction]], b: Sequence[Fraction],
+                 lo: Sequence[Fraction | None], hi: Sequence[Fraction | None]
+                 ) -> Fraction | None:
+    """Exact ``min c^T x`` s.t. ``A x = b``, ``lo <= x <= hi`` (``None``: no bound).
+
+    Returns the optimum, or ``None`` if the LP is unbounded below. Raises
+    ``ValueError`` if it is infeasible. Variables are shifted and split into
+    nonnegative parts (standard form); phase 1 uses one artificial per row.
+    """
+    n = len(c)
+    # x = lo + s (s >= 0, s <= hi - lo) or x = hi - s, or x = s+ - s- (free)
+    cols: list[tuple[int, Fraction]] = []  # (original var, sign) per standard column
+    const = [Fraction(0)] * n
+    ub_rows: list[tuple[int, Fraction]] = []  # (standard column, upper bound)
+    for j in range(n):
+        if lo[j] is not None:
+            const[j] = lo[j]
+            cols.append((j, Fraction(1)))
+            if hi[j] is not None:
+                ub_rows.append((len(cols) - 1, hi[j] - lo[j]))
+        elif hi[j] is not None:
+            const[j] = hi[j]
+            cols.append((j, Fraction(-1)))
+        else:
+            cols.append((j, Fraction(1)))
+            cols.append((j, Fraction(-1)))
+    m0 = len(b)
+    ns = len(cols)
+    n_slack = len(ub_rows)
+    N = ns + n_slack
+    rows: list[list[Fraction]] = []
+    rhs: list[Fraction] = []
+    for i in range(m0):
+        row = [A[i][j] * sg for (j, sg) in cols] + [Fraction(0)] * n_slack
+        rows.append(row)
+        rhs.append(b[i] - sum(A[i][j] * const[j] for j in range(n)))
+    for t, (col, ub) in enumerate(ub_rows):
+        row = [Fraction(0)] * N
+        row[col] = Fraction(1)
+        row[ns + t] = Fraction(1)
+        rows.append(row)
+        rhs.append(ub)
+    cost = [c[j] * sg for (j, sg) in cols] + [Fraction(0)] * n_slack
+    m = len(rows)
+    for i in range(m):
+        if rhs[i] < 0:
+            rows[i] = [-v for v in rows[i]]
+            rhs[i] = -rhs[i]
+    # tableau with artificials
+    T = [rows[i] + [Fraction(1) if k == i else Fraction(0) for k in range(m)] + [rhs[i]]
+         for i in range(m)]
+    basis = [N + i for i in range(m)]
+    total = N + m
+
+    def pivot(r: int, q: int) -> None:
+        pv = T[r][q]
+        T[r] = [v / pv for v in T[r]]
+        for i in range(m):
+            if i != r and T[i][q] != 0:
+                f = T[i][q]
+                T[i] = [a - f * bb for a, bb in zip(T[i], T[r], strict=True)]
+        basis[r] = q
+
+    def simplex(obj: list[Fraction], allowed: int) -> bool:
+        """Minimise obj over the tableau; False if unbounded (Bland's rule)."""
+        while True:
+            red = []
+            for j in range(allowed):
+                if j in basis:
+                    continue
+                rc = obj[j] - sum(obj[basis[i]] * T[i][j] for i in range(m))
+                if rc < 0:
+                    red.append(j)
+            if not red:
+                return True
+            q = min(red)
+            best = None
+            for i in range(m):
+                if T[i][q] > 0:
+                    ratio = T[i][-1] / T[i][q]
+                    if best is None or ratio < best[0] or (ratio == best[0]
+                                                            and basis[i] < basis[best[1]]):
+                        best = (ratio, i)
+            if best is None:
+                return False
+            pivot(best[1], q)
+
+    phase1 = [Fraction(0)] * N + [Fraction(1)] * m
+    simplex(phase1, total)
+    if sum(T[i][-1] for i in range(m) if basis[i] >= N) != 0:
+        raise ValueError("infeasible LP")
+    # drive artificials out of the basis where possible
+    for i in range(m):
+        if basis[i] >= N:
+            for j in range(N):
+                if T[i][j] != 0:
+                    pivot(i, j)
+                    break
+    obj = cost + [Fraction(0)] * m
+    # forbid artificials: remove their columns from consideration
+    if not simplex(obj, N):
+        return None
+    val = sum(cost[basis[i]] * T[i][-1] for i in range(m) if basis[i] < N)
+    return val + sum(c[j] * const[j] for j in range(n))
+
+
+def history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box=None, d_box=None, y_rtol=0.0):
+    """The whole-history LP of ``d_k`` in exact rationals (original coordinates).
+
+    Variables ``v = (x_0, d_0, dd_0 .. dd_(k-1), e_0 .. e_k)``; ``x_(j+1) = Phi x_j +
+    Gamma u_j + G d_j``, ``d_(j+1) = d_j + dd_j``, ``Xi x_j = y_j + e_j`` with
+    ``|e_j| <= y_rtol |y_j|`` (the data's representation error; ``0``: exact data),
+    ``|dd_j| <= r_inc``; ``x_box``/``d_box``: optional ``(lo, hi)`` for ``x_0``/``d_0``.
+
+    Returns ``(A, b, lo, hi, Md)`` with ``d_k = Md v``.
+    """
+    Phi_f = [[_F(v) for v in row] for row in np.atleast_2d(Phi)]
+    G_f = [[_F(v) for v in row] for row in np.atleast_2d(G)]
+    Xi_f = [[_F(v) for v in row] for row in np.atleast_2d(Xi)]
+    n, q = len(Phi_f), len(G_f[0])
+    nv = n + q + k * q
+    # x_j = Mx v + ox, d_j = Md v (rows as Fraction lists)
+    Mx = [[Fraction(int(i == j)) for j in range(nv)] for i in range(n)]
+    ox = [Fraction(0)] * n
+    Md = [[Fraction(int(j == n + i)) for j in range(nv)] for i in range(q)]
+    A, b = [], []
+    for j in range(k + 1):
+        for i in range(len(Xi_f)):
+            A.append([sum(Xi_f[i][t] * Mx[t][col] for t in range(n)) for col in range(nv)])
+            b.append(_F(Y[j][i]) - sum(Xi_f[i][t] * ox[t] for t in range(n)))
+        if j == k:
+            break
+        newMx = [[sum(Phi_f[i][t] * Mx[t][col] for t in range(n))
+                  + sum(G_f[i][t] * Md[t][col] for t in range(q)) for col in range(nv)]
+                 for i in range(n)]
+        newox = [sum(Phi_f[i][t] * ox[t] for t in range(n)) for i in range(n)]
+        if U is not None and Gamma is not None and np.size(Gamma):
+            Gam_f = [[_F(v) for v in row] for row in np.atleast_2d(Gamma)]
+            for i in range(n):
+                newox[i] += sum(Gam_f[i][t] * _F(U[j][t]) for t in range(len(Gam_f[0])))
+        Mx, ox = newMx, newox
+        Md = [row[:] for row in Md]
+        for i in range(q):
+            Md[i][n + q + j * q + i] += 1
+    lo: list[Fraction | None] = []
+    hi: list[Fraction | None] = []
+    for i in range(n):
+        lo.append(None if x_box is None else _F(x_box[0][i]))
+        hi.append(None if x_box is None else _F(x_box[1][i]))
+    for i in range(q):
+        lo.append(None if d_box is None else _F(d_box[0][i]))
+        hi.append(None if d_box is None else _F(d_box[1][i]))
+    for _ in range(k):
+        for i in range(q):
+            lo.append(-_F(r_inc[i]))
+            hi.append(_F(r_inc[i]))
+    # ox enters b: Xi x_j = y_j  ->  Xi Mx v = y_j - Xi ox  (already in b)
+    if y_rtol:
+        rho = _F(y_rtol)
+        ne = len(A)
+        yflat = [_F(v) for j in range(k + 1) for v in np.atleast_1d(Y[j])]
+        for i in range(ne):
+            A[i] = A[i] + [Fraction(-1) if t == i else Fraction(0) for t in range(ne)]
+            lo.append(-rho * abs(yflat[i]))
+            hi.append(rho * abs(yflat[i]))
+        Md = [row + [Fraction(0)] * ne for row in Md]
+    return A, b, lo, hi, Md
+
+
+def exact_history_bounds(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_box=None,
+                         y_rtol=0.0):
+    """Exact ``(lo, hi)`` of each ``d_k`` component over the whole history (Fractions)."""
+    A, b, lo, hi, Md = history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box, d_box, y_rtol)
+    out_lo, out_hi = [], []
+    for row in Md:
+        mn = exact_lp_min(row, A, b, lo, hi)
+        mx = exact_lp_min([-v for v in row], A, b, lo, hi)
+        out_lo.append(mn)
+        out_hi.append(None if mx is None else -mx)
+    return out_lo, out_hi
