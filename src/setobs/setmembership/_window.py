@@ -21,10 +21,13 @@ computed once (``-C_o A_o^j``, ...). Their rounding errors, and those of
 assembling ``c`` and ``b``, are bounded elementwise by Higham's ``gamma``
 bounds on the matching products of absolute values (``|C_o| |A_o|^j |c_S|``,
 ...), computed alongside; the representation error of the data (a relative
-``data_rtol`` on every ``y`` and ``u``) is added. The LP certificate covers
-the resulting ``b_err`` and the hull covers ``c_err``, so the bounds contain
-the set for the exact data even when large states cancel against large
-measurements (``|y| ~ 1e15``).
+``data_rtol`` on every ``y`` and ``u``) is added. The rounding of the generator
+and constraint matrices (``C_o A_o^j G_S``, relative ``gK``) acts on the
+factors; their image in a measurement row has the size of ``y`` unless the
+prediction cancels, so ``gK |y|`` is added on every measurement row (the
+*model allowance*). The LP certificate covers the resulting ``b_err`` and the
+hull covers ``c_err``, so the bounds contain the set for the exact data even
+when large states cancel against large measurements (``|y| ~ 1e15``).
 """
 
 from __future__ import annotations
@@ -35,6 +38,12 @@ from numpy.typing import NDArray
 from ..geometry import ConstrainedZonotope
 from ..geometry.fastlp import FixedStructureLP, LPState, hull_from_bounds, hull_objectives
 from ..geometry.lp import _U, _gamma
+
+
+def model_rtol(s: int, N: int, p: int, nD: int) -> float:
+    """Relative rounding bound of ``s`` steps of the recursion's products (Higham's
+    ``gamma`` of their depth, doubled): the *model allowance* per measurement."""
+    return 2.0 * _gamma((s + 2) * (N + p + nD + 3) + 8)
 
 
 class WindowModel:
@@ -140,7 +149,7 @@ class WindowModel:
         self.c_c, self.c_u, self.c_const = Mc, Mu, kappa
         self._c_c_a, self._c_u_a, self._c_const_a = Mc_a, Mu_a, kappa_a
         # Depth of the products (s steps of N-term sums, plus assembly) for gamma.
-        self._gK = 2.0 * _gamma((s + 2) * (N + p + nD + 3) + 8)
+        self._gK = model_rtol(s, N, p, nD)
         self.h_D = np.tile(increment.h, s)
         self.free = np.concatenate([np.asarray(free_S, dtype=bool), np.isinf(self.h_D)])
         W = G if P is None else np.vstack([G, P @ G])
@@ -206,7 +215,14 @@ class WindowModel:
         g = self._gK + 3.0 * _U
         eb = g * eb
         ec = g * ec
-        eb[self.y_pos] += (3.0 * _U + data_rtol) * ya
+        # On every measurement row: the data's representation error, the rounding
+        # of adding y (none where the rest is zero, e.g. from R^n), and the model
+        # allowance gK |y|: the rounding of the generator products C_o A_o^j G_S
+        # (relative gK) acting on the factors, whose image C_o G_j xi has the
+        # size of y when the prediction does not cancel.
+        t = b_tail[self.y_pos] - yflat
+        eb[self.y_pos] += (data_rtol + self._gK) * ya + np.where(
+            t != 0.0, _U * (np.abs(t) + ya), 0.0)
         if self.p and data_rtol:
             eb = eb + data_rtol * (self._b_u_a @ au)
             ec = ec + data_rtol * (self._c_u_a @ au)

@@ -22,7 +22,7 @@ from ..geometry.box import box_center
 from ..geometry.zonotope import box_center_radius
 from ..systems import LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
-from ._window import WindowModel
+from ._window import WindowModel, model_rtol
 
 __all__ = [
     "SMFDO",
@@ -501,6 +501,7 @@ class SMFDO:
         self._windowing = False  # the window has restarted from a hull at least once
         self._u_pending: NDArray[np.float64] | None = None
         self._states: dict[tuple, object] = {}  # LP warm-start states, one per structure
+        self._depth = 0  # recursion steps since the start set of the current posterior
 
     @property
     def _Z(self) -> ConstrainedZonotope | None:
@@ -597,10 +598,16 @@ class SMFDO:
             Zp = Zp.minkowski_sum(v, err=err)
         return Zp
 
-    def _posterior(self, Zp: ConstrainedZonotope, y: NDArray[np.float64]) -> ConstrainedZonotope:
-        """Eq. (21): intersection with ``{z : C_o z = y}`` (``y`` in balanced units)."""
-        return Zp.intersect_affine(self.C_o, y, y_err=self.data_rtol * np.abs(y)
-                                   if self.data_rtol else None)
+    def _posterior(self, Zp: ConstrainedZonotope, y: NDArray[np.float64],
+                   depth: int) -> ConstrainedZonotope:
+        """Eq. (21): intersection with ``{z : C_o z = y}`` (``y`` in balanced units).
+
+        ``y`` is known to within ``data_rtol |y|`` plus the model allowance of
+        ``depth`` recursion steps (see :mod:`setobs.setmembership._window`).
+        """
+        nD = self._inc_fixed.n_gen if self._inc_fixed is not None else self.sys.q
+        rtol = self.data_rtol + model_rtol(depth, self.A_o.shape[0], self.sys.p, nD)
+        return Zp.intersect_affine(self.C_o, y, y_err=rtol * np.abs(y))
 
     @staticmethod
     def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -660,10 +667,12 @@ class SMFDO:
                 model, c, b, h, c_err, b_err = Z_src
                 Z_src = model.to_cz(c, b, h, c_err, b_err)
                 Zd = self.P @ Z_src
+            self._depth = k if mode == "init" else self.window
             return self._commit(k, mode, Z_src, box, box_o, Zd, yv, uv, dd, "ok")
         self.stats["reference"] += 1
         if k == 0:
             Zp = self._Z0_prior
+            depth = 0
         elif mode == "box":
             # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
             win = self.window
@@ -673,10 +682,12 @@ class SMFDO:
             for i, (yy, uu, ddi) in enumerate(hist):
                 Zp = self._prior(Z, ddi, uu)
                 if i < len(hist) - 1:
-                    Z = self._posterior(Zp, yy)
+                    Z = self._posterior(Zp, yy, i + 1)
+            depth = len(hist)
         else:
             Zp = self._prior(self._Z, dd, uv)
-        Z = self._posterior(Zp, yv)
+            depth = self._depth + 1
+        Z = self._posterior(Zp, yv, depth)
         status = "ok"
         try:
             Zd, box, box_o, fell_back = self._bounds(Z)
@@ -685,6 +696,7 @@ class SMFDO:
             # pass through the same inconsistency again).
             Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, dd, uv)
             Z = self._handle_empty(k, Zp1, yv)
+            depth = 0
             Zd, box, box_o, fell_back = self._bounds(Z)
             # The window restarts from the reset set: eq. (24) is applied again only
             # once delta consistent steps have been collected.
@@ -702,6 +714,7 @@ class SMFDO:
                     f"SMFDO step k={k}: an LP failed under every solver setting; the bounds "
                     "of this step are wider (still certified) and flagged status='fallback' "
                     "(warned once per observer)", SolverWarning, stacklevel=2)
+        self._depth = depth
         return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, yv, uv,
                             dd, status)
 
@@ -766,7 +779,7 @@ class SMFDO:
         factor = self.reset_inflation
         for _ in range(40):  # inflate geometrically until the measurement is explainable
             pad = factor * (w + scale)
-            Zr = self._posterior(self._box_cz(Box(hull.lo - pad, hull.hi + pad)), y)
+            Zr = self._posterior(self._box_cz(Box(hull.lo - pad, hull.hi + pad)), y, 0)
             if not Zr.is_empty():
                 return Zr
             factor *= 4.0
