@@ -201,3 +201,57 @@ def exact_history_bounds(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None
         out_lo.append(mn)
         out_hi.append(None if mx is None else -mx)
     return out_lo, out_hi
+
+
+def _solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
+    n = len(M)
+    aug = [[*row, r[i]] for i, row in enumerate(M)]
+    for col in range(n):
+        piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
+        if piv is None:
+            return None
+        aug[col], aug[piv] = aug[piv], aug[col]
+        p = aug[col][col]
+        aug[col] = [v / p for v in aug[col]]
+        for i in range(n):
+            if i != col and aug[i][col] != 0:
+                f = aug[i][col]
+                aug[i] = [a - f * b for a, b in zip(aug[i], aug[col], strict=True)]
+    return [aug[i][n] for i in range(n)]
+
+
+def exact_hpolytope_vertices(H: np.ndarray, k: np.ndarray) -> list[list[Fraction]]:
+    """Exact vertices of the full-dimensional polytope ``{x : H x <= k}`` (Fractions).
+
+    Candidates come from scipy's ``HalfspaceIntersection`` (floating point); each
+    is made exact by solving its ``n`` nearest-active facets in rational
+    arithmetic, and kept only if it satisfies every inequality exactly and has
+    ``n`` linearly independent active facets (a vertex by definition). Near-
+    degenerate candidates that fail are re-tried with other active sets.
+    """
+    from itertools import combinations
+
+    from scipy.optimize import linprog
+    from scipy.spatial import HalfspaceIntersection
+
+    n = H.shape[1]
+    nrm = np.linalg.norm(H, axis=1)
+    res = linprog(np.r_[np.zeros(n), -1.0], A_ub=np.hstack([H, nrm[:, None]]), b_ub=k,
+                  bounds=[(None, None)] * n + [(0, None)], method="highs")
+    cand = HalfspaceIntersection(np.hstack([H, -k[:, None]]), res.x[:n]).intersections
+    Hf = [[Fraction(float(v)) for v in row] for row in H]
+    kf = [Fraction(float(v)) for v in k]
+    out: dict[tuple, list[Fraction]] = {}
+    for v in cand:
+        resid = np.abs(H @ v - k) / nrm
+        near = list(np.argsort(resid)[: n + 3])
+        for act in combinations(near, n):
+            x = _solve_exact([Hf[i] for i in act], [kf[i] for i in act])
+            if x is None:
+                continue
+            slack = [kf[i] - sum(Hf[i][j] * x[j] for j in range(n)) for i in range(len(kf))]
+            if min(slack) < 0:
+                continue
+            out[tuple(x)] = x
+            break
+    return list(out.values())

@@ -1,6 +1,8 @@
-"""Polytope conversion (pycddlib) and 2-D plotting."""
+"""Polytope conversion (verified vertices and facets) and 2-D plotting."""
 
 from __future__ import annotations
+
+from fractions import Fraction
 
 import cdd
 import matplotlib.pyplot as plt
@@ -13,7 +15,8 @@ from scipy.spatial import ConvexHull
 
 from setobs import ConstrainedZonotope, EmptySetError, UnboundedSetError
 from setobs.geometry.plotting import polygon_2d
-from tests.conftest import cdd_vertices, random_cz
+from tests.conftest import cdd_vertices, exact_factor_vertices, random_cz
+from tests.oracles import exact_hpolytope_vertices
 
 seeds = st.integers(0, 2**32 - 1)
 
@@ -145,3 +148,75 @@ def test_vertex_that_float_cdd_redundancy_removal_dropped():
     if nrm @ (V[k] - a) < 0:
         nrm = -nrm
     assert Z.support(nrm) - nrm @ a > 2e-4  # the set reaches past the chord
+
+
+# ------------------------------------------------------------------ issue 11, item 9
+def _intersection_of_random_hulls(seed, points):
+    rng = np.random.default_rng(seed)
+    E1 = ConvexHull(rng.random((points, 3))).equations
+    E2 = ConvexHull(rng.random((points, 3))).equations
+    Z = ConstrainedZonotope.from_hpolytope(E1[:, :3], -E1[:, 3]).intersect(
+        ConstrainedZonotope.from_hpolytope(E2[:, :3], -E2[:, 3]))
+    E = np.vstack([E1, E2])
+    return Z, E[:, :3], -E[:, 3]
+
+
+def _check_against_exact_vertices(Z, H, k):
+    exact = exact_hpolytope_vertices(H, k)
+    X = np.array([[float(v) for v in x] for x in exact])
+    V = Z.vertices()
+    # same vertex set: each returned point is an exact vertex and vice versa
+    assert len(V) == len(X), (len(V), len(X))
+    dist = np.linalg.norm(V[:, None, :] - X[None, :, :], axis=2)
+    assert dist.min(axis=1).max() < 1e-8 and dist.min(axis=0).max() < 1e-8
+    # the H-representation contains every exact vertex (certified offsets) and is
+    # tight: each facet offset is within 1e-8 of the exact support in its normal
+    hr = Z.to_hrep()
+    for x in exact:
+        for a, off in zip(hr.H, hr.k, strict=True):
+            assert sum(Fraction(float(a[j])) * x[j] for j in range(3)) <= Fraction(float(off))
+    for a, off in zip(hr.H, hr.k, strict=True):
+        assert off - (X @ a).max() < 1e-8
+    assert hr.E.shape[0] == 0 and hr.contains(X.mean(axis=0))
+
+
+def test_vertices_of_the_intersection_of_two_random_3d_hulls():
+    """Reported: 2 points returned where the set has 35; to_hrep then excluded the interior."""
+    Z, H, k = _intersection_of_random_hulls(31, 12)
+    assert len(Z.vertices()) == 35
+    _check_against_exact_vertices(Z, H, k)
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_vertices_on_coras_randomized_intersection_test(seed):
+    """CORA's testLong_conZonotope_and in 3-D (hulls of 100 random points, ~120 generators):
+    cdd dropped up to 59 of 128 vertices (seed 4: 12 of 144 returned)."""
+    Z, H, k = _intersection_of_random_hulls(seed, 100)
+    assert Z.n_gen > 100
+    _check_against_exact_vertices(Z, H, k)
+
+
+@given(seeds)
+def test_vertices_of_random_3d_sets_equal_exact_enumeration(seed):
+    """Against exact rational vertex enumeration of the factor polytope (conftest)."""
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=3, n_g=5, n_c=1)
+    verts = exact_factor_vertices(Z.A, Z.b, Z.h)
+    P = np.array([[float(v) for v in xi] for xi in verts]) @ Z.G.T + Z.c
+    V = Z.vertices()
+    if np.linalg.matrix_rank(P - P.mean(axis=0), tol=1e-7) < 3:
+        # flat: every returned point is one of the exact points
+        assert np.linalg.norm(V[:, None] - P[None], axis=2).min(axis=1).max() < 1e-7
+        return
+    ref = hull_vertices(P)
+    assert as_set(V, 6) == as_set(ref, 6)
+
+
+def test_flat_3d_set_has_an_affine_hull():
+    # the square [0, 1]^2 x {0.5} in R^3
+    Z = ConstrainedZonotope.from_box([0, 0, 0.5], [1, 1, 0.5])
+    assert as_set(Z.vertices()) == {(0, 0, 0.5), (1, 0, 0.5), (0, 1, 0.5), (1, 1, 0.5)}
+    hr = Z.to_hrep()
+    assert hr.E.shape == (1, 3)
+    np.testing.assert_allclose(np.abs(hr.E[0]), [0, 0, 1], atol=1e-12)
+    assert hr.contains([0.5, 0.5, 0.5]) and not hr.contains([0.5, 0.5, 0.6])

@@ -626,20 +626,28 @@ class ConstrainedZonotope:
             wider certified bound, possibly ``inf``).
         """
         d = as_vector("direction", direction, size=self.dim)
+        val, fallback = self._support_value(d)
+        if fallback:
+            warnings.warn("the support LP failed under every solver setting; the value is a "
+                          "wider certified bound", SolverWarning, stacklevel=2)
+        return val
+
+    def _support(self, d: NDArray[np.float64]) -> float:
+        """:meth:`support` for a validated direction, without the warning."""
+        return self._support_value(d)[0]
+
+    def _support_value(self, d: NDArray[np.float64]) -> tuple[float, bool]:
         w = self._G.T @ d
         w_err = 2.0 * _gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
         out = self._lp().minimize(-w, w_err=w_err, w_pair=(self._G, -d))
-        if out.status == "fallback":
-            warnings.warn("the support LP failed under every solver setting; the value is a "
-                          "wider certified bound", SolverWarning, stacklevel=2)
         if not np.isfinite(out.bound):
-            return np.inf
+            return np.inf, out.status == "fallback"
         dc = float(d @ self._c)
         err = 2.0 * _gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
         if self._cerr is not None:
             err += float(np.abs(d) @ self._cerr) * (1.0 + _gamma(self.dim + 1))
         s = -out.bound + dc
-        return _up(s + err + _U * abs(s))
+        return _up(s + err + _U * abs(s)), out.status == "fallback"
 
     def support_point(self, direction: ArrayLike) -> NDArray[np.float64]:
         """A maximiser of ``d^T z`` over the set (the solver's point; not certified).
@@ -705,7 +713,7 @@ class ConstrainedZonotope:
 
     # ------------------------------------------------------------------ conversion, plotting
     def vertices(self) -> NDArray[np.float64]:
-        """Vertices of a bounded set (pycddlib); see :func:`setobs.geometry.polytope.vertices`."""
+        """Vertices of a bounded set (verified); see :func:`setobs.geometry.polytope.vertices`."""
         from .polytope import vertices
 
         return vertices(self)
