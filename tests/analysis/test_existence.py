@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import quad_vec
 from scipy.linalg import expm
 
+import setobs as so
 from setobs import DimensionError, LinearSystem
 from setobs import examples as ex
 from setobs.analysis import (
@@ -24,8 +25,10 @@ from setobs.analysis import (
     pio_error_poles,
 )
 from tests.analysis.helpers import (
+    block_system,
     diagonal_rescaling,
     random_similarity,
+    siso_with_zeros,
     with_unobservable_disturbance,
 )
 
@@ -311,3 +314,51 @@ def test_diagnose_examples_and_zero_on_the_unit_circle():
     assert not d5["PIO"].exists
     with pytest.raises(KeyError, match="no design"):
         d5["Kalman"]
+
+
+# ------------------------------------------------------------------ issue 11, item 6
+def _dense_similarity(rng, n, cond):
+    U, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    V, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    return U @ np.diag(np.logspace(0, np.log10(cond), n)) @ V
+
+
+def test_existence_verdict_does_not_depend_on_coordinates():
+    """Two SISO channels with zeros 1.6259 and 1.97735: a bounded DO exists (the zeros
+    are not at 1; each channel is observable). The explicit Theorem-1 ranks flipped to NO
+    under well-conditioned similarities; the verdict is now yes, or undecidable when the
+    coordinates are so ill-conditioned that the data cannot tell — never a wrong NO.
+    And a structurally failing system is never called yes."""
+    yes_sys = block_system(siso_with_zeros([1.6259], [0.5, -0.3]),
+                           siso_with_zeros([1.97735], [0.2, 0.7]))
+    assert bounded_do_exists(yes_sys).verdict == "yes"
+    no_sys, _ = with_unobservable_disturbance(np.random.default_rng(0))
+    assert bounded_do_exists(no_sys).verdict == "no"
+    for t in range(40):
+        rng = np.random.default_rng(t)
+        for cond, allowed in ((200.0, {"yes"}), (1e3, {"yes"}), (1e8, {"yes", "undecidable"})):
+            S = yes_sys.transformed(_dense_similarity(rng, 4, cond))
+            assert bounded_do_exists(S).verdict in allowed, (t, cond)
+            Sn = no_sys.transformed(_dense_similarity(rng, no_sys.n, cond))
+            assert bounded_do_exists(Sn).verdict in {"no", "undecidable"}, (t, cond)
+        # outputs and disturbances scaled over 2 x 3 and 2 x 8 decades (+ a cond-10 basis)
+        assert bounded_do_exists(random_similarity(yes_sys, rng, decades=3.0)).verdict == "yes"
+        assert bounded_do_exists(random_similarity(yes_sys, rng, decades=8.0)).verdict in {
+            "yes", "undecidable"}
+
+
+def test_undecidable_is_reported_by_diagnose_and_the_smfdo():
+    from setobs.setmembership import ExistenceError
+
+    yes_sys = block_system(siso_with_zeros([1.6259], [0.5, -0.3]),
+                           siso_with_zeros([1.97735], [0.2, 0.7]))
+    S = yes_sys.transformed(_dense_similarity(np.random.default_rng(0), 4, 1e8))
+    r = bounded_do_exists(S)
+    assert r.verdict == "undecidable" and not r.decided and not r.satisfied
+    v = diagnose(S)["SMFDO"]
+    assert v.mark == "undecidable" and "undecidable at this precision" in v.reason
+    assert "undecidable" in repr(diagnose(S))
+    with pytest.raises(ExistenceError, match="undecidable at this precision"):
+        so.SMFDO(S)
+    # a well-conditioned similarity of the same system: the SMFDO runs
+    so.SMFDO(yes_sys.transformed(_dense_similarity(np.random.default_rng(0), 4, 200.0)))

@@ -113,7 +113,9 @@ def balance_system(
     Returns
     -------
     Ab, Bb, Cb : ndarrays
-        ``Dx^-1 A Dx``, ``Dx^-1 B Du``, ``Dy^-1 C Dx``.
+        ``Dx^-1 A Dx``, ``Dx^-1 B Du``, ``Dy^-1 C Dx``: the state scaling
+        from LAPACK's balancing, inputs and outputs then scaled to unit column
+        and row norms.
     dx, du, dy : ndarrays
         The scalings (states, inputs, outputs).
     """
@@ -133,8 +135,24 @@ def balance_system(
         _, (sc, _) = matrix_balance(S, permute=False, separate=True)
     else:
         sc = np.ones(0)
-    dx, du, dy = sc[:n], sc[n : n + m], sc[n : n + p]
+    dx = sc[:n]
     Ab = A * (1.0 / dx)[:, None] * dx[None, :]
-    Bb = (1.0 / dx)[:, None] * B * du[None, :]
-    Cb = (1.0 / dy)[:, None] * C * dx[None, :]
+    # Inputs and outputs: gebal cannot scale a row whose matching column of the
+    # padded matrix is zero (outputs scaled by 1e8 and 1e-8 came out unscaled,
+    # and a rank-2 C looked rank 1). Equilibrate them directly instead: unit
+    # column norms of Dx^-1 B, unit row norms of C Dx (powers of two, exact).
+    Bx = (1.0 / dx)[:, None] * B
+    Cx = C * dx[None, :]
+    du = 1.0 / _pow2_norm(np.linalg.norm(Bx, axis=0))
+    dy = _pow2_norm(np.linalg.norm(Cx, axis=1))
+    Bb = Bx * du[None, :]
+    Cb = Cx / dy[:, None]
     return Ab, Bb, Cb, dx, du, dy
+
+
+def _pow2_norm(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Powers of two close to ``v`` (1 where ``v`` is zero)."""
+    out = np.ones(v.size)
+    pos = v > 0
+    out[pos] = np.ldexp(1.0, np.frexp(v[pos])[1] - 1)
+    return out

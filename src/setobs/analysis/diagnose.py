@@ -24,7 +24,11 @@ __all__ = ["DesignVerdict", "Diagnosis", "diagnose"]
 
 @dataclass(frozen=True)
 class DesignVerdict:
-    """Existence verdict of one observer design."""
+    """Existence verdict of one observer design.
+
+    ``decided`` is ``False`` when the verdict is undecidable at this precision
+    (``exists`` is then ``False`` and ``reason`` says why).
+    """
 
     design: str
     exists: bool
@@ -32,6 +36,14 @@ class DesignVerdict:
     numbers: dict
     reason: str = ""
     source: str = ""
+    decided: bool = True
+
+    @property
+    def mark(self) -> str:
+        """``"yes"``, ``"NO"`` or ``"undecidable"``."""
+        if not self.decided:
+            return "undecidable"
+        return "yes" if self.exists else "NO"
 
 
 @dataclass(frozen=True)
@@ -76,7 +88,7 @@ class Diagnosis:
         width = max(len(v.design) for v in self.verdicts)
         lines = ["Diagnosis", "  " + self._header()]
         for v in self.verdicts:
-            mark = "yes" if v.exists else "NO "
+            mark = f"{v.mark:<3}"
             lines.append(f"  {v.design:<{width}}  {mark}  {v.condition}")
             if not v.exists:
                 lines.append(f"  {'':<{width}}       -> {v.reason}")
@@ -93,7 +105,7 @@ class Diagnosis:
                "|---|---|---|---|---|"]
         for v in self.verdicts:
             nums = "; ".join(f"{k}={_fmt(val)}" for k, val in v.numbers.items())
-            out.append(f"| {v.design} | {'yes' if v.exists else 'no'} | {v.condition} | "
+            out.append(f"| {v.design} | {v.mark.lower()} | {v.condition} | "
                        f"{nums} | {v.reason or '—'} |")
         if self.notes:
             out += ["", *[f"- {n}" for n in self.notes]]
@@ -147,6 +159,11 @@ def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
             "N_o": bdo.N_o, "n_o": bdo.n_o, "margin_decades": round(bdo.margin_decades, 1)}
     if bdo.satisfied:
         reason = ""
+    elif not bdo.decided:
+        reason = ("undecidable at this precision: a singular value of the observability "
+                  "staircase lies between RANK_FLOOR and RANK_RTOL of its scale (a structural "
+                  "zero cannot be told from a small nonzero; an ill-conditioned state basis "
+                  "does this)")
     elif bdo.corollary1:
         reason = f"Corollary 1: n_o = {bdo.n_o} < q = {bdo.q}"
     else:
@@ -156,9 +173,10 @@ def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
                   f"{k} disturbance direction(s) not recoverable: {dirs}")
     verdicts.append(DesignVerdict("SMFDO", bdo.satisfied,
                                   "Theorem 1: rank[O, IbarOG] = rank O + q", nums, reason,
-                                  "Li-Cong-Dong Thm 1"))
+                                  "Li-Cong-Dong Thm 1", bdo.decided))
     if not bdo.forms_agree:
-        notes.append("Theorem 1 and Remark 1 disagree: a rank decision is fragile "
+        notes.append("Theorem 1's explicit ranks disagree with its coordinate-free form "
+                     "(Remark 1, which decides): an explicit rank decision is fragile "
                      f"(margin {bdo.margin_decades:.1f} decades)")
     if bdo.satisfied and not bdo.printed_horizon_satisfied:
         notes.append("Theorem 1 with only n blocks (as printed in eq. (16)) fails here; "

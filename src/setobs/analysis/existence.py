@@ -11,7 +11,7 @@ from scipy.linalg import eigvals, null_space, solve_discrete_are
 
 from .._validation import as_matrix
 from ..systems import LinearSystem
-from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
+from ..tolerances import RANK_FLOOR, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, orth_rows, rank_decision
 from .observability import ObservabilityReport, observability, observability_matrix
 
@@ -42,18 +42,34 @@ class BoundedDOReport:
     Attributes
     ----------
     satisfied : bool
-        Theorem 1: ``rank([O, Ibar O G]) = rank(O) + q``, with ``O`` over
-        ``n + q`` blocks (enough by Cayley-Hamilton for the augmented system).
+        The verdict: a bounded DO exists (Theorem 1, decided in its
+        coordinate-free form, Remark 1: ``N_o = n_o + q`` from orthogonal
+        staircases), and the decision is not in the grey zone (see
+        :attr:`decided`).
+    decided : bool
+        ``False`` when a singular value the verdict depends on lies between
+        ``RANK_FLOOR`` and ``RANK_RTOL`` of its scale: at double precision the
+        data cannot tell a structural zero from a small nonzero there (dense
+        similarities of condition ``1e8`` put generic systems in that zone), so
+        the verdict is *undecidable at this precision* rather than a guess.
+    theorem1_explicit : bool
+        Theorem 1 evaluated literally: ``rank([O, Ibar O G]) = rank(O) + q``,
+        with ``O`` over ``n + q`` blocks (enough by Cayley-Hamilton for the
+        augmented system). Explicit powers ``Phi^k`` make it coordinate
+        dependent (a similarity of condition 200 flipped it on a system with
+        zeros 1.63 and 1.98); it is reported, not used for the verdict.
     rank_O, rank_Oaug : int
-        The two ranks of Theorem 1.
+        The two ranks of the explicit form.
     n_o, N_o : int
         Remark 1: observable dimensions of ``(Phi, Xi)`` and of the augmented
         pair, from an orthogonal staircase (an independent computation);
         Remark 1 holds iff ``N_o = n_o + q``.
     remark1_satisfied : bool
+        ``N_o = n_o + q`` as computed (whether decided or not).
     forms_agree : bool
-        Whether Theorem 1 and Remark 1 agree (they must; a disagreement means a
-        rank decision is fragile and is flagged in :attr:`fragile`).
+        Whether the explicit form and Remark 1 agree (they must; a disagreement
+        means a rank decision of the explicit form is fragile, flagged in
+        :attr:`fragile`).
     corollary1 : bool
         ``n_o < q`` (then no bounded DO exists).
     printed_horizon_satisfied : bool
@@ -80,11 +96,20 @@ class BoundedDOReport:
     unrecoverable_directions: NDArray[np.float64]
     recoverable_functionals: NDArray[np.float64]
     decisions: list[RankDecision] = field(default_factory=list)
+    theorem1_explicit: bool = True
+    decided: bool = True
+
+    @property
+    def verdict(self) -> str:
+        """``"yes"``, ``"no"`` or ``"undecidable"`` (at this precision)."""
+        if not self.decided:
+            return "undecidable"
+        return "yes" if self.satisfied else "no"
 
     @property
     def forms_agree(self) -> bool:
-        """Theorem 1 and Remark 1 give the same verdict."""
-        return self.satisfied == self.remark1_satisfied
+        """The explicit form of Theorem 1 and Remark 1 give the same verdict."""
+        return self.theorem1_explicit == self.remark1_satisfied
 
     @property
     def margin_decades(self) -> float:
@@ -97,13 +122,18 @@ class BoundedDOReport:
         return (not self.forms_agree) or any(d.fragile for d in self.decisions)
 
     def __repr__(self) -> str:
-        return (f"BoundedDOReport(satisfied={self.satisfied}: rank[O, IbarOG]={self.rank_Oaug}, "
+        return (f"BoundedDOReport({self.verdict}: rank[O, IbarOG]={self.rank_Oaug}, "
                 f"rank O={self.rank_O}, q={self.q}; Remark 1 N_o={self.N_o}, n_o={self.n_o}; "
                 f"margin={self.margin_decades:.1f} decades)")
 
 
 def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedDOReport:
     """Whether a bounded disturbance observer exists (Li-Cong-Dong, Theorem 1, Remark 1, Cor. 1).
+
+    The verdict is decided in the coordinate-free form of Remark 1 (orthogonal
+    observability staircases of the balanced pairs, no explicit powers); it is
+    ``"undecidable"`` when a rank it depends on is in the grey zone between
+    ``RANK_FLOOR`` and ``RANK_RTOL`` (see :attr:`BoundedDOReport.decided`).
 
     Notes
     -----
@@ -142,16 +172,20 @@ def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedD
         return rank_decision(O * w, rtol), rank_decision(Oaug, rtol)
 
     dO, dAug = explicit(n + q)
-    decisions += [dO, dAug]
-    satisfied = dAug.rank == dO.rank + q
+    explicit_ok = dAug.rank == dO.rank + q
     pO, pAug = explicit(n)
     printed = pAug.rank == pO.rank + q
-    # Remark 1 by the orthogonal staircase (independent computation).
+    # Remark 1 by the orthogonal staircase: the coordinate-free form that decides.
     rep_x = observability(sys.Phi, sys.Xi, rtol=rtol)
     aug = sys.augmented()
     rep_z = observability(aug.A, aug.C, rtol=rtol)
-    decisions += rep_x.decisions + rep_z.decisions
+    decisions += rep_x.decisions + rep_z.decisions + [dO, dAug]
     remark1 = rep_z.n_observable == rep_x.n_observable + q
+    # Grey zone: a dropped singular value above RANK_FLOOR of its scale could be a
+    # small nonzero the data cannot resolve (the threshold is rtol of the scale).
+    floor = RANK_FLOOR / rtol
+    decided = not any(d.largest_dropped > floor * d.threshold
+                      for d in rep_x.decisions + rep_z.decisions)
     # Recoverable functionals: w with [0, w] in row(O_aug) (rows of the staircase basis T_o).
     T_o = rep_z.observable_rows
     if T_o.shape[0]:
@@ -161,10 +195,11 @@ def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedD
     else:
         Wr, Wn = np.zeros((0, q)), np.eye(q)
     return BoundedDOReport(
-        satisfied=bool(satisfied), rank_O=dO.rank, rank_Oaug=dAug.rank, q=q,
+        satisfied=bool(remark1 and decided), rank_O=dO.rank, rank_Oaug=dAug.rank, q=q,
         n_o=rep_x.n_observable, N_o=rep_z.n_observable, remark1_satisfied=bool(remark1),
         corollary1=rep_x.n_observable < q, printed_horizon_satisfied=bool(printed),
         unrecoverable_directions=Wn.T, recoverable_functionals=Wr, decisions=decisions,
+        theorem1_explicit=bool(explicit_ok), decided=bool(decided),
     )
 
 

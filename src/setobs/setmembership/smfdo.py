@@ -375,11 +375,17 @@ class SMFDO:
             raise DimensionError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
                                  f"{data_rtol!r}; bound measurement noise with a set")
         report = bounded_do_exists(sys)
+        if not report.decided:
+            raise ExistenceError(
+                "whether a bounded disturbance observer exists is undecidable at this "
+                "precision (Li-Cong-Dong, Theorem 1/Remark 1: a rank decision of the "
+                "observability staircase is in the grey zone; an ill-conditioned state "
+                "basis does this: use a better-conditioned realisation)", report)
         if not report.satisfied:
             raise ExistenceError(
                 "no bounded disturbance observer exists for this system (Li-Cong-Dong, "
-                f"Theorem 1): rank[O, IbarOG] = {report.rank_Oaug} < rank O + q = "
-                f"{report.rank_O + report.q}", report)
+                f"Theorem 1 / Remark 1): N_o = {report.N_o} < n_o + q = "
+                f"{report.n_o + report.q}", report)
         self.sys = sys
         self.existence = report
         n, q = sys.n, sys.q
