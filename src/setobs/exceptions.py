@@ -46,6 +46,9 @@ class SolverError(SetobsError, RuntimeError):
         super().__init__(message)
         self.status = status
 
+    def __reduce__(self):
+        return (type(self), (str(self), self.status))
+
 
 class SolverWarning(RuntimeWarning):
     """A solver failed on every retry and a wider certified outer answer was returned.

@@ -126,6 +126,16 @@ class LinearSystem:
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("LinearSystem is immutable")
 
+    def __getstate__(self) -> dict[str, Any]:
+        return {name: getattr(self, name) for name in self.__slots__}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # pickling and deepcopy: rebuild the read-only arrays
+        for name, val in state.items():
+            if isinstance(val, np.ndarray):
+                val = readonly(np.array(val))
+            object.__setattr__(self, name, val)
+
     # ------------------------------------------------------------------ sizes
     @property
     def n(self) -> int:

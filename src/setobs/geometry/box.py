@@ -67,6 +67,9 @@ class Box:
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("Box is immutable")
 
+    def __reduce__(self):
+        return (Box, (np.array(self._lo), np.array(self._hi)))
+
     @property
     def lo(self) -> NDArray[np.float64]:
         """Lower bounds (read-only)."""

@@ -29,6 +29,9 @@ class DesignError(SetobsError, ValueError):
         super().__init__(message)
         self.condition = condition
 
+    def __reduce__(self):
+        return (type(self), (str(self), self.condition))
+
 
 @dataclass(frozen=True)
 class ObserverResult:
