@@ -30,9 +30,9 @@ def _to_float(name: str, value: ArrayLike, what: str) -> NDArray[np.float64]:
     except (TypeError, ValueError) as exc:
         raise DimensionError(f"{name} must be a real numeric {what}: {exc}") from None
     if np.iscomplexobj(raw):
-        if np.any(np.imag(raw) != 0):
-            raise DimensionError(f"{name} must be real, got complex entries")
-        raw = np.real(raw)
+        hint = (" (its imaginary part is zero: pass .real)" if not np.any(np.imag(raw) != 0)
+                else "")
+        raise DimensionError(f"{name} must be real, got a complex array{hint}")
     if raw.dtype.kind not in "biuf":
         if raw.dtype.kind == "O":
             try:

@@ -92,7 +92,14 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
 def _pick(data: dict[str, Any], key: str, required: bool = True):
     for name in _ALIASES[key]:
         if name in data:
-            return np.asarray(data[name], dtype=float)
+            try:
+                M = np.asarray(data[name], dtype=float)
+            except (TypeError, ValueError):
+                raise CLIError(f"matrix {name!r} must be a numeric matrix (a list of rows of "
+                               f"numbers), got {str(data[name])[:60]!r}") from None
+            if M.ndim > 2:
+                raise CLIError(f"matrix {name!r} must be 2-D, got {M.ndim} dimensions")
+            return M
     if required:
         raise CLIError(f"missing matrix {key!r} (accepted names: {', '.join(_ALIASES[key])})")
     return None
@@ -203,10 +210,21 @@ def study(config: str, dask: str | None = None, out: str | None = None,
                  for o in cfg.get("observers") or []]
     except (TypeError, KeyError) as exc:
         raise CLIError(f"bad configuration in {p}: {exc}") from None
+    runs, seed = cfg.get("runs", 10), cfg.get("seed", 0)
+    for key, val in (("runs", runs), ("seed", seed)):
+        if isinstance(val, bool) or not isinstance(val, int):
+            raise CLIError(f"{key} must be an integer, got {val!r}")
+    ref_window = cfg.get("reference_window", 20)
+    if ref_window is not None:
+        from .setmembership.smfdo import _check_window
+
+        try:
+            _check_window(ref_window)
+        except (TypeError, ValueError) as exc:
+            raise CLIError(f"reference_window: {exc}") from None
     out_dir = Path(out or cfg.get("out") or p.with_suffix("").name + "_results")
-    res = run_campaign(scenario, specs, int(cfg.get("runs", 10)), base_seed=int(cfg.get("seed", 0)),
-                       reference_window=cfg.get("reference_window", 20), client=dask,
-                       processes=processes, out_dir=out_dir)
+    res = run_campaign(scenario, specs, runs, base_seed=seed, reference_window=ref_window,
+                       client=dask, processes=processes, out_dir=out_dir)
     print(res.summary().to_string(float_format=lambda x: f"{x:.4g}"))
     import matplotlib
 
@@ -246,18 +264,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     ps.add_argument("--out", help="output directory")
     ps.add_argument("--processes", type=int, help="local worker processes")
     args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_usage(sys.stderr)
+        print("setobs: error: a command is required (demo, check or study; see --help)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         if args.command == "demo":
             return demo(args.out, args.steps, args.seed)
         if args.command == "check":
             return check(args.file, args.format)
-        if args.command == "study":
-            return study(args.config, args.dask, args.out, args.processes)
-    except (CLIError, SetobsError, ValueError, OSError) as exc:
+        return study(args.config, args.dask, args.out, args.processes)
+    except BrokenPipeError:
+        # the reader went away (setobs check all | head -1): not an error of ours
+        _silence_stdout()
+        return 0
+    except (CLIError, SetobsError, ValueError, TypeError, OSError) as exc:
         print(f"setobs: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    parser.print_help()
-    return 0
+
+
+def _silence_stdout() -> None:
+    """Point stdout at devnull so the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # pragma: no cover - stdout without a descriptor
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -224,7 +224,7 @@ class LinearSystem:
             raise DimensionError("the StateSpace model must be discrete-time (dt > 0 or True)")
         if np.any(D != 0):
             raise DimensionError("D must be zero: y = Xi x has no feedthrough")
-        idx = [int(i) for i in disturbance_inputs]
+        idx = _input_indices("disturbance_inputs", disturbance_inputs, B.shape[1])
         rest = [i for i in range(B.shape[1]) if i not in idx]
         dt = None if ss.dt is True else float(ss.dt)
         return cls(A, B[:, idx], C, B[:, rest] if rest else None, dt=dt)
@@ -253,6 +253,33 @@ class LinearSystem:
         sy = np.ones(self.l) if output_scale is None else np.asarray(output_scale, float)
         return LinearSystem(T_a @ self.Phi @ Ti, (T_a @ self.G) / sd, (sy[:, None] * self.Xi) @ Ti,
                             T_a @ self.Gamma if self.p else None, dt=self.dt)
+
+
+def _input_indices(name: str, indices: Any, m: int) -> list[int]:
+    """Validated, distinct input indices in ``[0, m)`` (at least one)."""
+    if isinstance(indices, int | np.integer) and not isinstance(indices, bool):
+        indices = [indices]
+    try:
+        items = list(indices)
+    except TypeError:
+        raise TypeError(f"{name} must be a sequence of input indices, got {indices!r}") from None
+    out = []
+    for i in items:
+        if isinstance(i, bool | np.bool_) or not isinstance(i, int | np.integer | float
+                                                            | np.floating):
+            raise TypeError(f"{name} must hold integer input indices, got {i!r}")
+        if float(i) != int(i):
+            raise DimensionError(f"{name} must hold integer input indices, got {i!r}")
+        j = int(i)
+        if not 0 <= j < m:
+            raise DimensionError(f"{name}: index {j} is out of range for {m} input(s) "
+                                 f"(valid: 0..{m - 1})")
+        if j in out:
+            raise DimensionError(f"{name}: index {j} is given twice")
+        out.append(j)
+    if not out:
+        raise DimensionError(f"{name} must name at least one input (the disturbances)")
+    return out
 
 
 def require_system(sys: Any, name: str = "sys") -> LinearSystem:

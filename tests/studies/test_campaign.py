@@ -34,15 +34,28 @@ def test_smfdo_rows_are_sound_and_scores_are_consistent():
 
 
 def test_local_and_dask_give_identical_tables(tmp_path):
+    """Bit for bit: local processes, Dask's default threaded workers, Dask processes.
+
+    Issue 11: on LocalCluster(processes=False, threads_per_worker=2) the SMFDOs of
+    concurrent runs shared warm-start state and the campaign aborted.
+    """
     distributed = pytest.importorskip("distributed")
-    sc = Scenario(horizon=25)
-    local = run_campaign(sc, SPECS, runs=2, processes=2, progress=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = run_campaign(sc, SPECS, runs=2, client=client, progress=False)
-    pd.testing.assert_frame_equal(local.table, remote.table)
-    assert remote.metadata["backend"] == "dask" and local.metadata["backend"] == "processes"
+    sc = Scenario(horizon=120)
+    specs = [*SPECS, ObserverSpec("SMFDO d=10", "smfdo", {"window": 10})]
+    local = run_campaign(sc, specs, runs=4, processes=2, progress=False)
+    serial = run_campaign(sc, specs, runs=4, processes=1, progress=False)
+    pd.testing.assert_frame_equal(local.table, serial.table, check_exact=True)
+    for processes in (False, True):
+        with distributed.LocalCluster(n_workers=2 if processes else 1,
+                                      threads_per_worker=1 if processes else 2,
+                                      processes=processes, dashboard_address=None) as cluster, \
+                distributed.Client(cluster) as client:
+            remote = run_campaign(sc, specs, runs=4, client=client, progress=False)
+        pd.testing.assert_frame_equal(local.table, remote.table, check_exact=True)
+        assert remote.metadata["backend"] == "dask"
+    assert local.metadata["backend"] == "processes"
+    smf = local.table[local.table.observer.str.startswith("SMFDO") & (local.table.k > 0)]
+    assert (smf.contained == 1.0).all()
 
 
 def test_resumable_output_and_metadata(tmp_path):

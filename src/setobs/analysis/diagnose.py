@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from .existence import (
     BoundedDOReport,
@@ -147,6 +147,7 @@ def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
     >>> d.existing
     ['SMFDO', 'PIO', 'higher-order observer', 'modular observer']
     """
+    sys = require_system(sys)
     bdo = bounded_do_exists(sys, rtol=rtol)
     rd = relative_degrees(sys, rtol=rtol)
     uio = uio_conditions(sys, rtol=rtol)

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, null_space, solve_discrete_are
 
 from .._validation import as_matrix
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 from ..tolerances import RANK_FLOOR, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, orth_rows, rank_decision
 from .observability import ObservabilityReport, observability, observability_matrix
@@ -159,6 +159,7 @@ def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedD
     >>> bounded_do_exists(chang2006()).satisfied
     True
     """
+    sys = require_system(sys)
     n, q, l = sys.n, sys.q, sys.l
     Pb, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
     decisions: list[RankDecision] = []
@@ -251,6 +252,7 @@ def pio_error_poles(sys: LinearSystem, P: ArrayLike, L: ArrayLike) -> ErrorPoles
     P : array_like, shape (n, l)
     L : array_like, shape (q, l)
     """
+    sys = require_system(sys)
     P_a = as_matrix("P", P, rows=sys.n, cols=sys.l)
     L_a = as_matrix("L", L, rows=sys.q, cols=sys.l)
     F = np.block([[sys.Phi - P_a @ sys.Xi, sys.G], [-L_a @ sys.Xi, np.eye(sys.q)]])
@@ -339,6 +341,7 @@ def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
 
 def pio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCondition:
     """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable."""
+    sys = require_system(sys)
     rep: ObservabilityReport = observability(sys.augmented().A, sys.augmented().C, rtol=rtol)
     bad = rep.unstable_unobservable_modes
     pbh = _pbh_at_one(sys, rtol)
@@ -357,6 +360,7 @@ def higher_order_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Ob
     """Higher-order observer (Fu-Wang) with ``d = G d*``: the pair with state
     ``(x, d*, Delta d*)``, ``[[Phi, G, 0], [0, I, I], [0, 0, I]]``, ``[Xi, 0, 0]``
     must be detectable (stable roots of eq. (10) for some gains)."""
+    sys = require_system(sys)
     n, q = sys.n, sys.q
     A = np.block([[sys.Phi, sys.G, np.zeros((n, q))],
                   [np.zeros((q, n)), np.eye(q), np.eye(q)],
@@ -383,6 +387,7 @@ def modular_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Observe
     needs ``(S, H V + Q) = (I, Xi V)`` detectable, i.e. ``rank(Xi V) = q``.
     ``L0`` is taken from a DARE (any stabilising gain gives the same rank).
     """
+    sys = require_system(sys)
     rep = observability(sys.Phi, sys.Xi, rtol=rtol)
     nums: dict = {"n_o": rep.n_observable, "detectable": rep.detectable}
     if not rep.detectable:

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals
 
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, orth_rows
 
@@ -191,6 +191,7 @@ class ObservabilityDecomposition:
 
 def augmented_observability(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObservabilityReport:
     """Observability report of the augmented pair ``(A, C)`` of eqs. (9)-(11)."""
+    sys = require_system(sys)
     aug = sys.augmented()
     return observability(aug.A, aug.C, rtol=rtol)
 
@@ -213,6 +214,7 @@ def observability_decomposition(sys: LinearSystem, *, rtol: float = RANK_RTOL,
     disturbance_scale : array_like, shape (q,), optional
         Magnitudes ``S`` of the disturbance increments, used by the balancing.
     """
+    sys = require_system(sys)
     aug = sys.augmented()
     A, E, C, Gam = aug.A, aug.E, aug.C, aug.Gamma
     dz = dy = None

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 from ..tolerances import PRODUCT_RTOL, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, rank_decision
 from .zeros import ZerosResult, invariant_zeros
@@ -83,6 +83,7 @@ def relative_degrees(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> RelativeD
     >>> relative_degrees(chen_gao_lin_example1()).degrees
     (2, 4, 3)
     """
+    sys = require_system(sys)
     A, E, C = sys.Phi, sys.G, sys.Xi
     n = sys.n
     Ab, Eb, Cb, _, _, _ = balance_system(A, E, C)
@@ -232,6 +233,7 @@ class UIOResult:
 def uio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL,
                    unit_tol: float = UNIT_CIRCLE_TOL) -> UIOResult:
     """UIO conditions (a), (b) for ``(Phi, G, Xi)`` and the delay for the augmented system."""
+    sys = require_system(sys)
     _, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
     dG = rank_decision(Gb, rtol)
     dXG = rank_decision(Xb @ Gb, rtol, scale=float(np.linalg.norm(Xb, 2) * np.linalg.norm(Gb, 2)))

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, svd
 
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, rank_decision
 
@@ -183,4 +183,5 @@ def invariant_zeros(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ZerosResul
     >>> [round(float(v.real), 5) for v in z]
     [1.26095]
     """
+    sys = require_system(sys)
     return system_zeros(sys.Phi, sys.G, sys.Xi, rtol=rtol)

@@ -204,7 +204,10 @@ class ConstrainedZonotope:
             if np.size(A) == 0 and b_a.size == 0:
                 A_a = np.zeros((0, n_g))
             else:
-                A_a = as_matrix("A", A, rows=b_a.size, cols=n_g)
+                A_a = as_matrix("A", A, cols=n_g)
+                if b_a.size != A_a.shape[0]:
+                    raise DimensionError(
+                        f"b must have one entry per row of A ({A_a.shape[0]}), got {b_a.size}")
         if h is None:
             h_a = np.ones(n_g)
         else:

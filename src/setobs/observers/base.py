@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, SetobsError
-from ..systems import LinearSystem
+from ..systems import LinearSystem, require_system
 
 __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
 
@@ -66,9 +66,7 @@ class PointObserver:
     name = "observer"
 
     def __init__(self, sys: LinearSystem) -> None:
-        if not isinstance(sys, LinearSystem):
-            raise TypeError(f"sys must be a LinearSystem, got {type(sys).__name__}")
-        self.sys = sys
+        self.sys = require_system(sys)
         self.delay = 0
 
     @property

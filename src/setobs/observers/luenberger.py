@@ -56,7 +56,13 @@ def _place(A: NDArray[np.float64], C: NDArray[np.float64], poles: Sequence[compl
     ``check="radius"``: only the spectral radius is checked (for repeated poles,
     e.g. a nilpotent target, whose computed eigenvalues are ill-conditioned).
     """
-    poles = np.asarray(poles, dtype=complex)
+    try:
+        poles = np.asarray(poles, dtype=complex).reshape(-1)
+    except (TypeError, ValueError):
+        raise DesignError(f"poles must be a sequence of numbers, got {poles!r}",
+                          "poles") from None
+    if not np.isfinite(poles).all():
+        raise DesignError(f"poles must be finite, got {poles.tolist()}", "poles")
     if poles.size != A.shape[0]:
         raise DesignError(f"need {A.shape[0]} poles, got {poles.size}", "pole count")
     if check == "poles" and C.shape[0] == 1 and len(set(np.round(poles, 12))) < poles.size:

@@ -136,10 +136,10 @@ class SMFDOResult:
             If ``D`` does not have the shape ``(N, q)`` of the result.
         """
         N, q = self.lo.shape
-        Da = as_matrix("D", D, cols=q)
-        if Da.shape[0] != N:
+        if np.shape(D) != (N, q):
             raise DimensionError(f"D must have shape ({N}, {q}) like the result, "
-                                 f"got {Da.shape}")
+                                 f"got {np.shape(D)}")
+        Da = as_matrix("D", D, cols=q)
         out = (Da < self.lo) | (Da > self.hi)
         return int(out.any(axis=1).sum())
 
@@ -211,7 +211,7 @@ def _as_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
     if value is None:
         return None
     if isinstance(value, Box):
-        return ConstrainedZonotope.from_box(value.lo, value.hi)
+        value = ConstrainedZonotope.from_box(value.lo, value.hi)
     if not isinstance(value, ConstrainedZonotope):
         raise TypeError(
             f"{name} must be a ConstrainedZonotope or a Box (e.g. Box(lo, hi)), got "
@@ -500,7 +500,7 @@ class SMFDO:
         # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
         # runs from Z_0^-) or of the last delta steps (once the window restarts)
         self._hist: list[tuple[NDArray[np.float64], NDArray[np.float64] | None,
-                               ConstrainedZonotope]] = []
+                               ConstrainedZonotope | None]] = []
         # the posterior, either a set or (model, c, b, h, c_err, b_err) of the fast path
         self._Z_src: object = None
         self._from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
@@ -729,7 +729,7 @@ class SMFDO:
         self._Z_src = Z_src
         if mode == "box":
             self._windowing = True
-        self._hist.append((yv, uv, dd if dd is not None else self._increment(0)))
+        self._hist.append((yv, uv, dd))  # dd is None at k = 0 (never used)
         if self.window is not None:
             # The restart box of eq. (24) gets the same relative margin as the
             # reported bounds: the set recursion itself rounds (O(eps)), and a

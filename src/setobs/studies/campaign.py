@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
 import platform
@@ -18,19 +19,46 @@ import numpy as np
 from ..exceptions import DimensionError
 from .scenarios import Scenario, rng_for_run
 
-__all__ = ["OBSERVER_KINDS", "CampaignResult", "ObserverSpec", "run_campaign", "run_one"]
+__all__ = ["OBSERVER_KINDS", "SMFDO_PARAMS", "CampaignResult", "ObserverSpec", "run_campaign",
+           "run_one"]
 
 #: Observer kinds a campaign can run (built inside the worker from plain data).
 OBSERVER_KINDS = ("smfdo", "pio", "pio_printed", "higher_order", "modular", "mbeso",
                   "variant_mbeso", "delayed_uio")
 
 
+#: SMFDO keywords an ObserverSpec may set (the scenario gives the initial state
+#: set; ``increment_set`` defaults to the scenario's increment box).
+SMFDO_PARAMS = ("window", "increment_set", "fast", "margin", "data_rtol", "reset",
+                "reset_inflation")
+
+
+def _point_ctor(kind: str):
+    from .. import observers as obs
+
+    return {"pio": obs.PIO, "higher_order": obs.HigherOrderObserver,
+            "modular": obs.ModularObserver, "mbeso": obs.MBESO,
+            "variant_mbeso": obs.VariantMBESO, "delayed_uio": obs.DelayedUIO}[kind]
+
+
+def _accepted_params(kind: str) -> tuple[str, ...]:
+    if kind == "smfdo":
+        return SMFDO_PARAMS
+    if kind == "pio_printed":
+        return ()
+    sig = inspect.signature(_point_ctor(kind).__init__)
+    return tuple(p for p in sig.parameters if p not in ("self", "sys"))
+
+
 @dataclass(frozen=True)
 class ObserverSpec:
     """An observer in a campaign: a display ``name``, a ``kind`` and its parameters.
 
-    ``kind="smfdo"`` takes ``window`` (int or ``None`` for exact mode); point
-    observers take their constructor keywords (e.g. ``omega`` for the MB-ESO).
+    ``kind="smfdo"`` takes the SMFDO keywords in :data:`SMFDO_PARAMS`
+    (``window``: int, or ``None`` for exact mode; ``increment_set``: a radius or
+    per-channel radii, default the scenario's); point observers take their
+    constructor keywords (e.g. ``omega`` for the MB-ESO). Every parameter is
+    honoured or refused: an unknown name raises at construction.
     """
 
     name: str
@@ -38,20 +66,47 @@ class ObserverSpec:
     params: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise DimensionError(f"an observer needs a non-empty name, got {self.name!r}")
         if self.kind not in OBSERVER_KINDS:
             raise DimensionError(f"unknown observer kind {self.kind!r}; choose from "
                                  f"{list(OBSERVER_KINDS)}")
+        if not isinstance(self.params, dict):
+            raise TypeError(f"params of observer {self.name!r} must be a mapping, got "
+                            f"{type(self.params).__name__}")
+        accepted = _accepted_params(self.kind)
+        unknown = sorted(set(self.params) - set(accepted))
+        if unknown:
+            raise DimensionError(
+                f"observer {self.name!r} ({self.kind}): unknown parameter(s) {unknown}; "
+                f"accepted: {list(accepted) or 'none'}")
+        if self.kind == "smfdo" and "window" in self.params:
+            from ..setmembership.smfdo import _check_window
+
+            try:
+                _check_window(self.params["window"])
+            except (TypeError, ValueError) as exc:
+                raise DimensionError(f"observer {self.name!r}: {exc}") from None
 
 
 def _point_observer(spec: ObserverSpec, sys):
     from .. import observers as obs
 
-    ctor = {"pio": obs.PIO, "higher_order": obs.HigherOrderObserver,
-            "modular": obs.ModularObserver, "mbeso": obs.MBESO,
-            "variant_mbeso": obs.VariantMBESO, "delayed_uio": obs.DelayedUIO}
     if spec.kind == "pio_printed":
         return obs.PIO.chang2006_baseline(sys)
-    return ctor[spec.kind](sys, **spec.params)
+    return _point_ctor(spec.kind)(sys, **spec.params)
+
+
+def _smfdo_for(spec_params: dict[str, Any], scenario: Scenario, sys, reset: str):
+    """The SMFDO of a spec (scenario defaults for the sets)."""
+    from ..setmembership import SMFDO
+
+    kw = {"increment_set": scenario.increment_set(sys.q),
+          "initial_state_set": scenario.initial_state_set(sys.n), "reset": reset}
+    kw.update(spec_params)
+    if np.ndim(kw["increment_set"]) == 0 and not hasattr(kw["increment_set"], "dim"):
+        kw["increment_set"] = np.full(sys.q, float(kw["increment_set"]))
+    return SMFDO(sys, **kw)
 
 
 def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_seed: int = 0,
@@ -68,25 +123,19 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     the truth lies in that interval (SMFDO only).
     """
     from ..compare import worst_case_error
-    from ..setmembership import SMFDO
 
     sys = scenario.build_system()
     traj = scenario.simulate(rng_for_run(base_seed, run))
-    Dd = scenario.increment_set(sys.q)
-    X0 = scenario.initial_state_set(sys.n)
     reset = "box" if scenario.noise_std > 0 else "raise"
-
-    def smfdo(window):
-        return SMFDO(sys, window=window, increment_set=Dd, initial_state_set=X0,
-                     reset=reset).run(traj.Y, traj.U)
-
-    ref = smfdo(reference_window)
+    ref_params = {"window": reference_window}
+    ref = _smfdo_for(ref_params, scenario, sys, reset).run(traj.Y, traj.U)
     rows: list[dict[str, Any]] = []
     for spec in specs:
         if spec.kind == "smfdo":
-            window = spec.params.get("window", 10)
+            params = {"window": 10, **spec.params}
             # The same deterministic computation as the reference: reuse it.
-            res = ref if window == reference_window else smfdo(window)
+            res = ref if params == ref_params else _smfdo_for(params, scenario, sys,
+                                                              reset).run(traj.Y, traj.U)
             est, radius = res.estimate, res.radius
             contained = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
         else:
@@ -118,6 +167,23 @@ class CampaignResult:
         t = self.table[self.table["k"] >= start]
         cols = ["err_inf", "err_2", "worst_inf", "radius"]
         return t.groupby("observer", sort=False)[cols].mean()
+
+
+def _check_resume(out: Path, request: dict[str, Any]) -> None:
+    """Refuse to mix runs of different campaigns in one ``out_dir``."""
+    req_file = out / "request.json"
+    if req_file.exists():
+        stored = json.loads(req_file.read_text())
+        if stored != request:
+            diff = sorted(k for k in request if stored.get(k) != request.get(k))
+            raise DimensionError(
+                f"{out} holds runs of a different campaign (different {', '.join(diff)}); "
+                "use another out_dir, or delete it to start over")
+    elif any(out.glob("run_*.csv")):
+        raise DimensionError(f"{out} holds runs without a record of their campaign "
+                             "(request.json); use another out_dir")
+    else:
+        req_file.write_text(json.dumps(request, indent=2) + "\n")
 
 
 def _versions() -> dict[str, str]:
@@ -160,7 +226,9 @@ def run_campaign(
     out_dir : path, optional
         Resumable output: each run is written to ``run_XXXXX.csv`` and skipped
         when the file exists; ``results.csv`` and ``metadata.json`` are written
-        at the end.
+        at the end. ``request.json`` records the scenario, observers, seed and
+        reference window: resuming into a directory of a different request is
+        refused (runs are never mixed).
     progress : bool
         Show a tqdm progress bar.
 
@@ -172,14 +240,32 @@ def run_campaign(
     import pandas as pd
     from tqdm.auto import tqdm
 
-    if int(runs) != runs or runs < 1:
+    if (isinstance(runs, bool) or not isinstance(runs, int | np.integer | float)
+            or int(runs) != runs or runs < 1):
         raise DimensionError(f"runs must be a positive integer, got {runs!r}")
+    runs = int(runs)
     specs = list(specs)
     if not specs:
         raise DimensionError("at least one observer is needed")
+    names = [s.name for s in specs]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise DimensionError(f"observer names must be distinct (their rows are keyed by "
+                             f"name); repeated: {dup}")
+    # Build every observer once on the scenario's system: bad parameters fail here,
+    # before any run is dispatched.
+    sys0 = scenario.build_system()
+    for spec in specs:
+        if spec.kind == "smfdo":
+            _smfdo_for({"window": 10, **spec.params}, scenario, sys0, "raise")
+        else:
+            _point_observer(spec, sys0)
     out = Path(out_dir) if out_dir is not None else None
+    request = {"scenario": scenario.to_dict(), "observers": [asdict(s) for s in specs],
+               "base_seed": int(base_seed), "reference_window": reference_window}
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
+        _check_resume(out, json.loads(json.dumps(request, default=str)))
     frames: dict[int, Any] = {}
     todo = []
     for r in range(runs):
