@@ -258,9 +258,21 @@ def test_compare_every_observer_is_at_least_the_optimal_radius():
     fin = np.isfinite(ref.radius)
     for name in ("PIO", "HO", "modular"):
         assert np.all(table.error[name][fin] >= ref.radius[fin] - 1e-9)
-    np.testing.assert_allclose(table.error["SMFDO"][fin], ref.radius[fin], atol=1e-9)
+    # Independent scores: the consistent box from a whole-history LP (scipy, no setobs);
+    # worst-case infinity-norm error of an estimate e over [lo, hi] is
+    # max_i max(e_i - lo_i, hi_i - e_i), and the optimum is the largest half-width.
+    from tests.setmembership.test_smfdo import history_lp_bounds
+
+    for k in (10, 35, 59):
+        lo, hi = history_lp_bounds(sys, Y, None, -np.ones(3), np.ones(3), 1.0, k)
+        optimum = 0.5 * (hi - lo).max()
+        assert table.optimal[k] == pytest.approx(optimum, abs=1e-6)
+        for name, e in est.items():
+            worst = np.maximum(e[k] - lo, hi - e[k]).max()
+            assert table.error[name][k] == pytest.approx(worst, abs=1e-6)
+        assert table.error["SMFDO"][k] == pytest.approx(optimum, abs=1e-6)  # centre optimal
+        assert table.error["PIO"][k] > optimum
     summ = {s["observer"]: s for s in table.summary(start=5)}
-    assert summ["SMFDO"]["mean_ratio"] == pytest.approx(1.0)
     assert summ["PIO"]["mean_ratio"] > 1.0
     assert "| PIO |" in table.to_markdown(start=5)
     assert len(table.rows) == 4 * N

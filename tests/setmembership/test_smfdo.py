@@ -324,3 +324,60 @@ def test_coordinate_shortcut_equals_direct_hull_of_PZ():
         lo, hi = obs._outward(direct.lo, direct.hi)
         np.testing.assert_allclose(st.lo, lo, rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(st.hi, hi, rtol=1e-12, atol=1e-12)
+
+
+# ------------------------------------------------------------------ eq. (24), independently
+def _window_lp_bounds(sys, box, Y_window, step):
+    """Bounds of d at the end of a window, by scipy's LP in the original coordinates.
+
+    Variables: z = [x; d] at the window's start, in ``box``; increments in
+    ``[-step, step]``; ``z+ = [[Phi, G], [0, I]] z + [0; I] dd``, ``[Xi, 0] z = y`` for
+    every measurement of the window (eq. (24): delta priors and posteriors).
+    """
+    n, q = sys.n, sys.q
+    A = np.block([[sys.Phi, sys.G], [np.zeros((q, n)), np.eye(q)]])
+    C = np.hstack([sys.Xi, np.zeros((sys.l, q))])
+    s = len(Y_window)
+    M = np.hstack([np.eye(n + q), np.zeros((n + q, s * q))])  # z_j = M v
+    A_eq, b_eq = [], []
+    for j, y in enumerate(Y_window):
+        M = A @ M
+        M[n:, n + q + j * q:n + q + (j + 1) * q] += np.eye(q)
+        A_eq.append(C @ M)
+        b_eq.append(y)
+    bounds = [(lo, hi) for lo, hi in zip(box.lo, box.hi, strict=True)] + [(-step, step)] * (s * q)
+    out = np.empty((2, q))
+    for i in range(q):
+        for t, sgn in enumerate((1.0, -1.0)):
+            r = linprog(sgn * M[n + i], A_eq=np.vstack(A_eq), b_eq=np.concatenate(b_eq),
+                        bounds=bounds, method="highs")
+            assert r.status == 0, r.message
+            out[t, i] = sgn * r.fun
+    return out[0], out[1]
+
+
+@pytest.mark.parametrize("fast", [True, False])
+@pytest.mark.parametrize("window", [3, 10])
+def test_windowed_step_equals_an_independent_lp_over_the_window(window, fast):
+    """Eq. (24): step k equals the LP over (restart box, the window's increments and
+    measurements), built here from the original model, not from the observer's sets."""
+    rng = np.random.default_rng(13)
+    sys = so.examples.chang2006()
+    Y, D = simulate(sys, 60, rng, x0=[0.2, -0.5, 0.3], d0=[1.0, -2.0])
+    obs = so.SMFDO(sys, window=window, fast=fast)
+    # the internal coordinates are the original ones here (checked, not assumed)
+    assert np.array_equal(obs.T_o, np.eye(5))
+    assert np.array_equal(obs.decomposition.state_scale, np.ones(5))
+    checked = 0
+    for k in range(60):
+        box = obs.restart_box
+        st = obs.update(Y[k])
+        if box is None or k < 2 * window:
+            continue
+        lo, hi = _window_lp_bounds(sys, box, Y[k - window + 1:k + 1], 1.0)
+        scale = 1.0 + np.abs(np.concatenate([lo, hi]))
+        assert (np.abs(st.lo - lo) <= 1e-7 * scale[:2]).all()
+        assert (np.abs(st.hi - hi) <= 1e-7 * scale[2:]).all()
+        assert st.contains(D[k])
+        checked += 1
+    assert checked >= 20

@@ -518,6 +518,19 @@ class SMFDO:
             self._Z_src = src
         return src  # type: ignore[return-value]
 
+    @property
+    def restart_box(self) -> Box | None:
+        """The box the window restarts from at the next step (eq. (24)), or ``None``.
+
+        ``IH(Z_(k+1-delta))`` with the outward margin, in the observer's internal
+        coordinates ``z_o = T_o D^-1 [x; d]`` (see the class notes; for a fully
+        observable augmented pair of a well-scaled model, ``T_o = I``, ``D = I``);
+        ``None`` in exact mode and until ``delta`` steps have been seen.
+        """
+        if self.window is None or len(self._hulls) < self.window:
+            return None
+        return Box(*self._restart_bounds(self._hulls[0]))
+
     def _start_mode(self, k: int) -> str:
         """How step ``k`` is computed: ``"box"`` (eq. (24), restart from IH(Z_(k-delta))),
         ``"init"`` (the whole history from Z_0^-), or ``"recursive"`` (one more step)."""
