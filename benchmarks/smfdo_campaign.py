@@ -67,13 +67,14 @@ def hull_PZ_times(sys, sc, trs):
                 inst.append(obs._Z_src)
     model = inst[0][0]
     lp = FixedStructureLP(model.A, hull_objectives(obs.P @ model.G), model.free, model.radius)
+    state = lp.new_state()  # warm-started from step to step, as in the SMFDO
     fast_t, ref_t, sets, maxdiff = [], [], [], 0.0
-    for m, c, b, h in inst:
+    for m, c, b, h, _, _ in inst:
         if m is not model:
             continue
         Pc = obs.P @ c
         t0 = time.perf_counter()
-        bounds, ok = lp._minimize_all(b, h)
+        bounds, ok = lp._minimize_all(b, h, state)
         lo = np.nextafter(bounds[0::2] + Pc, -np.inf)
         hi = np.nextafter(Pc - bounds[1::2], np.inf)
         fast_t.append(time.perf_counter() - t0)

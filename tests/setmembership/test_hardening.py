@@ -176,9 +176,10 @@ def test_rounding_level_entries_do_not_make_the_fast_path_unbounded():
     U = rng.normal(size=(40, 1))
     Y, D = simulate(sys_, 40, rng, [0.0, 0.0], [0.2], 0.01, U)
     for window in (10, None):
-        fast = so.SMFDO(sys_, window=window, increment_set=[0.01])
-        rf = fast.run(Y, U)
-        assert fast.stats["fast"] >= 38
+        obs = so.SMFDO(sys_, window=window, increment_set=[0.01])
+        rf = obs.run(Y, U)
+        if window is not None:
+            assert obs.stats["fast"] >= 38  # no silent hand-over either
         assert np.isfinite(rf.radius[2:]).all()  # was inf on every step
         assert rf.violations(D) == 0
     # exact mode against the exact LP
@@ -219,7 +220,10 @@ def test_the_documented_minimum_window_gives_bounded_sets(fast):
     assert np.isfinite(res.radius[2:]).all()  # was +-inf forever
     assert res.violations(D) == 0
     exact = so.SMFDO(sys_, window=None).run(Y)
-    assert (res.lo <= exact.lo + 1e-9).all() and (res.hi >= exact.hi - 1e-9).all()
+    # windowed contains exact, up to the rounding allowances (which grow with the
+    # exact mode's depth): 1e-8 relative
+    tol = 1e-8 * (1.0 + np.abs(np.nan_to_num(exact.lo, posinf=0, neginf=0)))
+    assert (res.lo <= exact.lo + tol).all() and (res.hi >= exact.hi - tol).all()
 
 
 # ------------------------------------------------------------------ 8. run() continued

@@ -597,6 +597,30 @@ class FactorPolytope:
             return None
         return LPOutcome(bound, float(objs[0]), None, "optimal")
 
+    def _compiled_relaxed(self, w, delta, w_err, w_pair) -> LPOutcome | None:
+        """The relaxed LP by the compiled simplex: slack factors ``|s| <= delta`` turn
+        ``|A xi - b| <= delta`` into ``A xi + s = b``, a fixed-structure LP."""
+        from .fastlp import FixedStructureLP
+
+        A2 = np.hstack([self.A, np.eye(self.n_c)])
+        h2 = np.concatenate([self.h, delta])
+        w2 = np.concatenate([w, np.zeros(self.n_c)])
+        lp = FixedStructureLP(A2, w2[None, :], np.isinf(h2), self.radius)
+        if not lp.usable:
+            return None
+        bounds, ok, ys, objs = lp.minimize_all(self.b, h2, b_err=self.b_err,
+                                               return_duals=True)
+        if not ok[0] or not np.isfinite(bounds[0]):
+            return None
+        werr2 = None if w_err is None else np.concatenate([w_err, np.zeros(self.n_c)])
+        pair2 = None if w_pair is None else (
+            np.hstack([w_pair[0], np.zeros((w_pair[0].shape[0], self.n_c))]), w_pair[1])
+        bound, _ = lagrangian_lower_bound(w2, A2, self.b, h2, ys[0], w_err=werr2,
+                                          radius=self.radius, w_pair=pair2, b_err=self.b_err)
+        if not np.isfinite(bound):
+            return None
+        return LPOutcome(bound, float(objs[0]), None, "optimal")
+
     def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """Duals recomputed from HiGHS's optimal basis, with one refinement step.
 
@@ -655,6 +679,9 @@ class FactorPolytope:
                     x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
                     break
             if y is None:
+                out = self._compiled_relaxed(w, delta, w_err, w_pair)
+                if out is not None:
+                    return out
                 self.fallbacks += 1
                 y, x = np.zeros(self.n_c), None
             bound, y = self._certify(w, y, w_err, w_pair)

@@ -1,0 +1,95 @@
+"""A randomized soundness campaign (issue 11, "Done when"): run with ``pytest -m slow``.
+
+Random systems (badly scaled ones included), random magnitudes, increments drawn
+inside and on the boundary of their box, inputs; windows 3, 10, 20 and the exact
+mode; the runs execute concurrently on threads. Own simulator (below). Every step
+must contain the true disturbance, and no run on consistent data may abort.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import setobs as so
+from setobs import LinearSystem
+
+
+def _random_case(rng):
+    """A random system satisfying Theorem 1, with its data (own simulator)."""
+    while True:
+        n = int(rng.integers(1, 6))
+        q = int(rng.integers(1, 3))
+        l = q + int(rng.integers(0, 2))
+        p = int(rng.integers(0, 2))
+        Phi = rng.normal(size=(n, n))
+        Phi *= rng.uniform(0.3, 1.05) / max(np.abs(np.linalg.eigvals(Phi)).max(), 1e-9)
+        G = rng.normal(size=(n, q))
+        Xi = rng.normal(size=(l, n))
+        Gamma = rng.normal(size=(n, p)) if p else None
+        if rng.random() < 0.3:  # badly scaled: states, outputs, disturbances over decades
+            s = 10.0 ** rng.uniform(-3, 3, n)
+            Phi = Phi * s[:, None] / s[None, :]
+            G = G * s[:, None] * 10.0 ** rng.uniform(-2, 2, q)
+            Xi = Xi / s[None, :] * 10.0 ** rng.uniform(-2, 2, (l, 1))
+            Gamma = Gamma * s[:, None] if p else None
+        sys = LinearSystem(Phi, G, Xi, Gamma)
+        if so.analysis.bounded_do_exists(sys).satisfied:
+            return sys
+
+
+def _simulate(sys, N, rng):
+    r = 10.0 ** rng.uniform(-3, 1, sys.q)
+    x = rng.normal(size=sys.n) * 10.0 ** rng.uniform(-3, 5)
+    d = rng.normal(size=sys.q) * r * 10.0
+    on_vertices = rng.random() < 0.3  # increments at the box's corners (degenerate LPs)
+    U = rng.normal(size=(N, sys.p)) if sys.p else None
+    Y, D = [], []
+    for k in range(N):
+        Y.append(sys.Xi @ x)
+        D.append(d.copy())
+        x = sys.Phi @ x + sys.G @ d + (sys.Gamma @ U[k] if sys.p else 0.0)
+        dd = rng.choice([-1.0, 1.0], sys.q) if on_vertices else rng.uniform(-1, 1, sys.q)
+        d = d + dd * r
+    return np.array(Y), np.array(D), U, r
+
+
+def _one(seed: int) -> tuple[int, int, list[str]]:
+    rng = np.random.default_rng(seed)
+    sys = _random_case(rng)
+    exact = seed % 25 == 0
+    N = 60 if exact else 400
+    Y, D, U, r = _simulate(sys, N, rng)
+    steps = violations = 0
+    problems = []
+    windows = [None] if exact else [3, 10, 20]
+    for w in windows:
+        try:
+            obs = so.SMFDO(sys, window=w, increment_set=r)
+        except so.DimensionError:  # window below mu_o - 1 for this system
+            continue
+        try:
+            res = obs.run(Y, U)
+        except Exception as exc:  # every abort is a failure, recorded
+            problems.append(f"seed {seed} window {w}: {type(exc).__name__}: {exc}")
+            continue
+        steps += N
+        v = res.violations(D)
+        violations += v
+        if v:
+            problems.append(f"seed {seed} window {w}: {v} violations")
+    return steps, violations, problems
+
+
+@pytest.mark.slow
+def test_randomized_soundness_campaign_on_threads():
+    seeds = range(150)
+    with ThreadPoolExecutor(max_workers=4) as ex:
+        out = list(ex.map(_one, seeds))
+    steps = sum(o[0] for o in out)
+    problems = [p for o in out for p in o[2]]
+    assert not problems, problems[:10]
+    assert sum(o[1] for o in out) == 0
+    assert steps >= 100_000
