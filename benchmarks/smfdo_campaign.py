@@ -139,7 +139,7 @@ def main() -> None:
         wall = campaign(sc, window, small)
         camp[f"delta={window}"] = {"runs": small, "wall_s": wall,
                                    "extrapolated_5000_runs_min": 5000 * wall / small / 60}
-    ex_runs = max(1, min(args.runs, 4))
+    ex_runs = max(1, min(args.runs, 16))
     wall = campaign(sc, None, ex_runs)
     camp["exact"] = {"runs": ex_runs, "wall_s": wall,
                      "extrapolated_5000_runs_min": 5000 * wall / ex_runs / 60}

@@ -21,6 +21,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 from setobs import ConstrainedZonotope
+from tests.oracles import solve_exact
 
 matplotlib.use("Agg")
 
@@ -29,24 +30,6 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.load_profile("setobs")
-
-
-def _solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
-    """Solve a square system exactly (Gauss-Jordan); ``None`` if singular."""
-    n = len(M)
-    aug = [[*row, r[i]] for i, row in enumerate(M)]
-    for col in range(n):
-        piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
-        if piv is None:
-            return None
-        aug[col], aug[piv] = aug[piv], aug[col]
-        p = aug[col][col]
-        aug[col] = [v / p for v in aug[col]]
-        for i in range(n):
-            if i != col and aug[i][col] != 0:
-                f = aug[i][col]
-                aug[i] = [a - f * bcol for a, bcol in zip(aug[i], aug[col], strict=True)]
-    return [aug[i][n] for i in range(n)]
 
 
 def _rank_exact(M: list[list[Fraction]]) -> int:
@@ -83,7 +66,7 @@ def exact_factor_vertices(A: np.ndarray, b: np.ndarray, h: np.ndarray) -> list[l
                 xi[j] = s * hf[j]
             rhs = [bf[i] - sum(Af[i][j] * xi[j] for j in nonbasis) for i in range(n_c)]
             if n_c:
-                sol = _solve_exact(MB, rhs)
+                sol = solve_exact(MB, rhs)
                 if sol is None:
                     continue
                 for j, v in zip(basis, sol, strict=True):
@@ -106,6 +89,21 @@ def exact_extremes(Z: ConstrainedZonotope, d: np.ndarray) -> tuple[Fraction, Fra
     const = sum(df[i] * cf[i] for i in range(Z.dim))
     vals = [sum(wj * xj for wj, xj in zip(w, xi, strict=True)) + const for xi in verts]
     return min(vals), max(vals)
+
+
+def cripple_highs(monkeypatch) -> None:
+    """Make every HiGHS model stop before its first iteration (simplex and IPM)."""
+    from setobs.geometry.lp import FactorPolytope
+
+    original = FactorPolytope._new_highs
+
+    def crippled():
+        hs = original()
+        hs.setOptionValue("simplex_iteration_limit", 0)
+        hs.setOptionValue("ipm_iteration_limit", 0)
+        return hs
+
+    monkeypatch.setattr(FactorPolytope, "_new_highs", staticmethod(crippled))
 
 
 def cdd_vertices(Z: ConstrainedZonotope) -> np.ndarray:

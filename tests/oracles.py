@@ -203,7 +203,8 @@ def exact_history_bounds(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None
     return out_lo, out_hi
 
 
-def _solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
+def solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | None:
+    """Solve a square system exactly (Gauss-Jordan); ``None`` if singular."""
     n = len(M)
     aug = [[*row, r[i]] for i, row in enumerate(M)]
     for col in range(n):
@@ -246,7 +247,7 @@ def exact_hpolytope_vertices(H: np.ndarray, k: np.ndarray) -> list[list[Fraction
         resid = np.abs(H @ v - k) / nrm
         near = list(np.argsort(resid)[: n + 3])
         for act in combinations(near, n):
-            x = _solve_exact([Hf[i] for i in act], [kf[i] for i in act])
+            x = solve_exact([Hf[i] for i in act], [kf[i] for i in act])
             if x is None:
                 continue
             slack = [kf[i] - sum(Hf[i][j] * x[j] for j in range(n)) for i in range(len(kf))]

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from setobs import ConstrainedZonotope
 from setobs.exceptions import SolverWarning
 from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
-from tests.conftest import exact_extremes, random_cz
+from tests.conftest import cripple_highs, exact_extremes, random_cz
 
 seeds = st.integers(0, 2**32 - 1)
 
@@ -62,22 +62,9 @@ def test_unbounded_factor_bound_covers_points_within_radius():
     assert box.hi[0] - 3.1 < 1e-12 and -2.9 - box.lo[0] < 1e-12
 
 
-def _crippled_highs(monkeypatch):
-    """Every HiGHS model stops before its first iteration (simplex and IPM)."""
-    original = FactorPolytope._new_highs
-
-    def crippled():
-        hs = original()
-        hs.setOptionValue("simplex_iteration_limit", 0)
-        hs.setOptionValue("ipm_iteration_limit", 0)
-        return hs
-
-    monkeypatch.setattr(FactorPolytope, "_new_highs", staticmethod(crippled))
-
-
 def test_solver_failure_is_retried_with_the_compiled_simplex(monkeypatch):
     """HiGHS fails under every setting: the compiled simplex gives the tight answer."""
-    _crippled_highs(monkeypatch)
+    cripple_highs(monkeypatch)
     Z = ConstrainedZonotope(np.eye(3), np.zeros(3), [[1.0, 1.0, 1.0]], [0.5])
     box = Z.interval_hull()  # no warning: a retry solved it
     # exact hull of {xi in [-1, 1]^3 : sum xi = 0.5}: each xi_i in [-1, 1]
@@ -92,7 +79,7 @@ def test_total_solver_failure_gives_a_wider_certified_box_and_a_warning(seed):
     rng = np.random.default_rng(seed)
     Z = random_cz(rng, n=2, n_g=5, n_c=2)
     with pytest.MonkeyPatch.context() as mp:
-        _crippled_highs(mp)
+        cripple_highs(mp)
         mp.setattr(FactorPolytope, "_compiled", lambda self, w, we, wp: None)
         with pytest.warns(SolverWarning, match="failed under every solver setting"):
             box = Z.interval_hull()

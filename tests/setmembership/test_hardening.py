@@ -1,7 +1,7 @@
 """Issue 11: the SMFDO under threads, bad scaling, large data, solver trouble.
 
 Every test here failed on the code before the hardening. Oracles are independent
-of the code under test: the simulator below, the exact rational LP of
+of the code under test: the simulator of ``test_smfdo``, the exact rational LP of
 ``tests/oracles.py`` (original coordinates, Fractions), scipy's HiGHS.
 """
 
@@ -14,30 +14,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.optimize import linprog
 
 import setobs as so
 from setobs import ConstrainedZonotope, DimensionError, LinearSystem
 from tests.oracles import exact_history_bounds, exact_lp_min
+from tests.setmembership.test_smfdo import history_lp_bounds, simulate
 
 REGRESSIONS = Path(__file__).resolve().parents[3] / "shared" / "data" / "regressions"
 #: The data's representation error the oracle grants each y (the SMFDO's default data_rtol).
 DATA_RTOL = 2 * np.finfo(float).eps
-
-
-def simulate(sys, N, rng, x0, d0, inc, U=None, signs=False):
-    """Own simulator: x+ = Phi x + Gamma u + G d, y = Xi x, d+ = d + dd, |dd_i| <= inc_i."""
-    x, d = np.array(x0, float), np.array(d0, float)
-    inc = np.broadcast_to(np.asarray(inc, float), d.shape)
-    Y, D = [], []
-    for k in range(N):
-        Y.append(sys.Xi @ x)
-        D.append(d.copy())
-        u = U[k] if U is not None else np.zeros(sys.p)
-        x = sys.Phi @ x + sys.Gamma @ u + sys.G @ d
-        dd = rng.choice([-1.0, 1.0], d.size) if signs else rng.uniform(-1, 1, d.size)
-        d = d + dd * inc
-    return np.array(Y), np.array(D)
 
 
 def _float_bounds(lo, hi):
@@ -238,34 +223,9 @@ def test_a_record_split_in_two_runs_equals_the_whole_history_lp():
     second = obs.run(Y[8:], U[8:])
     assert second.violations(D[8:]) == 0
     for k in (8, 12):
-        A_eq, b_eq, Md = _history_lp_float(sys_, Y, U, k)
-        for i in range(2):
-            for sgn in (1.0, -1.0):
-                r = linprog(sgn * Md[i], A_eq=A_eq, b_eq=b_eq,
-                            bounds=[(None, None)] * 5 + [(-1, 1)] * (2 * k), method="highs")
-                assert r.status == 0
-                got = second.lo[k - 8, i] if sgn > 0 else second.hi[k - 8, i]
-                assert abs(got - sgn * r.fun) < 1e-6
-
-
-def _history_lp_float(sys_, Y, U, k):
-    n, q = 3, 2
-    nv = n + q + k * q
-    Mx = np.hstack([np.eye(n), np.zeros((n, nv - n))])
-    ox = np.zeros(n)
-    Md = np.zeros((q, nv))
-    Md[:, n:n + q] = np.eye(q)
-    A, b = [], []
-    for j in range(k + 1):
-        A.append(sys_.Xi @ Mx)
-        b.append(Y[j] - sys_.Xi @ ox)
-        if j == k:
-            break
-        Mx = sys_.Phi @ Mx + sys_.G @ Md
-        ox = sys_.Phi @ ox + sys_.Gamma @ U[j]
-        Md = Md.copy()
-        Md[:, n + q + j * q:n + q + (j + 1) * q] += np.eye(q)
-    return np.vstack(A), np.concatenate(b), Md
+        lo, hi = history_lp_bounds(sys_, Y, U, [None] * 3, [None] * 3, 1.0, k)
+        np.testing.assert_allclose(second.lo[k - 8], lo, atol=1e-6)
+        np.testing.assert_allclose(second.hi[k - 8], hi, atol=1e-6)
 
 
 def test_continuing_without_the_pending_input_is_refused():
@@ -295,16 +255,9 @@ def test_consistent_data_never_abort_a_run(fast):
 def test_a_fallback_step_is_flagged_and_warned_once(monkeypatch):
     from setobs.exceptions import SolverWarning
     from setobs.geometry.lp import FactorPolytope
+    from tests.conftest import cripple_highs
 
-    original = FactorPolytope._new_highs
-
-    def crippled():
-        hs = original()
-        hs.setOptionValue("simplex_iteration_limit", 0)
-        hs.setOptionValue("ipm_iteration_limit", 0)
-        return hs
-
-    monkeypatch.setattr(FactorPolytope, "_new_highs", staticmethod(crippled))
+    cripple_highs(monkeypatch)
     monkeypatch.setattr(FactorPolytope, "_compiled", lambda self, w, we, wp: None)
     sys_ = so.examples.chang2006()
     Y, D = simulate(sys_, 12, np.random.default_rng(0), np.zeros(3), [0, 0], 1.0)

@@ -17,16 +17,19 @@ from setobs.setmembership import (
 )
 
 
-def simulate(sys, N, rng, x0, d0, step=1.0, U=None):
-    """x+ = Phi x + Gamma u + G d, d+ = d + dd with |dd_i| <= step (uniform)."""
+def simulate(sys, N, rng, x0, d0, step=1.0, U=None, signs=False):
+    """x+ = Phi x + Gamma u + G d, y = Xi x, d+ = d + dd with |dd_i| <= step_i
+    (uniform; ``signs``: dd_i = +-step_i, the corners of the box)."""
     x, d = np.array(x0, float), np.array(d0, float)
+    step = np.broadcast_to(np.asarray(step, float), (sys.q,))
     Y, D = [], []
     for k in range(N):
         Y.append(sys.Xi @ x)
         D.append(d.copy())
         u = U[k] if U is not None else np.zeros(sys.p)
         x = sys.Phi @ x + sys.Gamma @ u + sys.G @ d
-        d = d + rng.uniform(-step, step, sys.q)
+        d = d + (rng.choice([-1.0, 1.0], sys.q) * step if signs
+                 else rng.uniform(-step, step, sys.q))
     return np.array(Y), np.array(D)
 
 

@@ -41,6 +41,23 @@ def _chang_runs(n_runs):
     return sc, [sc.simulate(rng_for_run(0, r)) for r in range(n_runs)]
 
 
+def _diamond_record():
+    """Chang 2006 with increments in the diamond |dd_1| + |dd_2| <= 1 (a CZ with a
+    constraint): the system, the set, 80 measurements and the true disturbances."""
+    sys = so.examples.chang2006()
+    diamond = ConstrainedZonotope.from_hpolytope(
+        [[1, 1], [1, -1], [-1, 1], [-1, -1]], [1, 1, 1, 1])
+    rng = np.random.default_rng(4)
+    x, d, Ys, Ds = np.zeros(3), np.array([0.5, -1.0]), [], []
+    for _ in range(80):
+        Ys.append(sys.Xi @ x)
+        Ds.append(d.copy())
+        x = sys.Phi @ x + sys.G @ d
+        v = rng.uniform(-1, 1, 2)
+        d = d + v / max(1.0, np.abs(v).sum())
+    return sys, diamond, Ys, Ds
+
+
 def _lp_instances(obs, Y, U=None):
     """Run ``obs`` and yield every fast-path step's (model, b, h)."""
     for j, y in enumerate(Y):
@@ -118,17 +135,7 @@ def test_fast_equals_reference_with_inputs_rotated_basis_and_constrained_increme
         assert rf.violations(D) == 0
         assert fast.stats["fast"] >= 110
     # Chang 2006 with the diamond |dd_1| + |dd_2| <= 1 (a CZ with a constraint)
-    sys = so.examples.chang2006()
-    diamond = ConstrainedZonotope.from_hpolytope(
-        [[1, 1], [1, -1], [-1, 1], [-1, -1]], [1, 1, 1, 1])
-    rng = np.random.default_rng(4)
-    x, d, Ys, Ds = np.zeros(3), np.array([0.5, -1.0]), [], []
-    for _ in range(80):
-        Ys.append(sys.Xi @ x)
-        Ds.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
-        v = rng.uniform(-1, 1, 2)
-        d = d + v / max(1.0, np.abs(v).sum())
+    sys, diamond, Ys, Ds = _diamond_record()
     kw = dict(window=5, increment_set=diamond)
     fast = so.SMFDO(sys, keep_sets=True, **kw)
     rf = fast.run(np.array(Ys))
@@ -156,17 +163,7 @@ def test_windowed_recursion_amplifies_rounding():
     within 80 steps. (Both runs stay sound.) Run-level comparisons of windowed
     results therefore need tolerances far above the rounding level.
     """
-    sys = so.examples.chang2006()
-    diamond = ConstrainedZonotope.from_hpolytope(
-        [[1, 1], [1, -1], [-1, 1], [-1, -1]], [1, 1, 1, 1])
-    rng = np.random.default_rng(4)
-    x, d, Ys, Ds = np.zeros(3), np.array([0.5, -1.0]), [], []
-    for _ in range(80):
-        Ys.append(sys.Xi @ x)
-        Ds.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
-        v = rng.uniform(-1, 1, 2)
-        d = d + v / max(1.0, np.abs(v).sum())
+    sys, diamond, Ys, Ds = _diamond_record()
     Y = np.array(Ys)
     a = so.SMFDO(sys, window=5, increment_set=diamond).run(Y)
     b = so.SMFDO(sys, window=5, increment_set=diamond, margin=0.0).run(Y)

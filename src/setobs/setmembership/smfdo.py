@@ -748,8 +748,8 @@ class SMFDO:
         self._Z_src = Z_src
         if mode == "box":
             self._windowing = True
-        self._hist.append((yv, uv, dd))  # dd is None at k = 0 (never used)
-        if self.window is not None:
+        if self.window is not None:  # (exact mode runs the plain recursion: no history)
+            self._hist.append((yv, uv, dd))  # dd is None at k = 0 (never used)
             # The restart box of eq. (24) gets the same relative margin as the
             # reported bounds: the set recursion itself rounds (O(eps)), and a
             # box without margin can make a thin set (states pinned to rounding
@@ -757,8 +757,6 @@ class SMFDO:
             self._hulls.append(Box._trusted(*self._outward(box_o.lo, box_o.hi)))
             if self._windowing and len(self._hist) > self.window:
                 del self._hist[:len(self._hist) - self.window]
-        elif not self._from_initial:
-            self._hist.clear()  # exact mode after a reset: plain recursion, no history
         lo, hi = self._outward(box.lo, box.hi)
         est = box_center(lo, hi)
         rad = float(np.max(0.5 * (hi - lo), initial=0.0))
