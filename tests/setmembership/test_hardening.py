@@ -20,7 +20,7 @@ from setobs import ConstrainedZonotope, DimensionError, LinearSystem
 from tests.oracles import exact_history_bounds, exact_lp_min
 from tests.setmembership.test_smfdo import history_lp_bounds, simulate
 
-REGRESSIONS = Path(__file__).resolve().parents[3] / "shared" / "data" / "regressions"
+REGRESSIONS = Path(__file__).resolve().parents[1] / "data" / "regressions"
 #: The data's representation error the oracle grants each y (the SMFDO's default data_rtol).
 DATA_RTOL = 2 * np.finfo(float).eps
 
@@ -96,7 +96,6 @@ def _exact_tol(lo, hi, Y):
     return 1e-8 * (1.0 + np.abs(fin).max(initial=0.0)) + 1e-10 * np.abs(Y).max()
 
 
-@pytest.mark.skipif(not (REGRESSIONS / "exact_wide.py").exists(), reason="regression data")
 def test_exact_mode_on_a_badly_scaled_system_equals_the_exact_lp():
     m = _load_exact_wide()
     Y, D = m.simulate(8)
@@ -177,7 +176,6 @@ def test_rounding_level_entries_do_not_make_the_fast_path_unbounded():
 
 
 # ------------------------------------------------------------------ 5. hull of a bounded 1-D set
-@pytest.mark.skipif(not (REGRESSIONS / "hull_inf_set.npz").exists(), reason="regression data")
 def test_interval_hull_of_the_regression_set_is_finite_and_exact():
     z = np.load(REGRESSIONS / "hull_inf_set.npz")
     G, c, A, b, h = (z[k] for k in ("G", "c", "A", "b", "h"))
