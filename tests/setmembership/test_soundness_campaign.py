@@ -93,3 +93,41 @@ def test_randomized_soundness_campaign_on_threads():
     assert not problems, problems[:10]
     assert sum(o[1] for o in out) == 0
     assert steps >= 100_000
+
+
+def _large_initial_state(seed: int) -> tuple[int, int, list[str]]:
+    from tests.setmembership.test_smfdo import simulate
+
+    rng = np.random.default_rng(1000 + seed)
+    sys = _random_case(rng)
+    x0 = rng.normal(size=sys.n) * 10.0 ** rng.uniform(7, 9)
+    U = rng.normal(size=(80, sys.p)) if sys.p else None
+    Y, D = simulate(sys, 80, rng, x0, rng.normal(size=sys.q), 1.0, U)
+    steps = violations = 0
+    problems = []
+    for w, N in ((None, 50), (10, 80)):
+        try:
+            obs = so.SMFDO(sys, window=w)  # X0 = R^n
+        except so.DimensionError:
+            continue
+        try:
+            res = obs.run(Y[:N], None if U is None else U[:N])
+        except Exception as exc:  # every abort is a failure, recorded
+            problems.append(f"seed {seed} window {w}: {type(exc).__name__}: {exc}")
+            continue
+        steps += N
+        violations += res.violations(D[:N])
+    return steps, violations, problems
+
+
+@pytest.mark.slow
+def test_large_unknown_initial_states_never_abort():
+    """||x0|| from 1e7 to 1e9 with X0 = R^n: 40 % of such runs aborted with
+    SolverError before, and one LP made HiGHS cycle for minutes (seed 29 here) until
+    its solves got iteration limits."""
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        out = list(ex.map(_large_initial_state, range(40)))
+    problems = [p for o in out for p in o[2]]
+    assert not problems, problems[:10]
+    assert sum(o[1] for o in out) == 0
+    assert sum(o[0] for o in out) >= 4000

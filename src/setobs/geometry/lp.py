@@ -318,6 +318,18 @@ def lagrangian_lower_bound(
     return _down(t1 - t2 - tb - err), y1 + y2
 
 
+def _simplex_limit(n_rows: int, n_cols: int) -> int:
+    """Simplex iteration limit of a HiGHS solve: generous for a healthy LP of this size."""
+    return 50 * (n_rows + n_cols) + 10_000
+
+
+def _option(hs: highspy.Highs, name: str) -> int:
+    """An integer HiGHS option (``getOptionValue`` returns ``(status, value)`` in
+    recent highspy releases and the value alone in older ones)."""
+    v = hs.getOptionValue(name)
+    return int(v[1] if isinstance(v, tuple) else v)
+
+
 def _status_name(h: highspy.Highs) -> str:
     return h.modelStatusToString(h.getModelStatus())
 
@@ -427,6 +439,11 @@ class FactorPolytope:
         lp.a_matrix_.value_ = np.ascontiguousarray(A.T[rows, cols])
         lp.a_matrix_.num_col_ = n_col
         lp.a_matrix_.num_row_ = n_r
+        # Deterministic iteration limits (a degenerate LP once cycled for minutes):
+        # a solve that hits them is undecided, and the retries / fallback take over.
+        hs.setOptionValue("simplex_iteration_limit",
+                          min(_simplex_limit(n_r, n_col), _option(hs, "simplex_iteration_limit")))
+        hs.setOptionValue("ipm_iteration_limit", min(1000, _option(hs, "ipm_iteration_limit")))
         return hs.passModel(lp) != highspy.HighsStatus.kError
 
     def _col_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
