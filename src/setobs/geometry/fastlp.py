@@ -150,6 +150,7 @@ class FixedStructureLP:
     radius : float
         Radius on unbounded factors used in certification (see
         :mod:`setobs.geometry.lp`).
+
     Attributes
     ----------
     usable : bool

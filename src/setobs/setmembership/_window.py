@@ -194,6 +194,7 @@ class WindowModel:
         b_tail = self.b_const + self.b_c @ c_S
         if self.p:
             b_tail = b_tail + self.b_u @ u
+        rest = b_tail[self.y_pos]  # what y is added to (a copy: fancy indexing)
         b_tail[self.y_pos] += yflat
         b = np.concatenate([b_S, b_tail]) if self.nS_rows else b_tail
         c = self.c_c @ c_S + self.c_const
@@ -220,9 +221,8 @@ class WindowModel:
         # allowance gK |y|: the rounding of the generator products C_o A_o^j G_S
         # (relative gK) acting on the factors, whose image C_o G_j xi has the
         # size of y when the prediction does not cancel.
-        t = b_tail[self.y_pos] - yflat
         eb[self.y_pos] += (data_rtol + self._gK) * ya + np.where(
-            t != 0.0, _U * (np.abs(t) + ya), 0.0)
+            rest != 0.0, _U * (np.abs(rest) + ya), 0.0)
         if self.p and data_rtol:
             eb = eb + data_rtol * (self._b_u_a @ au)
             ec = ec + data_rtol * (self._c_u_a @ au)

@@ -19,6 +19,7 @@ from ..analysis.existence import BoundedDOReport
 from ..exceptions import DimensionError, EmptySetError, SetobsError, SolverWarning
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center
+from ..geometry.fastlp import _pow2_inverse
 from ..geometry.zonotope import box_center_radius
 from ..systems import LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
@@ -233,9 +234,7 @@ def _normalize_free_columns(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     if not free.any():
         return Z
     norms = np.linalg.norm(np.vstack([Z.G, Z.A]), axis=0)
-    s = np.ones(Z.n_gen)
-    ok = free & (norms > 0)
-    s[ok] = np.ldexp(1.0, -np.frexp(norms[ok])[1])
+    s = np.where(free, _pow2_inverse(norms), 1.0)
     return ConstrainedZonotope._trusted(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.radius, Z.c_err,
                                         Z.b_err)
 
