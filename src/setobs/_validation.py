@@ -67,8 +67,9 @@ def check_real_scalar(name: str, value: object, *, positive: bool = False,
     return v
 
 
-def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool) -> None:
-    if np.isnan(a).any():
+def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool,
+                  allow_nan: bool = False) -> None:
+    if not allow_nan and np.isnan(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isnan(a))[0])
         raise DimensionError(f"{name} contains NaN (first at index {idx})")
     if not allow_inf and np.isinf(a).any():
@@ -83,6 +84,7 @@ def as_matrix(
     cols: int | None = None,
     *,
     allow_inf: bool = False,
+    allow_nan: bool = False,
 ) -> NDArray[np.float64]:
     """Validate and copy a 2-D float matrix.
 
@@ -96,7 +98,9 @@ def as_matrix(
     rows, cols : int, optional
         Required number of rows / columns.
     allow_inf : bool
-        Whether ``+-inf`` entries are allowed. NaN never is.
+        Whether ``+-inf`` entries are allowed.
+    allow_nan : bool
+        Whether NaN entries are allowed (e.g. "not measured" in a record).
 
     Returns
     -------
@@ -129,7 +133,7 @@ def as_matrix(
         raise DimensionError(
             f"{name} must have {cols} columns, got {a.shape[1]} (shape {a.shape})"
         )
-    _check_finite(name, a, allow_inf)
+    _check_finite(name, a, allow_inf, allow_nan)
     return np.ascontiguousarray(a)
 
 
@@ -139,6 +143,7 @@ def as_vector(
     size: int | None = None,
     *,
     allow_inf: bool = False,
+    allow_nan: bool = False,
 ) -> NDArray[np.float64]:
     """Validate and copy a 1-D float vector (a column or row matrix is flattened).
 
@@ -157,5 +162,5 @@ def as_vector(
         raise DimensionError(f"{name} must be a vector, got an array of shape {a.shape}")
     if size is not None and a.size != size:
         raise DimensionError(f"{name} must have length {size}, got {a.size}")
-    _check_finite(name, a, allow_inf)
+    _check_finite(name, a, allow_inf, allow_nan)
     return a

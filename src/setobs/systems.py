@@ -42,7 +42,7 @@ def _names(param: str, prefix: str, given: Sequence[str] | None, count: int
 
 
 class LinearSystem:
-    """``x[k+1] = Phi x[k] + Gamma u[k] + G d[k]``, ``y[k] = Xi x[k]``.
+    """``x[k+1] = Phi x[k] + Gamma u[k] + G d[k]``, ``y[k] = Xi x[k] + D_u u[k]``.
 
     Parameters
     ----------
@@ -54,6 +54,10 @@ class LinearSystem:
         Output matrix.
     Gamma : array_like, shape (n, p), optional
         Control input matrix (default: no inputs, ``p = 0``).
+    Du : array_like, shape (l, p), optional
+        Direct feedthrough of the known inputs to the outputs (``D`` of a
+        python-control or MATLAB state-space model; default zero). The
+        disturbance has no feedthrough.
     state_names, disturbance_names, output_names, input_names : sequence of str, optional
         Names used in reports.
     dt : float, optional
@@ -71,6 +75,7 @@ class LinearSystem:
     """
 
     __slots__ = (
+        "Du",
         "G",
         "Gamma",
         "Phi",
@@ -89,6 +94,7 @@ class LinearSystem:
         Xi: ArrayLike,
         Gamma: ArrayLike | None = None,
         *,
+        Du: ArrayLike | None = None,
         state_names: Sequence[str] | None = None,
         disturbance_names: Sequence[str] | None = None,
         output_names: Sequence[str] | None = None,
@@ -111,7 +117,18 @@ class LinearSystem:
             raise DimensionError("Xi must have at least one row (one output)")
         if dt is not None and not dt > 0:
             raise DimensionError(f"dt must be positive, got {dt}")
+        l, p = Xi_a.shape[0], Gamma_a.shape[1]
+        if Du is None:
+            Du_a = np.zeros((l, p))
+        else:
+            if p == 0 and np.size(Du) == 0:
+                Du_a = np.zeros((l, 0))
+            else:
+                if p == 0:
+                    raise DimensionError("Du is given but the system has no inputs (Gamma)")
+                Du_a = as_matrix("Du", Du, rows=l, cols=p)
         set_ = object.__setattr__
+        set_(self, "Du", readonly(Du_a))
         set_(self, "Phi", readonly(Phi_a))
         set_(self, "G", readonly(G_a))
         set_(self, "Xi", readonly(Xi_a))
@@ -131,6 +148,8 @@ class LinearSystem:
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # pickling and deepcopy: rebuild the read-only arrays
+        if "Du" not in state:  # pickled before Du existed
+            state = {**state, "Du": np.zeros((state["Xi"].shape[0], state["Gamma"].shape[1]))}
         for name, val in state.items():
             if isinstance(val, np.ndarray):
                 val = readonly(np.array(val))
@@ -210,7 +229,8 @@ class LinearSystem:
         Parameters
         ----------
         ss : control.StateSpace
-            Discrete-time model with ``D = 0``.
+            Discrete-time model. Its ``D`` columns of the control inputs become
+            the feedthrough ``Du``; those of the disturbances must be zero.
         disturbance_inputs : sequence of int
             Indices of the inputs that are disturbances; the others are controls.
         """
@@ -222,12 +242,14 @@ class LinearSystem:
         A, B, C, D = (np.asarray(M, dtype=float) for M in (ss.A, ss.B, ss.C, ss.D))
         if not ss.dt:
             raise DimensionError("the StateSpace model must be discrete-time (dt > 0 or True)")
-        if np.any(D != 0):
-            raise DimensionError("D must be zero: y = Xi x has no feedthrough")
         idx = _input_indices("disturbance_inputs", disturbance_inputs, B.shape[1])
         rest = [i for i in range(B.shape[1]) if i not in idx]
+        if np.any(D[:, idx] != 0):
+            raise DimensionError("the D columns of the disturbance inputs must be zero: "
+                                 "the disturbance has no feedthrough (y = Xi x + D_u u)")
         dt = None if ss.dt is True else float(ss.dt)
-        return cls(A, B[:, idx], C, B[:, rest] if rest else None, dt=dt)
+        return cls(A, B[:, idx], C, B[:, rest] if rest else None,
+                   Du=D[:, rest] if rest else None, dt=dt)
 
     # ------------------------------------------------------------------ augmented form
     def augmented(self) -> AugmentedSystem:
@@ -252,7 +274,8 @@ class LinearSystem:
         sd = np.ones(self.q) if disturbance_scale is None else np.asarray(disturbance_scale, float)
         sy = np.ones(self.l) if output_scale is None else np.asarray(output_scale, float)
         return LinearSystem(T_a @ self.Phi @ Ti, (T_a @ self.G) / sd, (sy[:, None] * self.Xi) @ Ti,
-                            T_a @ self.Gamma if self.p else None, dt=self.dt)
+                            T_a @ self.Gamma if self.p else None,
+                            Du=sy[:, None] * self.Du if self.p else None, dt=self.dt)
 
 
 def _input_indices(name: str, indices: Any, m: int) -> list[int]:

@@ -242,8 +242,8 @@ def test_bad_measurements():
     obs = so.SMFDO(so.examples.chang2006())
     with pytest.raises(DimensionError, match="y must have length 2, got 3"):
         obs.update([0.0, 0.0, 0.0])
-    with pytest.raises(DimensionError, match="y contains NaN"):
-        obs.update([np.nan, 0.0])
+    with pytest.raises(DimensionError, match="y contains inf"):
+        obs.update([np.inf, 0.0])  # (NaN means "not measured")
     with pytest.raises(DimensionError, match="Y must have 2 columns"):
         obs.run(np.zeros((5, 3)))
     sysu = LinearSystem(np.eye(2) * 0.5, [[1.0], [0.0]], [[1.0, 0.0], [0.0, 1.0]], [[0.0], [1.0]])
@@ -265,13 +265,16 @@ def test_inconsistent_data_raises_or_resets():
     with pytest.raises(ModelInvalidatedError, match="step k=20") as info:
         obs.run(Y)
     assert info.value.step == 20
-    obs2 = so.SMFDO(sys, window=5, increment_set=[0.1, 0.1], reset="box",
+    obs2 = so.SMFDO(sys, window=5, increment_set=[0.1, 0.1], on_inconsistent="reset",
                     initial_state_set=box(-np.ones(3), np.ones(3)))
     with pytest.warns(ModelInvalidatedWarning) as rec:
         res = obs2.run(Y)
     # First reset at the outlier; the set that explains the outlier may be reset once
-    # more when the next (true) measurement contradicts it.
-    assert "k=20" in str(rec[0].message) and len(rec) <= 3
+    # more when the next (true) measurement contradicts it. One warning per run.
+    assert len(rec) == 1 and "first at k=20" in str(rec[0].message)
+    assert res.first_inconsistent == 20 and obs2.first_inconsistent == 20
+    assert res.status[20] == "reset" and not res.consistent
+    assert 1 <= obs2.stats["reset"] <= 3
     assert np.isfinite(res.lo[25:]).all()
     assert ((D[25:] >= res.lo[25:]) & (D[25:] <= res.hi[25:])).all()
 

@@ -55,9 +55,12 @@ class WindowModel:
     Parameters
     ----------
     A_o, B_o, C_o, Gamma_o : ndarray
-        Observable-coordinate matrices of the augmented system.
+        Observable-coordinate matrices of the augmented system. ``B_o`` maps
+        the per-step uncertainty ``increment`` into the state: with process
+        noise it is ``[B_o, E_o]`` and ``increment`` is ``[[dd]] x W``.
     increment : ConstrainedZonotope
-        The (fixed) increment set ``[[dd]]``.
+        The (fixed) per-step uncertainty set (the increment set ``[[dd]]``,
+        possibly times the process-noise set).
     G_S, A_S : ndarray
         Generators and constraints of the start set.
     free_S : ndarray of bool
@@ -73,48 +76,97 @@ class WindowModel:
         ``P Z`` is not a coordinate selection of the hull of ``Z``.
     radius : float
         Radius on unbounded factors (certification).
+    noise : ConstrainedZonotope or None
+        Measurement-noise set in the coordinates of ``C_o`` (``y = C_o z + v``,
+        ``v in noise``): each posterior is the generalised intersection
+        ``Z ∩_(C_o) (y - noise)`` (Scott et al. 2016, eq. (13)), which adds the
+        noise factors and constraints (the noise factors have zero generator
+        columns: they enter only the constraints).
+    masks : sequence of bool arrays, optional
+        Measured outputs of each posterior (``s + first_posterior`` of them,
+        oldest first); default all. Unmeasured rows are left out; a posterior
+        with nothing measured is a pure prediction.
     """
 
     def __init__(self, A_o, B_o, C_o, Gamma_o, increment: ConstrainedZonotope,
                  G_S, A_S, free_S, s: int, first_posterior: bool,
-                 P: NDArray[np.float64] | None, radius: float) -> None:
+                 P: NDArray[np.float64] | None, radius: float,
+                 noise: ConstrainedZonotope | None = None, masks=None) -> None:
         N, nS = G_S.shape
         GD, AD = increment.G, increment.A
         nD, cD = GD.shape[1], increment.c
         l, p = C_o.shape[0], Gamma_o.shape[1]
-        n_g = nS + s * nD
+        n_y = s + int(first_posterior)
+        if masks is None:
+            masks = [np.ones(l, dtype=bool)] * n_y
+        masks = [np.asarray(m, dtype=bool) for m in masks]
+        if len(masks) != n_y or any(m.shape != (l,) for m in masks):
+            raise ValueError(f"masks must be {n_y} boolean vectors of length {l}")
+        nV = 0 if noise is None else noise.n_gen
+        n_noisy = sum(bool(m.any()) for m in masks) if nV else 0
+        n_x = nS + s * nD  # factors with generator columns
+        n_g = n_x + n_noisy * nV
         self.s, self.first_posterior, self.N = s, first_posterior, N
         self.l, self.p = l, p
-        n_y = s + int(first_posterior)
         absA, absB, absC, absGam = np.abs(A_o), np.abs(B_o), np.abs(C_o), np.abs(Gamma_o)
         # Rows: start constraints, then per posterior: increment rows (for steps
-        # >= 1) and C_o rows. b = b0 + Bc c_S + Bu u + scatter(y); the start set's
-        # own b_S enters through b0 (set per call by the caller's b_S). Each
-        # coefficient has an absolute-value twin (the rounding-error scale).
+        # >= 1), the noise set's own rows and the measured C_o rows.
+        # b = b0 + Bc c_S + Bu u + scatter(y); the start set's own b_S enters
+        # through b0 (set per call by the caller's b_S). Each coefficient has an
+        # absolute-value twin (the rounding-error scale); ``berr0`` collects
+        # absolute errors carried by the sets' centres and right-hand sides.
         rows_A = [np.hstack([A_S, np.zeros((A_S.shape[0], n_g - nS))])]
         self.nS_rows = A_S.shape[0]
-        blocks: list[tuple[NDArray[np.float64], ...]] = []  # (b0, Bc, Bu, |b0|, |Bc|, |Bu|)
+        blocks: list[tuple[NDArray[np.float64], ...]] = []  # (b0, Bc, Bu, |b0|, |Bc|, |Bu|, e0)
         y_pos: list[int] = []
-        G = np.zeros((N, n_g))
+        G = np.zeros((N, n_x))
         G[:, :nS] = G_S
         Mc = np.eye(N)                 # c_j = Mc c_S + Mu u_flat + kappa
         Mu = np.zeros((N, s * p))
         kappa = np.zeros(N)
         Mc_a, Mu_a, kappa_a = np.eye(N), np.zeros((N, s * p)), np.zeros(N)
+        kappa_e = np.zeros(N)          # absolute error carried by kappa (the sets' c_err)
         row = self.nS_rows
         BcD = B_o @ cD
         BcD_a = absB @ np.abs(cD)
+        BcD_e = absB @ increment.c_err
+        v_col = n_x
+        if nV:
+            GV, AV, cV = noise.G, noise.A, noise.c
+            cV_a, cV_e = np.abs(cV), noise.c_err
+        y_sel: list[bool] = []
 
-        def posterior() -> None:
-            nonlocal row
-            rows_A.append(C_o @ G)
-            blocks.append((-C_o @ kappa, -C_o @ Mc, -C_o @ Mu,
-                           absC @ kappa_a, absC @ Mc_a, absC @ Mu_a))
-            y_pos.extend(range(row, row + l))
-            row += l
+        def posterior(mask) -> None:
+            nonlocal row, v_col
+            y_sel.extend(mask.tolist())
+            m = int(mask.sum())
+            if not m:
+                return
+            if nV:
+                if AV.shape[0]:
+                    Arow = np.zeros((AV.shape[0], n_g))
+                    Arow[:, v_col:v_col + nV] = AV
+                    rows_A.append(Arow)
+                    zN0, zU0 = np.zeros((AV.shape[0], N)), np.zeros((AV.shape[0], s * p))
+                    blocks.append((noise.b.copy(), zN0, zU0, np.zeros(AV.shape[0]), zN0,
+                                   zU0, noise.b_err.copy()))
+                    row += AV.shape[0]
+            Arow = np.zeros((m, n_g))
+            Arow[:, :n_x] = C_o[mask] @ G
+            b0, b0_a = -C_o[mask] @ kappa, absC[mask] @ kappa_a
+            e0 = absC[mask] @ kappa_e
+            if nV:
+                Arow[:, v_col:v_col + nV] = GV[mask]
+                b0, b0_a, e0 = b0 - cV[mask], b0_a + cV_a[mask], e0 + cV_e[mask]
+                v_col += nV
+            rows_A.append(Arow)
+            blocks.append((b0, -C_o[mask] @ Mc, -C_o[mask] @ Mu, b0_a, absC[mask] @ Mc_a,
+                           absC[mask] @ Mu_a, e0))
+            y_pos.extend(range(row, row + m))
+            row += m
 
         if first_posterior:
-            posterior()
+            posterior(masks[0])
         for j in range(1, s + 1):
             blk = slice(nS + (j - 1) * nD, nS + j * nD)
             G = A_o @ G
@@ -125,34 +177,41 @@ class WindowModel:
                 Mu[:, (j - 1) * p:j * p] += Gamma_o
                 Mu_a[:, (j - 1) * p:j * p] += absGam
             kappa, kappa_a = A_o @ kappa + BcD, absA @ kappa_a + BcD_a
+            kappa_e = absA @ kappa_e + BcD_e
             if AD.shape[0]:
                 Arow = np.zeros((AD.shape[0], n_g))
                 Arow[:, blk] = AD
                 rows_A.append(Arow)
                 zN, zU = np.zeros((AD.shape[0], N)), np.zeros((AD.shape[0], s * p))
-                blocks.append((increment.b.copy(), zN, zU, increment.b_err.copy(), zN, zU))
+                blocks.append((increment.b.copy(), zN, zU, np.zeros(AD.shape[0]), zN, zU,
+                               increment.b_err.copy()))
                 row += AD.shape[0]
-            posterior()
+            posterior(masks[j - 1 + int(first_posterior)])
         self.A = np.vstack(rows_A) if rows_A else np.zeros((0, n_g))
         m = self.A.shape[0]
         nz = m - self.nS_rows
-        parts = [np.concatenate([blk[i] for blk in blocks]) if nz else None for i in range(6)]
+        parts = [np.concatenate([blk[i] for blk in blocks]) if nz else None for i in range(7)]
         self.b_const = parts[0] if nz else np.zeros(0)
         self.b_c = parts[1] if nz else np.zeros((0, N))
         self.b_u = parts[2] if nz else np.zeros((0, s * p))
         self._b_const_a = parts[3] if nz else np.zeros(0)
         self._b_c_a = parts[4] if nz else np.zeros((0, N))
         self._b_u_a = parts[5] if nz else np.zeros((0, s * p))
+        self._b_abs_err = parts[6] if nz else np.zeros(0)
         self.y_pos = np.asarray(y_pos, dtype=np.int64) - self.nS_rows
+        self.y_sel = np.asarray(y_sel, dtype=bool)
+        self.masks = tuple(masks)
         self.n_y = n_y
-        self.G = G
+        self.G = np.hstack([G, np.zeros((N, n_g - n_x))])
         self.c_c, self.c_u, self.c_const = Mc, Mu, kappa
         self._c_c_a, self._c_u_a, self._c_const_a = Mc_a, Mu_a, kappa_a
+        self._c_abs_err = kappa_e
         # Depth of the products (s steps of N-term sums, plus assembly) for gamma.
-        self._gK = model_rtol(s, N, p, nD)
-        self.h_D = np.tile(increment.h, s)
+        self._gK = model_rtol(s, N, p, nD + nV)
+        self.h_D = np.concatenate([np.tile(increment.h, s),
+                                   np.tile(noise.h, n_noisy) if nV else np.zeros(0)])
         self.free = np.concatenate([np.asarray(free_S, dtype=bool), np.isinf(self.h_D)])
-        W = G if P is None else np.vstack([G, P @ G])
+        W = self.G if P is None else np.vstack([self.G, P @ self.G])
         self.n_dir = W.shape[0]
         self.P = P
         self._absP = None if P is None else np.abs(P)
@@ -169,7 +228,7 @@ class WindowModel:
         return self.lp.new_state()
 
     def assemble(self, c_S, b_S, h_S, Y, U, *, c_S_err=None, b_S_err=None,
-                 data_rtol: float = 0.0):
+                 data_rtol: float = 0.0, Y_err=None):
         """Centre, ``b``, ``h`` and the error bounds of ``c`` and ``b`` for the data.
 
         Parameters
@@ -177,20 +236,24 @@ class WindowModel:
         c_S, b_S, h_S : ndarray
             The start set's centre, constraint right-hand side and factor bounds.
         Y : ndarray, shape (n_y, l)
-            Measurements (in the coordinates of ``C_o``).
+            Measurements (in the coordinates of ``C_o``); only the entries of
+            the structure's masks are read (the others may be NaN).
         U : ndarray, shape (s, p)
             Inputs.
         c_S_err, b_S_err : ndarray, optional
             Error bounds carried by the start set.
         data_rtol : float
             Relative uncertainty of every ``y`` and ``u`` (representation error).
+        Y_err : ndarray, shape (n_y, l), optional
+            Further absolute uncertainty of each measurement (e.g. the rounding
+            of subtracting a feedthrough ``D_u u``).
 
         Returns
         -------
         c, b, h, c_err, b_err : ndarray
         """
         u = U.reshape(-1) if self.p else np.zeros(0)
-        yflat = Y.reshape(-1)
+        yflat = Y.reshape(-1)[self.y_sel]
         b_tail = self.b_const + self.b_c @ c_S
         if self.p:
             b_tail = b_tail + self.b_u @ u
@@ -223,6 +286,10 @@ class WindowModel:
         # size of y when the prediction does not cancel.
         eb[self.y_pos] += (data_rtol + self._gK) * ya + np.where(
             rest != 0.0, _U * (np.abs(rest) + ya), 0.0)
+        if Y_err is not None:
+            eb[self.y_pos] += np.asarray(Y_err).reshape(-1)[self.y_sel]
+        eb = eb + self._b_abs_err
+        ec = ec + self._c_abs_err
         if self.p and data_rtol:
             eb = eb + data_rtol * (self._b_u_a @ au)
             ec = ec + data_rtol * (self._c_u_a @ au)

@@ -9,6 +9,7 @@ import warnings
 from collections import OrderedDict, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,7 @@ from ..exceptions import DimensionError, EmptySetError, SetobsError, SolverWarni
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center
 from ..geometry.fastlp import _pow2_inverse
+from ..geometry.lp import _U, _gamma
 from ..geometry.zonotope import box_center_radius
 from ..systems import LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
@@ -36,7 +38,14 @@ __all__ = [
 ]
 
 #: Values of :attr:`SMFDOStep.status`.
-STEP_STATUSES = ("ok", "unbounded", "fallback", "reset")
+STEP_STATUSES = ("ok", "unbounded", "fallback", "reset", "skipped")
+
+#: ``on_inconsistent`` choices.
+ON_INCONSISTENT = ("raise", "skip", "reset")
+
+#: Distinct missing-sample patterns an SMFDO sets up fast-path structures for;
+#: steps with further patterns go to the reference path.
+MAX_MASK_STRUCTURES = 64
 
 
 class ExistenceError(SetobsError, ValueError):
@@ -74,7 +83,8 @@ class ModelInvalidatedError(SetobsError, RuntimeError):
 
 
 class ModelInvalidatedWarning(RuntimeWarning):
-    """The posterior was empty and the filter was reset (``reset="box"``)."""
+    """Measurements were inconsistent with the model and were skipped, or the
+    filter was reset (``on_inconsistent="skip"`` or ``"reset"``)."""
 
 
 @dataclass(frozen=True)
@@ -98,8 +108,11 @@ class SMFDOStep:
         ``"ok"``; ``"unbounded"`` (some bound is infinite, e.g. before the data
         pin the disturbance down); ``"fallback"`` (an LP failed under every
         solver setting: the bounds are still certified, but wider); ``"reset"``
-        (the posterior was empty and ``reset="box"`` restarted the filter: the
-        guarantee is lost at this step).
+        (the posterior was empty and ``on_inconsistent="reset"`` restarted the
+        filter: the guarantee is lost at this step); ``"skipped"`` (the
+        posterior was empty and ``on_inconsistent="skip"`` dropped the
+        measurement: the bounds are the prediction, sound if the sample was an
+        outlier).
     """
 
     k: int
@@ -119,7 +132,18 @@ class SMFDOStep:
 @dataclass(frozen=True)
 class SMFDOResult:
     """Batch result of :meth:`SMFDO.run`: arrays of shape ``(N, q)`` (``radius``,
-    ``status``: ``(N,)``)."""
+    ``status``: ``(N,)``).
+
+    Attributes
+    ----------
+    status : ndarray of str, shape (N,)
+        Per-step status (:data:`STEP_STATUSES`).
+    first_inconsistent : int or None
+        The first time step ``k`` of this record whose measurement was
+        inconsistent with the model (status ``"skipped"`` or ``"reset"``): a
+        fault-detection result (the model, the uncertainty sets or the sensor
+        failed there). ``None`` if every measurement was consistent.
+    """
 
     estimate: NDArray[np.float64]
     lo: NDArray[np.float64]
@@ -127,6 +151,12 @@ class SMFDOResult:
     radius: NDArray[np.float64]
     steps: list[SMFDOStep]
     status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
+    first_inconsistent: int | None = None
+
+    @property
+    def consistent(self) -> bool:
+        """Whether no step was skipped or reset (the bands are the model's sets)."""
+        return self.first_inconsistent is None
 
     def violations(self, D: ArrayLike) -> int:
         """Number of steps at which the true disturbance ``D[k]`` is outside ``[lo, hi]``.
@@ -222,6 +252,54 @@ def _as_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
     return value
 
 
+NoiseSpec = (ConstrainedZonotope | Box | ArrayLike | Callable[[int], object] | None)
+
+
+def _noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
+    """A bounded noise set from a CZ, a Box, per-channel radii (a vector, or a scalar
+    for every channel), or None (no noise)."""
+    if value is None:
+        return None
+    if isinstance(value, Box):
+        value = ConstrainedZonotope.from_box(value.lo, value.hi)
+    if isinstance(value, ConstrainedZonotope):
+        if value.dim != dim:
+            raise DimensionError(f"{name} must have dimension {dim}, got {value.dim}")
+        if not value.is_bounded:
+            raise DimensionError(
+                f"{name} must be bounded (an output that is not measured at a step is "
+                "NaN in Y, not unbounded noise)")
+        return value
+    if isinstance(value, str | bytes) or callable(value):
+        raise TypeError(f"{name} must be a ConstrainedZonotope, a Box, per-channel radii "
+                        f"or a callable k -> set, got {type(value).__name__}")
+    r = np.asarray(value)
+    if r.ndim == 0:
+        r = np.full(dim, check_real_scalar(name, value, nonnegative=True))
+    r = as_vector(name, r, size=dim)
+    if (r < 0).any():
+        raise DimensionError(f"{name} radii must be nonnegative, got {r}")
+    return ConstrainedZonotope.from_box(-r, r)
+
+
+class _Entry(NamedTuple):
+    """One step's data: ``y_k`` (balanced units, NaN = not measured), ``u_(k-1)``,
+    the increment set ``[[dd_(k-1)]]``, the process-noise set ``W_(k-1)`` and the
+    measurement-noise set ``F_b V_k`` (internal coordinates; ``None``: no noise),
+    and an absolute uncertainty of ``y_k`` (the feedthrough's rounding) or ``None``."""
+
+    y: NDArray[np.float64]
+    u: NDArray[np.float64] | None
+    dd: ConstrainedZonotope | None
+    w: ConstrainedZonotope | None
+    v: ConstrainedZonotope | None
+    yerr: NDArray[np.float64] | None
+
+    def skipped(self) -> _Entry:
+        """The same step with its measurement dropped."""
+        return self._replace(y=np.full_like(self.y, np.nan), yerr=None)
+
+
 def _normalize_free_columns(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     """The same set with every unbounded factor's column ``[G; A]`` scaled to unit norm.
 
@@ -261,15 +339,37 @@ class SMFDO:
         Set containing ``x_0`` (default ``R^n``).
     initial_disturbance_set : ConstrainedZonotope or Box, optional
         Set containing ``d_0`` (default ``R^q``, as in Algorithm 1, line 1).
-    reset : {"raise", "box"}
-        On an empty posterior (data inconsistent with the model, e.g. a
-        measurement outlier): ``"raise"`` raises :class:`ModelInvalidatedError`;
-        ``"box"`` restarts from the interval hull of the prior, inflated by
-        ``reset_inflation`` (times 4 until the measurement is explainable),
-        intersected with the measurement; the window restarts from that set, the
-        step's status is ``"reset"`` and :class:`ModelInvalidatedWarning` is
-        issued (as in the set-membership filtering literature; the guarantee is
-        lost at that step by construction).
+    measurement_noise : ConstrainedZonotope, Box, array_like, callable or None
+        Bounded set ``V`` of the measurement noise: ``y_k = Xi x_k + D_u u_k + F v_k``,
+        ``v_k in V`` (``F = I`` by default, so ``V`` lives in output space): a
+        CZ, a :class:`Box`, per-channel radii (``|v_i| <= r_i``; a scalar for
+        all channels) or a callable ``k -> set`` (time-varying). Default: none
+        (``y = Xi x + D_u u`` exactly, up to ``data_rtol``). The posterior is
+        the generalised intersection with ``y - D_u u - F V``.
+    process_noise : ConstrainedZonotope, Box, array_like, callable or None
+        Bounded set ``W`` of the process noise: ``x_(k+1) = Phi x + Gamma u + G d
+        + E w_k``, ``w_k in W`` (``E = I`` by default: ``W`` in state space).
+        Same forms as ``measurement_noise``.
+    measurement_noise_matrix, process_noise_matrix : array_like, optional
+        ``F`` (``l x n_v``) and ``E`` (``n x n_w``) when the noise enters
+        through a matrix (default the identity).
+    on_inconsistent : {"raise", "skip", "reset"}
+        What to do when no state and disturbance history explains a
+        measurement (certified empty posterior: an outlier, a sensor fault, or
+        a model or uncertainty set that is wrong). ``"raise"`` (default):
+        :class:`ModelInvalidatedError` with the step. ``"skip"``: the
+        measurement is dropped (from the window's history too) and the step's
+        set is the prediction from the last posterior, status ``"skipped"`` --
+        sound if the sample was an outlier. ``"reset"``: restart from the
+        interval hull of the prediction, inflated by ``reset_inflation`` (times 4
+        until the measurement is explainable) and intersected with the
+        measurement; the window restarts from that set and the step's status is
+        ``"reset"`` (the guarantee is lost at that step by construction). The
+        first inconsistent step is :attr:`first_inconsistent`; :meth:`run`
+        issues one :class:`ModelInvalidatedWarning` per record, :meth:`update`
+        one per observer.
+    reset : {"raise", "box"}, optional
+        Deprecated spelling of ``on_inconsistent`` (``"box"`` is ``"reset"``).
     reset_inflation : float
         Positive initial inflation factor of the reset box.
     margin : float
@@ -305,8 +405,14 @@ class SMFDO:
     Attributes
     ----------
     stats : dict
-        Steps on the ``"fast"`` and ``"reference"`` paths, and ``"fallback"``
-        steps (an LP failed under every solver setting).
+        Steps on the ``"fast"`` and ``"reference"`` paths, ``"fallback"``
+        steps (an LP failed under every solver setting), ``"skipped"`` and
+        ``"reset"`` steps (inconsistent measurements) and ``"mask_reference"``
+        (steps with a missing-sample pattern beyond the fast path's budget of
+        :data:`MAX_MASK_STRUCTURES` structures, computed on the reference path).
+    first_inconsistent : int or None
+        First step (since the last :meth:`reset_state`) whose measurement was
+        inconsistent with the model (skipped or reset).
 
     Raises
     ------
@@ -356,7 +462,12 @@ class SMFDO:
         initial_state_set: ConstrainedZonotope | Box | None = None,
         *,
         initial_disturbance_set: ConstrainedZonotope | Box | None = None,
-        reset: str = "raise",
+        measurement_noise: NoiseSpec = None,
+        process_noise: NoiseSpec = None,
+        measurement_noise_matrix: ArrayLike | None = None,
+        process_noise_matrix: ArrayLike | None = None,
+        on_inconsistent: str = "raise",
+        reset: str | None = None,
         reset_inflation: float = 1.0,
         margin: float = 1e-9,
         data_rtol: float = DATA_RTOL,
@@ -365,8 +476,18 @@ class SMFDO:
     ) -> None:
         sys = require_system(sys, "sys")
         window = _check_window(window)
-        if reset not in ("raise", "box"):
-            raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
+        if reset is not None:
+            if reset not in ("raise", "box"):
+                raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
+            if on_inconsistent != "raise":
+                raise ValueError("give on_inconsistent only (reset is its deprecated "
+                                 "spelling)")
+            warnings.warn("SMFDO(reset=...) is deprecated: use on_inconsistent='raise' | "
+                          "'skip' | 'reset'", DeprecationWarning, stacklevel=2)
+            on_inconsistent = "reset" if reset == "box" else "raise"
+        if on_inconsistent not in ON_INCONSISTENT:
+            raise ValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
+                             f"{on_inconsistent!r}")
         self.reset_inflation = check_real_scalar("reset_inflation", reset_inflation,
                                                  positive=True)
         self.margin = check_real_scalar("margin", margin, nonnegative=True)
@@ -405,11 +526,34 @@ class SMFDO:
                 f"delta >= mu_o - 1 = {self.mu_o - 1} (mu_o = observability index "
                 "of the augmented pair)")
         self.window = window
-        self.reset = reset
+        self.on_inconsistent = on_inconsistent
         self.keep_sets = bool(keep_sets)
         T_o = dec.T_o
         dz, dy = dec.state_scale, dec.output_scale
         self._dy = dy
+        # Noise: E (n x n_w) and F (l x n_v), sets in w- and v-space; internally
+        # E_o = T_o D^-1 [E; 0] (the observable part: the unobservable one does
+        # not feed it) and F_b = diag(1/dy) F (balanced outputs; dy are powers of
+        # two, so the scaling is exact).
+        l = sys.l
+        E = np.eye(n) if process_noise_matrix is None else as_matrix(
+            "process_noise_matrix", process_noise_matrix, rows=n)
+        F = np.eye(l) if measurement_noise_matrix is None else as_matrix(
+            "measurement_noise_matrix", measurement_noise_matrix, rows=l)
+        if process_noise_matrix is not None and process_noise is None:
+            raise ValueError("process_noise_matrix is given without process_noise")
+        if measurement_noise_matrix is not None and measurement_noise is None:
+            raise ValueError("measurement_noise_matrix is given without measurement_noise")
+        self._E_o = (T_o / dz[None, :]) @ np.vstack([E, np.zeros((q, E.shape[1]))])
+        self._F_b = F / dy[:, None]
+        self._w_spec, self._v_spec = process_noise, measurement_noise
+        self._W_fixed = None if callable(process_noise) else _noise_set(
+            "process_noise", process_noise, E.shape[1])
+        self._V_fixed = None if callable(measurement_noise) else self._v_internal(
+            _noise_set("measurement_noise", measurement_noise, F.shape[1]))
+        self._noise_varies = callable(process_noise) or callable(measurement_noise)
+        Du = sys.Du
+        self._Du = Du if (sys.p and np.any(Du != 0)) else None
         target = np.hstack([np.zeros((q, n)), np.eye(q)])
         P = target @ (dz[:, None] * T_o.T)
         # d must not depend on the unobservable coordinates: [0 I] D T_obar^T = 0.
@@ -430,7 +574,16 @@ class SMFDO:
         D0 = ConstrainedZonotope.full_space(q) if D0 is None else D0
         self._Z0_prior = _normalize_free_columns((T_o / dz[None, :]) @ X0.cartesian(D0))
         self.fast = bool(fast)
-        self.stats = {"fast": 0, "reference": 0, "fallback": 0}
+        self.stats = {"fast": 0, "reference": 0, "fallback": 0, "skipped": 0, "reset": 0,
+                      "mask_reference": 0}
+        # The per-step uncertainty of the closed form: [[dd]] (x W), entering by
+        # B_o ([B_o, E_o] with process noise).
+        inc = self._inc_fixed
+        if inc is not None and self._W_fixed is not None:
+            self._step_set = inc.cartesian(self._W_fixed)
+            self._B_step = np.hstack([self.B_o, self._E_o])
+        else:
+            self._step_set, self._B_step = inc, self.B_o
         self._digest = self._structure_digest() if self.fast else b""
         # Window restart from a bounded hull only; after this many steps of
         # growth from Z_0^- (numerically unbounded hulls), restart anyway.
@@ -439,6 +592,23 @@ class SMFDO:
         self.reset_state()
 
     # ------------------------------------------------------------------ setup helpers
+    def _v_internal(self, V: ConstrainedZonotope | None) -> ConstrainedZonotope | None:
+        """``F_b V``: a measurement-noise set in balanced output units."""
+        return None if V is None else self._F_b @ V
+
+    def _process_noise(self, k: int) -> ConstrainedZonotope | None:
+        """``W_k`` (in the noise space of ``E``), or ``None``."""
+        if not callable(self._w_spec):
+            return self._W_fixed
+        return _noise_set(f"process_noise({k})", self._w_spec(k), self._E_o.shape[1])
+
+    def _measurement_noise(self, k: int) -> ConstrainedZonotope | None:
+        """``F_b V_k`` (balanced output units), or ``None``."""
+        if not callable(self._v_spec):
+            return self._V_fixed
+        return self._v_internal(_noise_set(f"measurement_noise({k})", self._v_spec(k),
+                                           self._F_b.shape[1]))
+
     def _fixed_increment(self, spec: IncrementSpec) -> ConstrainedZonotope | None:
         """The increment set when it does not depend on ``k`` (validated), else None."""
         q = self.sys.q
@@ -477,12 +647,14 @@ class SMFDO:
     def _structure_digest(self) -> bytes:
         """Fingerprint of everything a window structure depends on (shared cache key)."""
         hsh = hashlib.blake2b(digest_size=20)
-        inc = self._inc_fixed
+        inc = self._step_set
         Z0 = self._Z0_prior
-        parts = [self.A_o, self.B_o, self.C_o, self.Gamma_o, self.P, Z0.G, Z0.A,
+        parts = [self.A_o, self._B_step, self.C_o, self.Gamma_o, self.P, Z0.G, Z0.A,
                  np.isinf(Z0.h)]
-        if inc is not None:
-            parts += [inc.G, inc.c, inc.A, inc.b, inc.h, inc.b_err]
+        for S in (inc, self._V_fixed):
+            if S is not None:
+                parts += [S.G, S.c, S.A, S.b, S.h, S.b_err, S.c_err]
+            parts.append(np.array([S is None]))
         for a in parts:
             a = np.ascontiguousarray(a)
             hsh.update(str(a.shape).encode())
@@ -499,15 +671,18 @@ class SMFDO:
         self._hulls: deque[Box] = deque(maxlen=win or 1)
         # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
         # runs from Z_0^-) or of the last delta steps (once the window restarts)
-        self._hist: list[tuple[NDArray[np.float64], NDArray[np.float64] | None,
-                               ConstrainedZonotope | None]] = []
+        self._hist: list[_Entry] = []
         # the posterior, either a set or (model, c, b, h, c_err, b_err) of the fast path
         self._Z_src: object = None
         self._from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
         self._windowing = False  # the window has restarted from a hull at least once
         self._u_pending: NDArray[np.float64] | None = None
         self._states: dict[tuple, object] = {}  # LP warm-start states, one per structure
+        self._mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
         self._depth = 0  # recursion steps since the start set of the current posterior
+        self.first_inconsistent: int | None = None
+        self._warned_inconsistent = False
+        self._in_run = False
 
     @property
     def _Z(self) -> ConstrainedZonotope | None:
@@ -543,9 +718,15 @@ class SMFDO:
         return "init" if self._from_initial else "recursive"
 
     # ------------------------------------------------------------------ fast path
-    def _fast_step(self, k: int, mode: str, yv, uv, dd):
+    def _window_hist(self, entry: _Entry) -> list[_Entry]:
+        """The data of the window's re-run ending at ``entry`` (eq. (24))."""
+        win = self.window
+        return [*self._hist[-(win - 1):], entry] if win > 1 else [entry]
+
+    def _fast_step(self, k: int, mode: str, entry: _Entry):
         """Hulls of ``Z_k`` (and ``P Z_k``) by the closed form, or ``None`` (reference path)."""
-        if not self.fast or self._inc_fixed is None or mode == "recursive":
+        if (not self.fast or self._inc_fixed is None or self._noise_varies
+                or mode == "recursive"):
             return None
         if self.window is None:
             # Exact mode: each closed form would be used once, and a cold simplex on
@@ -554,7 +735,21 @@ class SMFDO:
             return None
         N = self.A_o.shape[0]
         P_extra = None if self._P_coords is not None else self.P
-        inc = self._inc_fixed
+        inc, B_step, V = self._step_set, self._B_step, self._V_fixed
+        hist = self._window_hist(entry) if mode == "box" else [*self._hist, entry]
+        Y = np.array([e.y for e in hist])
+        measured = ~np.isnan(Y)
+        if measured.all():
+            masks, mkey = None, b""
+        else:
+            masks = list(measured)
+            mkey = np.packbits(measured).tobytes() + len(hist).to_bytes(4, "little")
+            # ("init" structures are new at every step anyway: no budget there)
+            if mode == "box" and mkey not in self._mask_keys:
+                if len(self._mask_keys) >= MAX_MASK_STRUCTURES:
+                    self.stats["mask_reference"] += 1
+                    return None
+                self._mask_keys.add(mkey)
         if mode == "box":
             win = self.window
             lo, hi = self._restart_bounds(self._hulls[0])
@@ -562,24 +757,24 @@ class SMFDO:
             c_S, h_S = box_center_radius(lo, hi)
             b_S = np.zeros(0)
             c_S_err = b_S_err = None
-            hist = [*self._hist[-(win - 1):], (yv, uv, dd)] if win > 1 else [(yv, uv, dd)]
-            key = ("box", free.tobytes())
+            key = ("box", free.tobytes(), mkey)
             radius = min(UNBOUNDED_RADIUS, inc.radius)
 
             def build() -> WindowModel:
-                return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, np.eye(N),
-                                   np.zeros((0, N)), free, win, False, P_extra, radius)
+                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, inc, np.eye(N),
+                                   np.zeros((0, N)), free, win, False, P_extra, radius,
+                                   noise=V, masks=masks)
         else:  # "init": the whole history from Z_0^-
             Z0 = self._Z0_prior
             c_S, b_S, h_S = Z0.c, Z0.b, Z0.h
             c_S_err, b_S_err = Z0.c_err, Z0.b_err
-            hist = [*self._hist, (yv, uv, dd)]
-            key = ("init", k)
+            key = ("init", k, mkey)
             radius = min(Z0.radius, inc.radius)
 
             def build() -> WindowModel:
-                return WindowModel(self.A_o, self.B_o, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
-                                   np.isinf(Z0.h), k, True, P_extra, radius)
+                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
+                                   np.isinf(Z0.h), k, True, P_extra, radius, noise=V,
+                                   masks=masks)
         model = _MODELS.get((self._digest, *key), build)
         if not model.usable:
             return None
@@ -589,15 +784,19 @@ class SMFDO:
                 state = self._states[key] = model.new_state()
         else:  # each "init" structure is used once per run: a cold start
             state = model.new_state()
-        Y = np.array([e[0] for e in hist])
         if self.sys.p:
             steps = hist if len(hist) == model.s else hist[1:]
-            U = np.array([e[1] for e in steps])
+            U = np.array([e.u for e in steps])
         else:
             U = np.zeros((model.s, 0))
+        Y_err = None
+        if self._Du is not None:
+            Y_err = np.array([np.zeros(self.sys.l) if e.yerr is None else e.yerr
+                              for e in hist])
         c, b, h, c_err, b_err = model.assemble(c_S, b_S, h_S, Y, U, c_S_err=c_S_err,
-                                               b_S_err=b_S_err, data_rtol=self.data_rtol)
-        y_scale = float(np.abs(Y).max(initial=0.0))
+                                               b_S_err=b_S_err, data_rtol=self.data_rtol,
+                                               Y_err=Y_err)
+        y_scale = float(np.abs(Y[measured]).max(initial=0.0))
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
@@ -611,10 +810,12 @@ class SMFDO:
         return (model, c, b, h, c_err, b_err), box, box_o
 
     # ------------------------------------------------------------------ recursion
-    def _prior(self, Z: ConstrainedZonotope, dd: ConstrainedZonotope,
-               u: NDArray[np.float64] | None) -> ConstrainedZonotope:
-        """Eq. (20): ``A_o Z + B_o Z^Delta + Gamma_o u``."""
-        Zp = self.A_o @ Z + self.B_o @ dd
+    def _prior(self, Z: ConstrainedZonotope, e: _Entry) -> ConstrainedZonotope:
+        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``."""
+        Zp = self.A_o @ Z + self.B_o @ e.dd
+        if e.w is not None:
+            Zp = Zp + self._E_o @ e.w
+        u = e.u
         if u is not None and self.sys.p:
             v = self.Gamma_o @ u
             err = self.data_rtol * (np.abs(self.Gamma_o) @ np.abs(u)) if self.data_rtol \
@@ -622,16 +823,38 @@ class SMFDO:
             Zp = Zp.minkowski_sum(v, err=err)
         return Zp
 
-    def _posterior(self, Zp: ConstrainedZonotope, y: NDArray[np.float64],
+    def _posterior(self, Zp: ConstrainedZonotope, e: _Entry,
                    depth: int) -> ConstrainedZonotope:
-        """Eq. (21): intersection with ``{z : C_o z = y}`` (``y`` in balanced units).
+        """Eq. (21): ``Zp ∩ {z : C_o z in y - F_b V}`` on the measured rows of ``y``
+        (balanced units); with no noise set, ``{z : C_o z = y}``; with nothing
+        measured, ``Zp`` (a prediction step).
 
         ``y`` is known to within ``data_rtol |y|`` plus the model allowance of
-        ``depth`` recursion steps (see :mod:`setobs.setmembership._window`).
+        ``depth`` recursion steps (see :mod:`setobs.setmembership._window`) and
+        the feedthrough's rounding.
         """
+        y = e.y
+        m = ~np.isnan(y)
+        if not m.any():
+            return Zp
         nD = self._inc_fixed.n_gen if self._inc_fixed is not None else self.sys.q
-        rtol = self.data_rtol + model_rtol(depth, self.A_o.shape[0], self.sys.p, nD)
-        return Zp.intersect_affine(self.C_o, y, y_err=rtol * np.abs(y))
+        nV = 0 if e.v is None else e.v.n_gen
+        rtol = self.data_rtol + model_rtol(depth, self.A_o.shape[0], self.sys.p, nD + nV)
+        ym = y[m]
+        y_err = rtol * np.abs(ym)
+        if e.yerr is not None:
+            y_err = y_err + e.yerr[m]
+        C = self.C_o if m.all() else self.C_o[m]
+        if e.v is None:
+            return Zp.intersect_affine(C, ym, y_err=y_err)
+        V = e.v
+        # the set y - V_m (rows m of F_b V): centre y - c_V (rounded once), the
+        # noise's own constraints, generators -G_V
+        cY = ym - V.c[m]
+        cY_err = _U * np.abs(cY) + V.c_err[m] + y_err
+        Yset = ConstrainedZonotope._trusted(-V.G[m], cY, V.A, V.b, V.h, V.radius, cY_err,
+                                            V.b_err)
+        return Zp.intersect(Yset, R=C)
 
     @staticmethod
     def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -647,42 +870,76 @@ class SMFDO:
     def _box_cz(cls, box: Box) -> ConstrainedZonotope:
         return ConstrainedZonotope.from_box(*cls._restart_bounds(box))
 
-    def _check_inputs(self, y: ArrayLike, u_prev: ArrayLike | None):
-        yv = as_vector("y", y, size=self.sys.l) / self._dy
+    def _entry(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None) -> _Entry:
+        """Validate one step's data and collect its uncertainty sets."""
+        p = self.sys.p
+        yraw = as_vector("y", y, size=self.sys.l, allow_nan=True)
         uv = None
         if u_prev is not None:
-            uv = as_vector("u_prev", u_prev, size=self.sys.p)
-        elif self.sys.p and self.k >= 0:
+            uv = as_vector("u_prev", u_prev, size=p)
+        elif p and self.k >= 0:
             if self._u_pending is None:
                 raise DimensionError(
-                    f"u_prev (length {self.sys.p}) is required after the first step of a "
+                    f"u_prev (length {p}) is required after the first step of a "
                     "system with inputs")
             uv = self._u_pending
-        return yv, uv
+        uk = None
+        if u is not None:
+            if not p:
+                raise DimensionError("u is given but the system has no inputs")
+            uk = as_vector("u", u, size=p)
+        k = self.k + 1
+        yerr = None
+        if self._Du is not None:
+            if uk is None:
+                raise DimensionError(
+                    "u (the input at this step) is required: the system has a "
+                    "feedthrough D_u (y = Xi x + D_u u)")
+            Du = self._Du
+            absDu_u = np.abs(Du) @ np.abs(uk)
+            yraw = yraw - Du @ uk
+            # rounding of D_u u (gamma_p) and of the subtraction, the input's and
+            # the measurement's representation errors
+            yerr = ((_gamma(p + 1) + self.data_rtol) * absDu_u + _U * np.abs(yraw)
+                    + self.data_rtol * np.abs(yraw + Du @ uk)) * (1.0 + _gamma(p + 3))
+            yerr = np.where(np.isnan(yerr), 0.0, yerr) / self._dy
+        yv = yraw / self._dy
+        if k > 0:
+            dd = self._increment(k - 1)
+            w = self._process_noise(k - 1)
+        else:
+            dd = w = None
+        self._u_next = uk
+        return _Entry(yv, uv, dd, w, self._measurement_noise(k), yerr)
 
-    def update(self, y: ArrayLike, u_prev: ArrayLike | None = None) -> SMFDOStep:
+    def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
+               u: ArrayLike | None = None) -> SMFDOStep:
         """Process the measurement ``y_k`` (and the input ``u_(k-1)`` applied before it).
 
         Parameters
         ----------
         y : array_like, shape (l,)
-            Measurement at step ``k``.
+            Measurement at step ``k``; NaN entries are outputs not measured at
+            this step (all NaN: a prediction step).
         u_prev : array_like, shape (p,), optional
             Known input ``u_(k-1)`` (ignored at ``k = 0``). May be omitted right
-            after :meth:`run` was given ``U`` with ``N`` rows: its last row is
-            ``u_(k-1)``.
+            after :meth:`run` was given ``U`` with ``N`` rows (its last row is
+            ``u_(k-1)``), or after an ``update`` that was given ``u``.
+        u : array_like, shape (p,), optional
+            The input ``u_k`` at this step: required when the system has a
+            feedthrough ``D_u`` (``y_k = Xi x_k + D_u u_k + F v_k``).
 
         Raises
         ------
         ModelInvalidatedError
-            If no state and disturbance history explains the data (``reset="raise"``).
+            If no state and disturbance history explains the data
+            (``on_inconsistent="raise"``).
         """
-        yv, uv = self._check_inputs(y, u_prev)
-        self._u_pending = None
+        e = self._entry(y, u_prev, u)
+        self._u_pending = self._u_next
         k = self.k + 1
-        dd = self._increment(k - 1) if k > 0 else None
         mode = "init" if k == 0 else self._start_mode(k)
-        fast = self._fast_step(k, mode, yv, uv, dd)
+        fast = self._fast_step(k, mode, e)
         if fast is not None:
             self.stats["fast"] += 1
             Z_src, box, box_o = fast
@@ -692,43 +949,63 @@ class SMFDO:
                 Z_src = model.to_cz(c, b, h, c_err, b_err)
                 Zd = self.P @ Z_src
             self._depth = k if mode == "init" else self.window
-            return self._commit(k, mode, Z_src, box, box_o, Zd, yv, uv, dd, "ok")
+            return self._commit(k, mode, Z_src, box, box_o, Zd, e, "ok")
         self.stats["reference"] += 1
         if k == 0:
             Zp = self._Z0_prior
             depth = 0
         elif mode == "box":
             # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
-            win = self.window
             Z = self._box_cz(self._hulls[0])
             Zp = None
-            hist = [*self._hist[-(win - 1):], (yv, uv, dd)] if win > 1 else [(yv, uv, dd)]
-            for i, (yy, uu, ddi) in enumerate(hist):
-                Zp = self._prior(Z, ddi, uu)
+            hist = self._window_hist(e)
+            for i, ei in enumerate(hist):
+                Zp = self._prior(Z, ei)
                 if i < len(hist) - 1:
-                    Z = self._posterior(Zp, yy, i + 1)
+                    Z = self._posterior(Zp, ei, i + 1)
             depth = len(hist)
         else:
-            Zp = self._prior(self._Z, dd, uv)
+            Zp = self._prior(self._Z, e)
             depth = self._depth + 1
-        Z = self._posterior(Zp, yv, depth)
+        Z = self._posterior(Zp, e, depth)
         status = "ok"
         try:
             Zd, box, box_o, fell_back = self._bounds(Z)
         except EmptySetError:
+            msg = (f"the measurement at step k={k} is inconsistent with the model and the "
+                   "uncertainty sets (empty posterior)")
+            if self.on_inconsistent == "raise":
+                raise ModelInvalidatedError(msg, k) from None
             # One-step prior from the last valid posterior (the windowed re-run may
             # pass through the same inconsistency again).
-            Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, dd, uv)
-            Z = self._handle_empty(k, Zp1, yv)
-            depth = 0
-            Zd, box, box_o, fell_back = self._bounds(Z)
-            # The window restarts from the reset set: eq. (24) is applied again only
-            # once delta consistent steps have been collected.
-            self._hulls.clear()
-            self._hist.clear()
-            self._from_initial = False
-            self._windowing = False
-            status = "reset"
+            Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, e)
+            if self.on_inconsistent == "skip":
+                # The measurement is dropped, here and in the window's history.
+                e = e.skipped()
+                Z = Zp1
+                depth = self._depth + 1 if k else 0
+                Zd, box, box_o, fell_back = self._bounds(Z)
+                status = "skipped"
+            else:
+                Z = self._handle_empty(k, Zp1, e, msg)
+                depth = 0
+                Zd, box, box_o, fell_back = self._bounds(Z)
+                # The window restarts from the reset set: eq. (24) is applied again
+                # only once delta consistent steps have been collected.
+                self._hulls.clear()
+                self._hist.clear()
+                self._from_initial = False
+                self._windowing = False
+                status = "reset"
+            self.stats[status] += 1
+            if self.first_inconsistent is None:
+                self.first_inconsistent = k
+            if not self._in_run and not self._warned_inconsistent:
+                self._warned_inconsistent = True
+                warnings.warn(
+                    f"{msg}: {'skipped' if status == 'skipped' else 'reset'} "
+                    "(status recorded per step; warned once per observer)",
+                    ModelInvalidatedWarning, stacklevel=2)
         if fell_back:
             status = "fallback" if status == "ok" else status
             self.stats["fallback"] += 1
@@ -739,16 +1016,16 @@ class SMFDO:
                     "of this step are wider (still certified) and flagged status='fallback' "
                     "(warned once per observer)", SolverWarning, stacklevel=2)
         self._depth = depth
-        return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, yv, uv,
-                            dd, status)
+        return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, e,
+                            status)
 
-    def _commit(self, k, mode, Z_src, box, box_o, Zd, yv, uv, dd, status) -> SMFDOStep:
+    def _commit(self, k, mode, Z_src, box, box_o, Zd, e: _Entry, status) -> SMFDOStep:
         self.k = k
         self._Z_src = Z_src
         if mode == "box":
             self._windowing = True
         if self.window is not None:  # (exact mode runs the plain recursion: no history)
-            self._hist.append((yv, uv, dd))  # dd is None at k = 0 (never used)
+            self._hist.append(e)  # e.dd is None at k = 0 (never used)
             # The restart box of eq. (24) gets the same relative margin as the
             # reported bounds: the set recursion itself rounds (O(eps)), and a
             # box without margin can make a thin set (states pinned to rounding
@@ -785,13 +1062,8 @@ class SMFDO:
         scale = np.maximum(1.0, np.maximum(a, b))
         return lo - self.margin * scale, hi + self.margin * scale
 
-    def _handle_empty(self, k: int, Zp: ConstrainedZonotope, y: NDArray[np.float64]):
-        msg = (f"the measurement at step k={k} is inconsistent with the model and the "
-               "uncertainty sets (empty posterior)")
-        if self.reset == "raise":
-            raise ModelInvalidatedError(msg, k)
-        warnings.warn(msg + "; resetting from an inflated box", ModelInvalidatedWarning,
-                      stacklevel=3)
+    def _handle_empty(self, k: int, Zp: ConstrainedZonotope, e: _Entry, msg: str):
+        """``on_inconsistent="reset"``: the posterior of an inflated box of ``Zp``."""
         try:
             hull, _ = Zp._interval_hull()
         except EmptySetError:
@@ -801,7 +1073,7 @@ class SMFDO:
         factor = self.reset_inflation
         for _ in range(40):  # inflate geometrically until the measurement is explainable
             pad = factor * (w + scale)
-            Zr = self._posterior(self._box_cz(Box(hull.lo - pad, hull.hi + pad)), y, 0)
+            Zr = self._posterior(self._box_cz(Box(hull.lo - pad, hull.hi + pad)), e, 0)
             if not Zr.is_empty():
                 return Zr
             factor *= 4.0
@@ -814,20 +1086,28 @@ class SMFDO:
         ----------
         Y : array_like, shape (N, l)
             Measurements ``y_0 .. y_(N-1)`` (continuing from the current step
-            when the observer has already seen data).
+            when the observer has already seen data). NaN entries: not
+            measured (a row of NaN is a prediction step).
         U : array_like, shape (N, p) or (N-1, p), optional
             Inputs aligned with ``Y``: ``U[j]`` is applied at the time of
-            ``Y[j]``, so ``U[j-1]`` is used at record step ``j``. When a record
-            is split into consecutive calls, pass ``U`` with ``N`` rows: its
-            last row is the input before the first step of the next call.
+            ``Y[j]``, so ``U[j-1]`` is used at record step ``j`` (and ``U[j]``
+            too when the system has a feedthrough ``D_u``: then ``U`` needs
+            ``N`` rows). When a record is split into consecutive calls, pass
+            ``U`` with ``N`` rows: its last row is the input before the first
+            step of the next call.
 
         Returns
         -------
         SMFDOResult
             ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``radius`` and
-            ``status`` ``(N,)``.
+            ``status`` ``(N,)``, ``first_inconsistent``.
+
+        Warns
+        -----
+        ModelInvalidatedWarning
+            Once, if measurements of this record were skipped or reset.
         """
-        Ya = as_matrix("Y", Y, cols=self.sys.l)
+        Ya = as_matrix("Y", Y, cols=self.sys.l, allow_nan=True)
         N = Ya.shape[0]
         Ua = None
         if self.sys.p:
@@ -836,25 +1116,46 @@ class SMFDO:
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] not in (N, N - 1):
                 raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
+            if self._Du is not None and Ua.shape[0] != N:
+                raise DimensionError(
+                    f"U must have N = {N} rows: the system has a feedthrough D_u, so "
+                    "y_k needs u_k")
             if self.k >= 0 and self._u_pending is None and N:
                 raise DimensionError(
                     "the input applied before the first step of this record is unknown: "
                     "give the previous run() its U with N rows (the last row is that "
                     "input), or continue with update(y, u_prev)")
         steps = []
-        for j in range(N):
-            u = Ua[j - 1] if (Ua is not None and j >= 1) else None
-            steps.append(self.update(Ya[j], u))
+        with_u = self._Du is not None
+        self._in_run = True
+        try:
+            for j in range(N):
+                u = Ua[j - 1] if (Ua is not None and j >= 1) else None
+                steps.append(self.update(Ya[j], u, u=Ua[j] if with_u else None))
+        finally:
+            self._in_run = False
         if Ua is not None and Ua.shape[0] == N and N:
             self._u_pending = Ua[N - 1].copy()
         q = self.sys.q
+        status = np.array([s.status for s in steps], dtype="<U9")
+        bad = np.flatnonzero((status == "skipped") | (status == "reset"))
+        first = int(steps[bad[0]].k) if bad.size else None
+        if bad.size:
+            what = self.on_inconsistent
+            warnings.warn(
+                f"{bad.size} of {N} measurements were inconsistent with the model and the "
+                f"uncertainty sets (first at k={first}) and were "
+                f"{'skipped' if what == 'skip' else 'handled by a reset'}: the bands at "
+                "those steps are not the model's consistent sets (see result.status, "
+                "result.first_inconsistent)", ModelInvalidatedWarning, stacklevel=2)
         return SMFDOResult(
             np.array([s.estimate for s in steps]).reshape(N, q),
             np.array([s.lo for s in steps]).reshape(N, q),
             np.array([s.hi for s in steps]).reshape(N, q),
             np.array([s.radius for s in steps]),
             steps,
-            np.array([s.status for s in steps], dtype="<U9"),
+            status,
+            first,
         )
 
     def __repr__(self) -> str:
