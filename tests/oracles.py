@@ -127,13 +127,17 @@ def exact_lp_min(c: Sequence[Fraction], A: Sequence[Sequence[Fraction]], b: Sequ
     return val + sum(c[j] * const[j] for j in range(n))
 
 
-def history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box=None, d_box=None, y_rtol=0.0):
+def history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box=None, d_box=None, y_rtol=0.0,
+               noise_w=None, noise_v=None, Du=None):
     """The whole-history LP of ``d_k`` in exact rationals (original coordinates).
 
-    Variables ``v = (x_0, d_0, dd_0 .. dd_(k-1), e_0 .. e_k)``; ``x_(j+1) = Phi x_j +
-    Gamma u_j + G d_j``, ``d_(j+1) = d_j + dd_j``, ``Xi x_j = y_j + e_j`` with
-    ``|e_j| <= y_rtol |y_j|`` (the data's representation error; ``0``: exact data),
-    ``|dd_j| <= r_inc``; ``x_box``/``d_box``: optional ``(lo, hi)`` for ``x_0``/``d_0``.
+    Variables ``v = (x_0, d_0, dd_0 .. dd_(k-1), w_0 .. w_(k-1), nu_0 .. nu_k, e)``;
+    ``x_(j+1) = Phi x_j + Gamma u_j + G d_j + E w_j``, ``d_(j+1) = d_j + dd_j``,
+    ``Xi x_j + F nu_j = y_j - Du u_j + e_j`` on the measured (non-NaN) entries of
+    ``y_j``, with ``|e| <= y_rtol |y|`` (the data's representation error; ``0``:
+    exact data), ``|dd_j| <= r_inc``, ``noise_w = (E, r_w)``: ``|w_j| <= r_w``,
+    ``noise_v = (F, r_v)``: ``|nu_j| <= r_v``; ``x_box``/``d_box``: optional
+    ``(lo, hi)`` for ``x_0``/``d_0``.
 
     Returns ``(A, b, lo, hi, Md)`` with ``d_k = Md v``.
     """
@@ -141,21 +145,39 @@ def history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box=None, d_box=None, y_rtol
     G_f = [[_F(v) for v in row] for row in np.atleast_2d(G)]
     Xi_f = [[_F(v) for v in row] for row in np.atleast_2d(Xi)]
     n, q = len(Phi_f), len(G_f[0])
-    nv = n + q + k * q
+    E_f = [[_F(v) for v in row] for row in np.atleast_2d(noise_w[0])] if noise_w else None
+    F_f = [[_F(v) for v in row] for row in np.atleast_2d(noise_v[0])] if noise_v else None
+    nw = len(E_f[0]) if E_f else 0
+    nvv = len(F_f[0]) if F_f else 0
+    w0 = n + q + k * q
+    v0 = w0 + k * nw
+    nv = v0 + (k + 1) * nvv
     # x_j = Mx v + ox, d_j = Md v (rows as Fraction lists)
     Mx = [[Fraction(int(i == j)) for j in range(nv)] for i in range(n)]
     ox = [Fraction(0)] * n
     Md = [[Fraction(int(j == n + i)) for j in range(nv)] for i in range(q)]
-    A, b = [], []
+    A, b, yvals = [], [], []
     for j in range(k + 1):
         for i in range(len(Xi_f)):
-            A.append([sum(Xi_f[i][t] * Mx[t][col] for t in range(n)) for col in range(nv)])
-            b.append(_F(Y[j][i]) - sum(Xi_f[i][t] * ox[t] for t in range(n)))
+            if np.isnan(Y[j][i]):
+                continue
+            row = [sum(Xi_f[i][t] * Mx[t][col] for t in range(n)) for col in range(nv)]
+            for t in range(nvv):
+                row[v0 + j * nvv + t] += F_f[i][t]
+            A.append(row)
+            yj = _F(Y[j][i])
+            if Du is not None:
+                yj -= sum(_F(Du[i][t]) * _F(U[j][t]) for t in range(len(Du[0])))
+            b.append(yj - sum(Xi_f[i][t] * ox[t] for t in range(n)))
+            yvals.append(_F(Y[j][i]))
         if j == k:
             break
         newMx = [[sum(Phi_f[i][t] * Mx[t][col] for t in range(n))
                   + sum(G_f[i][t] * Md[t][col] for t in range(q)) for col in range(nv)]
                  for i in range(n)]
+        for i in range(n):
+            for t in range(nw):
+                newMx[i][w0 + j * nw + t] += E_f[i][t]
         newox = [sum(Phi_f[i][t] * ox[t] for t in range(n)) for i in range(n)]
         if U is not None and Gamma is not None and np.size(Gamma):
             Gam_f = [[_F(v) for v in row] for row in np.atleast_2d(Gamma)]
@@ -177,23 +199,32 @@ def history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box=None, d_box=None, y_rtol
         for i in range(q):
             lo.append(-_F(r_inc[i]))
             hi.append(_F(r_inc[i]))
+    for _ in range(k):
+        for t in range(nw):
+            lo.append(-_F(noise_w[1][t]))
+            hi.append(_F(noise_w[1][t]))
+    for _ in range(k + 1):
+        for t in range(nvv):
+            lo.append(-_F(noise_v[1][t]))
+            hi.append(_F(noise_v[1][t]))
     # ox enters b: Xi x_j = y_j  ->  Xi Mx v = y_j - Xi ox  (already in b)
     if y_rtol:
         rho = _F(y_rtol)
         ne = len(A)
-        yflat = [_F(v) for j in range(k + 1) for v in np.atleast_1d(Y[j])]
         for i in range(ne):
             A[i] = A[i] + [Fraction(-1) if t == i else Fraction(0) for t in range(ne)]
-            lo.append(-rho * abs(yflat[i]))
-            hi.append(rho * abs(yflat[i]))
+            lo.append(-rho * abs(yvals[i]))
+            hi.append(rho * abs(yvals[i]))
         Md = [row + [Fraction(0)] * ne for row in Md]
     return A, b, lo, hi, Md
 
 
 def exact_history_bounds(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_box=None,
-                         y_rtol=0.0):
-    """Exact ``(lo, hi)`` of each ``d_k`` component over the whole history (Fractions)."""
-    A, b, lo, hi, Md = history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box, d_box, y_rtol)
+                         y_rtol=0.0, noise_w=None, noise_v=None, Du=None):
+    """Exact ``(lo, hi)`` of each ``d_k`` component over the whole history (Fractions);
+    see :func:`history_lp` for the noise and missing-sample arguments."""
+    A, b, lo, hi, Md = history_lp(Phi, G, Xi, Y, U, Gamma, r_inc, k, x_box, d_box, y_rtol,
+                                  noise_w, noise_v, Du)
     out_lo, out_hi = [], []
     for row in Md:
         mn = exact_lp_min(row, A, b, lo, hi)

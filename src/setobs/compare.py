@@ -91,8 +91,8 @@ class ComparisonTable:
         return "\n".join(lines)
 
 
-def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = False
-            ) -> ComparisonTable:
+def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = False,
+            allow_inconsistent: bool = False) -> ComparisonTable:
     """Score point estimates against the consistent set of an SMFDO run.
 
     Parameters
@@ -107,7 +107,29 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
         the vertices ``v`` of the consistent set, and the optimal (Chebyshev)
         radius. Needs the SMFDO run with ``keep_sets=True``; steps where the set
         is unbounded give ``inf``.
+    allow_inconsistent : bool
+        Score against a reference whose run skipped or reset measurements
+        (``on_inconsistent="skip"`` / ``"reset"``). Refused by default: at and
+        after such steps its bands are not the model's consistent set (a reset
+        loses the guarantee; a skip assumes the sample was an outlier), so
+        "optimal" would not mean optimal.
+
+    Raises
+    ------
+    ValueError
+        If the reference run has skipped or reset steps and
+        ``allow_inconsistent`` is false.
     """
+    status = np.asarray(getattr(reference, "status", np.zeros(0, dtype="<U9")))
+    bad = np.flatnonzero((status == "skipped") | (status == "reset"))
+    if bad.size and not allow_inconsistent:
+        kinds = sorted(set(status[bad].tolist()))
+        raise ValueError(
+            f"the reference SMFDO run has {bad.size} step(s) with status {kinds} (first at "
+            f"record step {bad[0]}): its measurements there were inconsistent with the model, "
+            "so its bands are not the consistent set and its radius is not the optimal "
+            "error. Fix the model or the uncertainty sets, or pass "
+            "allow_inconsistent=True to compare anyway")
     lo, hi = np.asarray(reference.lo), np.asarray(reference.hi)
     optimal = np.asarray(reference.radius, float)
     err, out = {}, {}

@@ -17,6 +17,7 @@ __all__ = [
     "chen_gao_lin_example2",
     "chen_gao_lin_example4",
     "chen_gao_lin_example5",
+    "servo_motor",
 ]
 
 
@@ -169,3 +170,30 @@ def chen_gao_lin_example5(zeros: tuple[float, float] = (0.4, 0.4)) -> LinearSyst
     b221, b220 = z1 + z2, -z1 * z2
     A0 = [[0, 1, 0, 0], [b110, b111, b120, 0], [0, 0, 0, 1], [b210, 0, b220, b221]]
     return LinearSystem(A0, [[0], [1], [0], [0]], [[1, 0, 0, 0]])
+
+
+def servo_motor(J: float = 1.2e-4, B: float = 7.03e-5, dt: float = 1e-3, *,
+                measure_velocity: bool = False) -> LinearSystem:
+    """A servo motor with an unknown load torque: ``J dw/dt = tau - B w - tau_L``.
+
+    States ``x = (theta, omega)`` (rad, rad/s), control input the commanded
+    torque ``tau`` (N m), disturbance the load/friction torque ``tau_L`` (N m),
+    which enters like the input with the opposite sign; output the position
+    ``theta`` (and the velocity with ``measure_velocity=True``). Zero-order-hold
+    discretisation at ``dt`` (:meth:`LinearSystem.from_continuous`). The
+    defaults are the HSM150 lab rig's (``J = 1.2e-4 kg m^2``, ``B = 7.03e-5 N m s``,
+    1 kHz), whose measured identification record the noise tests and
+    benchmarks use (``shared/data/hsm150``, not shipped).
+
+    Examples
+    --------
+    >>> servo_motor()
+    LinearSystem(n=2, q=1, l=1, p=1, dt=0.001)
+    """
+    H = [[0.0, 1.0], [0.0, -B / J]]
+    C = [[1.0, 0.0], [0.0, 1.0]] if measure_velocity else [[1.0, 0.0]]
+    outputs = ["theta", "omega"] if measure_velocity else ["theta"]
+    return LinearSystem.from_continuous(H, [[0.0], [1.0 / J]], [[0.0], [-1.0 / J]], C, dt,
+                                        state_names=["theta", "omega"],
+                                        disturbance_names=["tau_L"], input_names=["tau"],
+                                        output_names=outputs)

@@ -17,6 +17,8 @@ _TINY = np.finfo(np.float64).tiny
 
 #: Pivots after which the explicit basis inverse is recomputed from scratch.
 REFACTOR_EVERY = 32
+#: Relative size of the cost perturbation against dual degeneracy (see solve_batch).
+PERTURB = 1e-7
 
 # Return codes of the simplex (also used by the batch kernel).
 OPTIMAL = 0
@@ -432,6 +434,7 @@ def solve_batch(A, b, h, b_err, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred,
     z = np.zeros(mr)
     m = A.shape[0]
     y = np.zeros(m)
+    wp = np.empty(nb)
     for i in range(n_lp):
         if dirstat[i] == 1:
             bounds[i] = -np.inf
@@ -441,8 +444,23 @@ def solve_batch(A, b, h, b_err, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred,
         if dirstat[i] == 2:
             codes[i] = AMBIGUOUS
             continue
-        code = dual_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i], binv[i],
+        # Dual-degenerate LPs (many columns with zero cost, e.g. noise factors that
+        # enter only the constraints) stall the dual simplex: solve with the costs
+        # perturbed first (ties broken deterministically), then finish from that
+        # basis with the true costs (a few pivots). The result is certified below
+        # on the original data either way.
+        wmax = 0.0
+        for j in range(nb):
+            wmax = max(wmax, abs(Wred[i, j]))
+        for j in range(nb):
+            frac = (j * 0.6180339887498949) % 1.0
+            sg = 1.0 if frac < 0.5 else -1.0
+            wp[j] = Wred[i, j] + sg * PERTURB * wmax * (1.0 + frac)
+        code = dual_simplex(Ared, AredT, bred, hB, wp, bases[i], upper[i], binv[i],
                             npiv[i:i + 1], x, z, maxit)
+        if code == OPTIMAL or code == ITERATION_LIMIT:
+            code = dual_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i], binv[i],
+                                npiv[i:i + 1], x, z, maxit)
         if code != OPTIMAL:
             codes[i] = code
             continue
