@@ -437,3 +437,24 @@ def test_the_whole_servo_motor_record_on_the_fast_path():
     tau, w = data[10_000:, 4], data[10_000:, 3]
     balance = float(np.mean(tau - float(m["B"]) * w))
     assert abs(np.mean(res.estimate[10_000:]) - balance) < 0.01
+
+
+def test_point_observers_remove_the_feedthrough():
+    """A PIO on a system with Du sees y - Du u: the same estimates as on the
+    feedthrough-free record of the same system (own simulator)."""
+    rng = np.random.default_rng(2)
+    base = so.examples.chang2006()
+    Gamma, Du = np.array([[1.0], [0.0], [0.5]]), np.array([[0.3], [-2.0]])
+    sys_d = LinearSystem(base.Phi, base.G, base.Xi, Gamma, Du=Du)
+    sys_0 = LinearSystem(base.Phi, base.G, base.Xi, Gamma)
+    U = rng.normal(size=(50, 1))
+    Y0, _ = simulate_noisy(sys_0, 50, np.random.default_rng(3), x0=np.zeros(3),
+                           d0=[0.5, -0.5], r_inc=[0.1, 0.1], U=U)
+    Yd, _ = simulate_noisy(sys_d, 50, np.random.default_rng(3), x0=np.zeros(3),
+                           d0=[0.5, -0.5], r_inc=[0.1, 0.1], U=U, Du=Du)
+    assert np.abs(Yd - Y0).max() > 0.1
+    est_d = so.observers.PIO(sys_d).run(Yd, U).d_hat
+    est_0 = so.observers.PIO(sys_0).run(Y0, U).d_hat
+    np.testing.assert_allclose(est_d, est_0, rtol=1e-12, atol=1e-12)
+    with pytest.raises(DimensionError, match="feedthrough"):
+        so.observers.PIO(sys_d).run(Yd)

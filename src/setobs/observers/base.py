@@ -95,7 +95,12 @@ class PointObserver:
         return None
 
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> ObserverResult:
-        """Run over a record from a fresh start (calls :meth:`reset` first)."""
+        """Run over a record from a fresh start (calls :meth:`reset` first).
+
+        With a feedthrough (``sys.Du != 0``), ``Du u_k`` is subtracted from
+        ``y_k`` first (``U`` is then required); :meth:`step` takes the
+        feedthrough-free measurement ``y_k - Du u_k``.
+        """
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
         Ua = None
@@ -103,6 +108,11 @@ class PointObserver:
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] < N:
                 raise DimensionError(f"U must have at least {N} rows, got {Ua.shape[0]}")
+        if self.sys.p and np.any(self.sys.Du != 0):
+            if Ua is None:
+                raise DimensionError("U is required: the system has a feedthrough Du "
+                                     "(y = Xi x + Du u)")
+            Ya = Ya - Ua[:N] @ self.sys.Du.T
         self.reset()
         D = np.empty((N, self.sys.q))
         X = None
