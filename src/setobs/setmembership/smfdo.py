@@ -260,11 +260,8 @@ def _noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None
     for every channel), or None (no noise)."""
     if value is None:
         return None
-    if isinstance(value, Box):
-        value = ConstrainedZonotope.from_box(value.lo, value.hi)
-    if isinstance(value, ConstrainedZonotope):
-        if value.dim != dim:
-            raise DimensionError(f"{name} must have dimension {dim}, got {value.dim}")
+    if isinstance(value, Box | ConstrainedZonotope):
+        value = _as_set(name, value, dim)
         if not value.is_bounded:
             raise DimensionError(
                 f"{name} must be bounded (an output that is not measured at a step is "
@@ -614,11 +611,8 @@ class SMFDO:
         q = self.sys.q
         if spec is None:
             return ConstrainedZonotope.from_box(-np.ones(q), np.ones(q))
-        if isinstance(spec, Box):
-            spec = ConstrainedZonotope.from_box(spec.lo, spec.hi)
-        if isinstance(spec, ConstrainedZonotope):
-            if spec.dim != q:
-                raise DimensionError(f"increment_set must have dimension {q}, got {spec.dim}")
+        if isinstance(spec, Box | ConstrainedZonotope):
+            spec = _as_set("increment_set", spec, q)
             if not spec.is_bounded:
                 raise DimensionError("increment_set must be bounded")
             return spec
@@ -870,8 +864,10 @@ class SMFDO:
     def _box_cz(cls, box: Box) -> ConstrainedZonotope:
         return ConstrainedZonotope.from_box(*cls._restart_bounds(box))
 
-    def _entry(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None) -> _Entry:
-        """Validate one step's data and collect its uncertainty sets."""
+    def _entry(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
+               ) -> tuple[_Entry, NDArray[np.float64] | None]:
+        """Validate one step's data and collect its uncertainty sets; also returns the
+        validated current input ``u_k`` (or ``None``)."""
         p = self.sys.p
         yraw = as_vector("y", y, size=self.sys.l, allow_nan=True)
         uv = None
@@ -909,8 +905,7 @@ class SMFDO:
             w = self._process_noise(k - 1)
         else:
             dd = w = None
-        self._u_next = uk
-        return _Entry(yv, uv, dd, w, self._measurement_noise(k), yerr)
+        return _Entry(yv, uv, dd, w, self._measurement_noise(k), yerr), uk
 
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
                u: ArrayLike | None = None) -> SMFDOStep:
@@ -935,8 +930,7 @@ class SMFDO:
             If no state and disturbance history explains the data
             (``on_inconsistent="raise"``).
         """
-        e = self._entry(y, u_prev, u)
-        self._u_pending = self._u_next
+        e, self._u_pending = self._entry(y, u_prev, u)
         k = self.k + 1
         mode = "init" if k == 0 else self._start_mode(k)
         fast = self._fast_step(k, mode, e)
