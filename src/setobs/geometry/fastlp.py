@@ -43,6 +43,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
+from .._blas import with_single_threaded_blas
 from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 from . import _simplex
 
@@ -175,6 +176,7 @@ class FixedStructureLP:
     is an :class:`LPState` passed to :meth:`minimize_all`.
     """
 
+    @with_single_threaded_blas
     def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
                  free: NDArray[np.bool_], radius: float = UNBOUNDED_RADIUS) -> None:
         self.A = np.ascontiguousarray(A, dtype=np.float64)
@@ -273,6 +275,7 @@ class FixedStructureLP:
         """A fresh warm-start state (initial basis from QR with pivoting)."""
         return LPState(self)
 
+    @with_single_threaded_blas
     def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
                      state: LPState | None = None, *, b_err: NDArray[np.float64] | None = None,
                      return_duals: bool = False):

@@ -65,6 +65,7 @@ import highspy
 import numpy as np
 from numpy.typing import NDArray
 
+from .._blas import with_single_threaded_blas
 from ..exceptions import EmptySetError
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 
@@ -510,6 +511,7 @@ class FactorPolytope:
         hs.run()
         return hs.getModelStatus()
 
+    @with_single_threaded_blas
     def minimize(
         self,
         w: NDArray[np.float64],
@@ -661,6 +663,7 @@ class FactorPolytope:
         y[nbr] = yn
         return y
 
+    @with_single_threaded_blas
     def minimize_relaxed(
         self,
         w: NDArray[np.float64],
@@ -716,6 +719,7 @@ class FactorPolytope:
         m, e = np.frexp(np.where(s > 0.0, s, 1.0))
         return np.ldexp(1.0, np.where(m == 0.5, e - 1, e))
 
+    @with_single_threaded_blas
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness test with a phase-1 LP.
 

@@ -708,6 +708,13 @@ class ConstrainedZonotope:
 
         return rescale(self)
 
+    def reduce_exact(self) -> ConstrainedZonotope:
+        """The same set with redundant factor bounds, constraints and factors removed;
+        see :func:`setobs.geometry.reduction.reduce_exact`."""
+        from .reduction import reduce_exact
+
+        return reduce_exact(self)
+
     def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
         """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`."""
         from .reduction import reduce_order

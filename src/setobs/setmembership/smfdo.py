@@ -14,6 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._blas import with_single_threaded_blas
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
 from ..analysis.existence import BoundedDOReport
@@ -907,6 +908,7 @@ class SMFDO:
             dd = w = None
         return _Entry(yv, uv, dd, w, self._measurement_noise(k), yerr), uk
 
+    @with_single_threaded_blas
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
                u: ArrayLike | None = None) -> SMFDOStep:
         """Process the measurement ``y_k`` (and the input ``u_(k-1)`` applied before it).
@@ -1073,6 +1075,7 @@ class SMFDO:
             factor *= 4.0
         raise ModelInvalidatedError(msg + " (no reset box explains it)", k)
 
+    @with_single_threaded_blas
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
         """Process a whole record from the current state.
 

@@ -1,0 +1,132 @@
+"""Benchmark: the SMFDO's exact mode (``window=None``) on the paper example.
+
+Measures, in one run:
+
+* time per exact-mode update around k = 50, 100 and 150, under three BLAS
+  settings, each on an idle machine and with the other core busy (a spinning
+  process, as in a two-process campaign): the library's single-threaded BLAS
+  kernels (default), the same with the limit switched off
+  (``SETOBS_BLAS_LIMIT=0``: the behaviour before it existed) and
+  ``OPENBLAS_NUM_THREADS=1`` set by the user;
+* the size of the exact-mode representation (generators, constraints) over k,
+  and what :meth:`ConstrainedZonotope.reduce_exact` makes of it (it stops
+  eliminating when its certified rounding budget is spent; see its notes).
+
+Each setting runs in a fresh subprocess (BLAS thread pools are per process).
+Writes ``benchmarks/results/exact_mode.json``.
+
+Run: ``python benchmarks/exact_mode.py [--kmax 150]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def child(kmax: int) -> dict:
+    sys.path.insert(0, str(HERE.parent))
+    import numpy as np
+    from benchmarks.smfdo import data
+
+    import setobs as so
+
+    sysm, Y, _ = data(kmax + 1)
+    obs = so.SMFDO(sysm, window=None)
+    times = []
+    for y in Y[:kmax + 1]:
+        t0 = time.perf_counter()
+        obs.update(y)
+        times.append(time.perf_counter() - t0)
+    out = {}
+    for k in (50, 100, 150):
+        if k <= kmax:
+            win = times[max(0, k - 5):k + 5]
+            out[str(k)] = 1e3 * statistics.median(win)
+    return {"ms_per_update": out, "total_s": float(np.sum(times))}
+
+
+def sizes(kmax: int) -> list[dict]:
+    from benchmarks.smfdo import data
+
+    import setobs as so
+
+    sysm, Y, _ = data(kmax + 1)
+    obs = so.SMFDO(sysm, window=None)
+    rows = []
+    for k, y in enumerate(Y[:kmax + 1]):
+        obs.update(y)
+        if k in (2, 5, 10, 20, 30, 50, 100, 150):
+            Z = obs._Z
+            t0 = time.perf_counter()
+            R = Z.reduce_exact()
+            rows.append({"k": k, "n_gen": Z.n_gen, "n_con": Z.n_con, "reduced_n_gen": R.n_gen,
+                         "reduced_n_con": R.n_con, "reduce_s": time.perf_counter() - t0})
+    return rows
+
+
+def run_setting(name: str, env_extra: dict, load: bool, kmax: int) -> dict:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "SETOBS_BLAS_LIMIT")}
+    env.update(env_extra)
+    spinner = None
+    if load:
+        spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        res = subprocess.run([sys.executable, __file__, "--child", "--kmax", str(kmax)],
+                             env=env, capture_output=True, text=True, check=True)
+    finally:
+        if spinner is not None:
+            spinner.kill()
+    row = json.loads(res.stdout.strip().splitlines()[-1])
+    row.update({"setting": name, "other_core_busy": load})
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--kmax", type=int, default=150)
+    ap.add_argument("--child", action="store_true")
+    ap.add_argument("--out", default=str(HERE / "results" / "exact_mode.json"))
+    args = ap.parse_args()
+    if args.child:
+        print(json.dumps(child(args.kmax)))
+        return
+    settings = [("library limit (default)", {}),
+                ("limit off, default BLAS threads", {"SETOBS_BLAS_LIMIT": "0"}),
+                ("OPENBLAS_NUM_THREADS=1", {"OPENBLAS_NUM_THREADS": "1"})]
+    rows = []
+    for load in (False, True):
+        for name, env in settings:
+            r = run_setting(name, env, load, args.kmax)
+            rows.append(r)
+            print(f"{name:>32} busy={load!s:5}: " + ", ".join(
+                f"k={k}: {v:7.1f} ms" for k, v in r["ms_per_update"].items())
+                + f"  (total {r['total_s']:.1f} s)")
+    sys.path.insert(0, str(HERE.parent))
+    size_rows = sizes(args.kmax)
+    for s in size_rows:
+        print(f"k={s['k']:4d}: representation {s['n_gen']:4d} gen / {s['n_con']:4d} con -> "
+              f"reduce_exact {s['reduced_n_gen']:4d} / {s['reduced_n_con']:4d} "
+              f"({s['reduce_s'] * 1e3:.0f} ms)")
+    import setobs as so
+
+    out = {"benchmark": "exact_mode", "system": "chang2006 (Li-Cong-Dong eq. 25)",
+           "increment": "|dd_i| <= 1", "setobs": so.__version__,
+           "python": platform.python_version(), "machine": platform.machine(),
+           "cpus": os.cpu_count(), "timings": rows, "representation": size_rows}
+    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,85 @@
+"""The library's kernels run with single-threaded BLAS, and give the user's setting back."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
+
+import setobs as so
+from setobs import _blas
+from setobs.geometry.lp import FactorPolytope
+
+
+def blas_threads() -> list[int]:
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+@pytest.fixture
+def two_threads():
+    if not blas_threads():
+        pytest.skip("no BLAS library with a thread pool is loaded")
+    with threadpool_limits(limits=2, user_api="blas"):
+        yield
+
+
+def spy_minimize(monkeypatch, seen):
+    orig = FactorPolytope._minimize
+
+    def spy(self, *args):
+        seen.append(blas_threads())
+        return orig(self, *args)
+
+    monkeypatch.setattr(FactorPolytope, "_minimize", spy)
+
+
+def test_lp_queries_run_single_threaded_and_restore(monkeypatch, two_threads):
+    seen: list[list[int]] = []
+    spy_minimize(monkeypatch, seen)
+    Z = so.ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], [0.0, 0.0],
+                               A=[[1.0, 1.0, 1.0]], b=[0.5])
+    Z.interval_hull()
+    assert seen and all(all(n == 1 for n in s) for s in seen)
+    assert all(n == 2 for n in blas_threads())
+
+
+def test_nested_and_threaded_use_restores_the_setting(monkeypatch, two_threads):
+    seen: list[list[int]] = []
+    spy_minimize(monkeypatch, seen)
+    sys = so.examples.chang2006()
+    Y = np.array([[0.0, 1.0]] * 12)
+    errors: list[BaseException] = []
+    barrier = threading.Barrier(3)
+
+    def work():
+        try:
+            barrier.wait()
+            for _ in range(2):
+                so.SMFDO(sys, window=3, fast=False).run(Y)
+        except BaseException as exc:
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert seen and all(all(n == 1 for n in s) for s in seen)
+    assert _blas._depth == 0
+    assert all(n == 2 for n in blas_threads())
+
+
+def test_the_limit_can_be_switched_off(monkeypatch, two_threads):
+    monkeypatch.setenv("SETOBS_BLAS_LIMIT", "0")
+    assert not _blas.blas_limit_enabled()
+    with _blas.single_threaded_blas():
+        assert all(n == 2 for n in blas_threads())
+    monkeypatch.setenv("SETOBS_BLAS_LIMIT", "1")
+    with _blas.single_threaded_blas():
+        with _blas.single_threaded_blas():
+            assert all(n == 1 for n in blas_threads())
+        assert all(n == 1 for n in blas_threads())
+    assert all(n == 2 for n in blas_threads())
