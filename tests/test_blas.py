@@ -6,7 +6,7 @@ import threading
 
 import numpy as np
 import pytest
-from threadpoolctl import threadpool_info, threadpool_limits
+from threadpoolctl import threadpool_info
 
 import setobs as so
 from setobs import _blas
@@ -14,15 +14,30 @@ from setobs.geometry.lp import FactorPolytope
 
 
 def blas_threads() -> list[int]:
-    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+    return [lib.num_threads for lib in _blas._blas_libs()]
+
+
+def test_numpy_and_scipy_blas_are_controlled():
+    ours = {lib.filepath for lib in _blas._blas_libs()}
+    loaded = {info["filepath"] for info in threadpool_info() if info["user_api"] == "blas"
+              and ("numpy" in info["filepath"] or "scipy" in info["filepath"])}
+    assert loaded <= ours
 
 
 @pytest.fixture
 def two_threads():
-    if not blas_threads():
+    libs = _blas._blas_libs()
+    if not libs:
         pytest.skip("no BLAS library with a thread pool is loaded")
-    with threadpool_limits(limits=2, user_api="blas"):
-        yield
+    saved = [lib.num_threads for lib in libs]
+    # (threadpoolctl's own threadpool_limits is ignored from a thread that is not
+    # its "controlling thread", which another test's threads may have become)
+    for lib in libs:
+        _blas._set_threads(lib, 2)
+    assert blas_threads() == [2] * len(libs)
+    yield
+    for lib, n in zip(libs, saved, strict=True):
+        _blas._set_threads(lib, n)
 
 
 def spy_minimize(monkeypatch, seen):
