@@ -21,6 +21,16 @@ def _F(v: float) -> Fraction:
     return Fraction(float(v))
 
 
+def _gauss_jordan_step(rows: list[list[Fraction]], r: int, q: int) -> None:
+    """In place: scale row ``r`` so that ``rows[r][q] = 1`` and clear column ``q`` elsewhere."""
+    pv = rows[r][q]
+    rows[r] = [v / pv for v in rows[r]]
+    for i in range(len(rows)):
+        if i != r and rows[i][q] != 0:
+            f = rows[i][q]
+            rows[i] = [a - f * b for a, b in zip(rows[i], rows[r], strict=True)]
+
+
 def exact_lp_min(c: Sequence[Fraction], A: Sequence[Sequence[Fraction]], b: Sequence[Fraction],
                  lo: Sequence[Fraction | None], hi: Sequence[Fraction | None]
                  ) -> Fraction | None:
@@ -76,12 +86,7 @@ def exact_lp_min(c: Sequence[Fraction], A: Sequence[Sequence[Fraction]], b: Sequ
     total = N + m
 
     def pivot(r: int, q: int) -> None:
-        pv = T[r][q]
-        T[r] = [v / pv for v in T[r]]
-        for i in range(m):
-            if i != r and T[i][q] != 0:
-                f = T[i][q]
-                T[i] = [a - f * bb for a, bb in zip(T[i], T[r], strict=True)]
+        _gauss_jordan_step(T, r, q)
         basis[r] = q
 
     def simplex(obj: list[Fraction], allowed: int) -> bool:
@@ -243,12 +248,7 @@ def solve_exact(M: list[list[Fraction]], r: list[Fraction]) -> list[Fraction] | 
         if piv is None:
             return None
         aug[col], aug[piv] = aug[piv], aug[col]
-        p = aug[col][col]
-        aug[col] = [v / p for v in aug[col]]
-        for i in range(n):
-            if i != col and aug[i][col] != 0:
-                f = aug[i][col]
-                aug[i] = [a - f * b for a, b in zip(aug[i], aug[col], strict=True)]
+        _gauss_jordan_step(aug, col, col)
     return [aug[i][n] for i in range(n)]
 
 

@@ -18,8 +18,8 @@ setting while another is still inside, or leave the limit in place for good).
 While any setobs kernel runs, BLAS calls of other threads of the process are
 single-threaded too; results never depend on it, only speed.
 
-Set the environment variable ``SETOBS_BLAS_LIMIT=0`` (before the first call)
-to leave the BLAS thread count alone.
+Set the environment variable ``SETOBS_BLAS_LIMIT=0`` to leave the BLAS thread
+count alone (read at each call).
 """
 
 from __future__ import annotations

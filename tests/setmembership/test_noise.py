@@ -21,7 +21,7 @@ from setobs import ConstrainedZonotope, DimensionError, LinearSystem
 from setobs.setmembership import ModelInvalidatedError, ModelInvalidatedWarning
 from tests.datasets import HSM150
 from tests.oracles import exact_history_bounds
-from tests.setmembership.test_soundness_campaign import _random_case
+from tests.setmembership.test_soundness_campaign import _random_case, run_windows
 
 EPS = np.finfo(float).eps
 
@@ -246,22 +246,8 @@ def _noisy_case(seed, N_windowed=500, windows=(3, 10, 20)):
                           r_inc=r_inc, r_v=r_v, r_w=r_w, U=U, vertices=rng.random() < 0.7)
     if rng.random() < 0.3:
         Y[rng.random(Y.shape) < 0.05] = np.nan
-    steps = violations = 0
-    problems = []
-    for w in ([None] if exact else windows):
-        try:
-            obs = so.SMFDO(sys, window=w, increment_set=r_inc, measurement_noise=r_v,
-                           process_noise=r_w)
-        except DimensionError:  # window below mu_o - 1 for this system
-            continue
-        try:
-            res = obs.run(Y, U)
-        except Exception as exc:  # every abort is a failure, recorded
-            problems.append(f"seed {seed} window {w}: {type(exc).__name__}: {exc}")
-            continue
-        steps += N
-        violations += res.violations(D)
-    return steps, violations, problems
+    return run_windows(sys, Y, U, D, [None] if exact else windows, seed, increment_set=r_inc,
+                       measurement_noise=r_v, process_noise=r_w)
 
 
 def _campaign(seeds, **kw):

@@ -62,12 +62,17 @@ def _one(seed: int) -> tuple[int, int, list[str]]:
     exact = seed % 25 == 0
     N = 60 if exact else 400
     Y, D, U, r = _simulate(sys, N, rng)
+    return run_windows(sys, Y, U, D, [None] if exact else [3, 10, 20], seed, increment_set=r)
+
+
+def run_windows(sys, Y, U, D, windows, seed, **kwargs):
+    """Run an SMFDO per window on one record: ``(steps, violations, problems)``; every
+    abort and every violation is a recorded problem."""
     steps = violations = 0
     problems = []
-    windows = [None] if exact else [3, 10, 20]
     for w in windows:
         try:
-            obs = so.SMFDO(sys, window=w, increment_set=r)
+            obs = so.SMFDO(sys, window=w, **kwargs)
         except so.DimensionError:  # window below mu_o - 1 for this system
             continue
         try:
@@ -75,7 +80,7 @@ def _one(seed: int) -> tuple[int, int, list[str]]:
         except Exception as exc:  # every abort is a failure, recorded
             problems.append(f"seed {seed} window {w}: {type(exc).__name__}: {exc}")
             continue
-        steps += N
+        steps += Y.shape[0]
         v = res.violations(D)
         violations += v
         if v:

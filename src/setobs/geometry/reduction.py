@@ -174,7 +174,6 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     return ConstrainedZonotope._trusted(G, Z.c, A, Z.b, h, Z.radius, Z.c_err, Z.b_err)
 
 
-
 #: Relative margin by which a factor's certified interval must lie inside its
 #: bound for :func:`reduce_exact` to call the bound redundant.
 REDUNDANT_BOUND_MARGIN = 1e-9
@@ -262,7 +261,7 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     elimination (``O(n_c (n + n_c) n_g)``). A set without constraints is
     returned with only step 3 applied. Measured on the exact-mode sets of the
     paper example (``benchmarks/exact_mode.py``): at ``k = 5`` the
-    representation ``(13 generators, 10 constraints)`` reduces to ``(4, 1)``;
+    representation ``(15 generators, 12 constraints)`` reduces to ``(4, 1)``;
     on longer histories the rounding budget stops the elimination early.
 
     Examples
@@ -278,30 +277,27 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     """
     G, c, A, b, h = Z.G.copy(), Z.c.copy(), Z.A.copy(), Z.b.copy(), Z.h.copy()
     cerr, berr = Z.c_err.copy(), Z.b_err.copy()
-    # 1. implied bounds (certified)
+    # 1. implied bounds (certified): such factors become free to eliminate; their
+    # bounds h stay (exact either way, and bounded factors keep the LPs well posed)
+    free = np.isinf(h)
     if A.shape[0]:
         cand = np.flatnonzero(np.isfinite(h) & (h > 0) & A.any(axis=0))
         if cand.size:
             lo, hi = _factor_ranges(Z, cand)
-            inner = (lo > -h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN)) & \
-                    (hi < h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN))
-            h[cand[inner]] = np.inf
-        elif A.shape[0]:
-            # no LP was needed; still decide emptiness before reporting a set
-            if Z.is_empty():
-                raise EmptySetError("the set is empty")
-    # 2. eliminate unbounded factors with constraint rows, while the tracked
-    # rounding of c and b stays within its budget
-    relaxed = np.isinf(h) & np.isfinite(Z.h)
-    h_orig = Z.h.copy()
-    fin = np.where(np.isfinite(Z.h), Z.h, 0.0)
-    c_budget = max(float(Z.c_err.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
-        1.0 + float(np.abs(Z.c).max(initial=0.0)) + float((np.abs(Z.G) @ fin).max(initial=0.0))))
-    b_budget = max(float(Z.b_err.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
-        1.0 + float(np.abs(Z.b).max(initial=0.0)) + float((np.abs(Z.A) @ fin).max(initial=0.0))))
+            free[cand] = (lo > -h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN)) & \
+                (hi < h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN))
+        elif Z.is_empty():  # no LP was needed; still decide emptiness
+            raise EmptySetError("the set is empty")
+    # 2. eliminate free factors with constraint rows, while the tracked rounding
+    # of c and b stays within its budget
+    fin = np.where(np.isfinite(h), h, 0.0)
+    c_budget = max(float(cerr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
+        1.0 + float(np.abs(c).max(initial=0.0)) + float((np.abs(G) @ fin).max(initial=0.0))))
+    b_budget = max(float(berr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
+        1.0 + float(np.abs(b).max(initial=0.0)) + float((np.abs(A) @ fin).max(initial=0.0))))
     g2 = 2.0 * _gamma(4)
     while A.shape[0]:
-        unb = np.flatnonzero(np.isinf(h))
+        unb = np.flatnonzero(free)
         if not unb.size:
             break
         rowmax = np.abs(A).max(axis=1)
@@ -330,12 +326,8 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
         G = G - np.outer(g, ai)
         A = A - np.outer(col, ai)
         keep_c = np.arange(G.shape[1]) != j
-        G, A, h = G[:, keep_c], A[keep_r][:, keep_c], h[keep_c]
-        relaxed, h_orig = relaxed[keep_c], h_orig[keep_c]
+        G, A, h, free = G[:, keep_c], A[keep_r][:, keep_c], h[keep_c], free[keep_c]
         b, berr = b[keep_r], berr[keep_r]
-    # redundant bounds that were not eliminated are kept (exact either way, and
-    # bounded factors keep the LPs well posed)
-    h = np.where(relaxed, h_orig, h)
     # 3. unused parts
     zero_r = ~A.any(axis=1)
     if zero_r.any():
