@@ -13,7 +13,10 @@ from scipy.linalg import expm
 from ._validation import as_matrix, readonly
 from .exceptions import DimensionError
 
-__all__ = ["AugmentedSystem", "LinearSystem", "require_system"]
+__all__ = ["AugmentedSystem", "DisturbanceInputs", "LinearSystem", "require_system"]
+
+#: Which inputs of a state-space model are disturbances: indices or input names.
+DisturbanceInputs = Sequence[int | str] | int | str | None
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,15 @@ def _names(param: str, prefix: str, given: Sequence[str] | None, count: int
 
 class LinearSystem:
     """``x[k+1] = Phi x[k] + Gamma u[k] + G d[k]``, ``y[k] = Xi x[k] + D_u u[k]``.
+
+    .. warning::
+
+       The positional order is ``(Phi, G, Xi, Gamma)``: the **second** matrix
+       is the *disturbance* input matrix, not the control input matrix.
+       ``LinearSystem(A, B, C)`` declares every column of ``B`` a disturbance.
+       With control-engineering names use the keyword-only
+       :meth:`from_matrices` (``A=, B=, C=, D=, G=``) or
+       :meth:`from_statespace` (python-control).
 
     Parameters
     ----------
@@ -189,9 +201,11 @@ class LinearSystem:
         F: ArrayLike,
         C: ArrayLike,
         T: float,
+        *,
+        Du: ArrayLike | None = None,
         **names: Any,
     ) -> LinearSystem:
-        """Zero-order-hold discretisation of ``dx/dt = H x + D u + F f``, ``y = C x``.
+        """Zero-order-hold discretisation of ``dx/dt = H x + D u + F f``, ``y = C x + Du u``.
 
         ``Phi = expm(H T)``, ``Gamma = int_0^T expm(H s) ds D`` and, for a
         disturbance held constant over a sample, ``G = int_0^T expm(H s) ds F``
@@ -220,36 +234,177 @@ class LinearSystem:
         Phi = E[:n, :n]
         Gamma = E[:n, n : n + m]
         G = E[:n, n + m :]
-        return cls(Phi, G, C_a, Gamma if m else None, dt=float(T), **names)
+        return cls(Phi, G, C_a, Gamma if m else None, Du=Du if m else None, dt=float(T),
+                   **names)
 
     @classmethod
-    def from_statespace(cls, ss: Any, disturbance_inputs: Sequence[int]) -> LinearSystem:
-        """From a discrete-time ``control.StateSpace`` (python-control, optional).
+    def from_matrices(
+        cls,
+        *,
+        A: ArrayLike,
+        C: ArrayLike,
+        B: ArrayLike | None = None,
+        D: ArrayLike | None = None,
+        G: ArrayLike | None = None,
+        disturbance_inputs: Sequence[int | str] | int | str | None = None,
+        dt: float | None = None,
+        continuous: bool = False,
+        state_names: Sequence[str] | None = None,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        disturbance_names: Sequence[str] | None = None,
+    ) -> LinearSystem:
+        """From control-engineering matrices, keyword-only: ``A, B, C, D`` and disturbances.
+
+        The disturbances are stated explicitly, in one of two ways:
+
+        * ``G`` given: ``B`` (optional) holds the control inputs only and ``G``
+          the disturbance input matrix;
+        * ``G`` omitted: ``disturbance_inputs`` names the columns of ``B`` that
+          are disturbances (indices, or names from ``input_names``); the other
+          columns are control inputs.
+
+        Parameters
+        ----------
+        A, C : array_like
+            State and output matrices.
+        B : array_like, optional
+            Input matrix (all inputs, or the control inputs when ``G`` is given).
+        D : array_like, optional
+            Feedthrough with one column per column of ``B``; the columns of the
+            disturbance inputs must be zero (the disturbance has no feedthrough).
+        G : array_like, optional
+            Disturbance input matrix.
+        disturbance_inputs : sequence of int or str, optional
+            Disturbance columns of ``B`` (when ``G`` is omitted).
+        dt : float, optional
+            Sampling time. Required with ``continuous=True``.
+        continuous : bool
+            ``A, B, G`` describe ``dx/dt = A x + B u + G d``: discretise with a
+            zero-order hold at ``dt`` (:meth:`from_continuous`).
+        state_names, input_names, output_names, disturbance_names : sequence of str, optional
+            Signal names; ``input_names`` lists the names of the columns of ``B``.
+
+        Raises
+        ------
+        DimensionError
+            On bad shapes, a disturbance given twice or not at all, a nonzero
+            ``D`` column of a disturbance, or ``continuous=True`` without ``dt``.
+
+        Examples
+        --------
+        >>> LinearSystem.from_matrices(A=[[1.0, 0.1], [0.0, 1.0]], B=[[0.0], [0.1]],
+        ...                            C=[[1.0, 0.0]], G=[[0.0], [0.1]], dt=0.1)
+        LinearSystem(n=2, q=1, l=1, p=1, dt=0.1)
+        """
+        A_a = as_matrix("A", A)
+        n = A_a.shape[0]
+        C_a = as_matrix("C", C, cols=n)
+        B_a = np.zeros((n, 0)) if B is None else as_matrix("B", B, rows=n)
+        m = B_a.shape[1]
+        D_a = np.zeros((C_a.shape[0], m)) if D is None or (m == 0 and np.size(D) == 0) \
+            else as_matrix("D", D, rows=C_a.shape[0], cols=m)
+        in_names = None if input_names is None else _names("input_names", "u", input_names, m)
+        if G is not None:
+            if disturbance_inputs is not None:
+                raise DimensionError("give either G or disturbance_inputs, not both")
+            Gd = as_matrix("G", G, rows=n)
+            Bu, Du, u_names = B_a, D_a, in_names
+        else:
+            if disturbance_inputs is None:
+                raise DimensionError(
+                    "state which inputs are disturbances: give G (disturbance input matrix) "
+                    "or disturbance_inputs (columns of B)")
+            idx = _input_indices("disturbance_inputs", disturbance_inputs, m, in_names)
+            rest = [i for i in range(m) if i not in idx]
+            if np.any(D_a[:, idx] != 0):
+                raise DimensionError("the D columns of the disturbance inputs must be zero: "
+                                     "the disturbance has no feedthrough (y = C x + D_u u)")
+            Gd, Bu, Du = B_a[:, idx], B_a[:, rest], D_a[:, rest]
+            if in_names is not None:
+                u_names = [in_names[i] for i in rest]
+                if disturbance_names is None:
+                    disturbance_names = [in_names[i] for i in idx]
+            else:
+                u_names = None
+        names = {"state_names": state_names, "output_names": output_names,
+                 "disturbance_names": disturbance_names,
+                 "input_names": u_names if Bu.shape[1] else None}
+        if continuous:
+            if dt is None:
+                raise DimensionError("a continuous-time model needs the sampling time dt "
+                                     "to be discretised (zero-order hold)")
+            return cls.from_continuous(A_a, Bu if Bu.shape[1] else None, Gd, C_a, dt,
+                                       Du=Du if Bu.shape[1] else None, **names)
+        return cls(A_a, Gd, C_a, Bu if Bu.shape[1] else None,
+                   Du=Du if Bu.shape[1] else None, dt=dt, **names)
+
+    @classmethod
+    def from_statespace(cls, ss: Any, disturbance_inputs: Sequence[int | str] | int | str,
+                        *, dt: float | None = None) -> LinearSystem:
+        """From a ``control.StateSpace`` (python-control), stating which inputs are disturbances.
 
         Parameters
         ----------
         ss : control.StateSpace
-            Discrete-time model. Its ``D`` columns of the control inputs become
-            the feedthrough ``Du``; those of the disturbances must be zero.
-        disturbance_inputs : sequence of int
-            Indices of the inputs that are disturbances; the others are controls.
+            Discrete-time model, or continuous-time model with ``dt`` given
+            (then discretised with a zero-order hold, the disturbance held
+            constant over a sample). Its ``D`` columns of the control inputs
+            become the feedthrough ``Du``; those of the disturbances must be zero.
+            Signal names (``ss.input_labels``, ...) are kept.
+        disturbance_inputs : sequence of int or str
+            Indices or names (``ss.input_labels``) of the inputs that are
+            disturbances; the others are control inputs.
+        dt : float, optional
+            Sampling time for a continuous-time ``ss`` (must equal ``ss.dt``
+            when ``ss`` is discrete with a numeric sampling time).
+
+        See Also
+        --------
+        to_statespace : the way back.
+        """
+        A, B, C, D = (np.asarray(M, dtype=float) for M in (ss.A, ss.B, ss.C, ss.D))
+        labels = {key: list(getattr(ss, f"{key}_labels", None) or [])
+                  for key in ("state", "input", "output")}
+        names = {f"{key}_names": (v if len(v) == dim else None) for (key, v), dim in
+                 zip(labels.items(), (A.shape[0], B.shape[1], C.shape[0]), strict=True)}
+        ss_dt = ss.dt
+        continuous = ss_dt is not None and ss_dt is not True and float(ss_dt) == 0.0
+        if continuous:
+            if dt is None:
+                raise DimensionError(
+                    "the StateSpace model is continuous-time: give the sampling time to "
+                    "discretise it (zero-order hold), LinearSystem.from_statespace(ss, "
+                    "disturbance_inputs, dt=Ts), or discretise it first (control.c2d)")
+        else:
+            if dt is not None and ss_dt not in (None, True) and float(ss_dt) != float(dt):
+                raise DimensionError(f"dt = {dt} differs from the model's sampling time "
+                                     f"{ss_dt}")
+            if dt is None:
+                dt = None if ss_dt in (None, True) else float(ss_dt)
+        if disturbance_inputs is None:
+            raise DimensionError("state which inputs are disturbances (disturbance_inputs)")
+        return cls.from_matrices(A=A, B=B, C=C, D=D, disturbance_inputs=disturbance_inputs,
+                                 dt=dt, continuous=continuous, **names)
+
+    def to_statespace(self) -> Any:
+        """This system as a discrete-time ``control.StateSpace`` (python-control).
+
+        Inputs are ``[u; d]`` (the control inputs, then the disturbances, with
+        their names), ``B = [Gamma, G]``, ``D = [Du, 0]``; the sampling time is
+        :attr:`dt` (``True``, unspecified, when unknown).
         """
         try:
-            import control  # noqa: F401  (lazy: optional dependency)
+            import control
         except ImportError as exc:  # pragma: no cover - exercised only without control
-            raise ImportError("LinearSystem.from_statespace needs python-control "
+            raise ImportError("LinearSystem.to_statespace needs python-control "
                               "(pip install control)") from exc
-        A, B, C, D = (np.asarray(M, dtype=float) for M in (ss.A, ss.B, ss.C, ss.D))
-        if not ss.dt:
-            raise DimensionError("the StateSpace model must be discrete-time (dt > 0 or True)")
-        idx = _input_indices("disturbance_inputs", disturbance_inputs, B.shape[1])
-        rest = [i for i in range(B.shape[1]) if i not in idx]
-        if np.any(D[:, idx] != 0):
-            raise DimensionError("the D columns of the disturbance inputs must be zero: "
-                                 "the disturbance has no feedthrough (y = Xi x + D_u u)")
-        dt = None if ss.dt is True else float(ss.dt)
-        return cls(A, B[:, idx], C, B[:, rest] if rest else None,
-                   Du=D[:, rest] if rest else None, dt=dt)
+        B = np.hstack([self.Gamma, self.G])
+        D = np.hstack([self.Du, np.zeros((self.l, self.q))])
+        return control.ss(np.array(self.Phi), B, np.array(self.Xi), D,
+                          self.dt if self.dt is not None else True,
+                          inputs=list(self.input_names) + list(self.disturbance_names),
+                          outputs=list(self.output_names), states=list(self.state_names))
 
     # ------------------------------------------------------------------ augmented form
     def augmented(self) -> AugmentedSystem:
@@ -278,9 +433,11 @@ class LinearSystem:
                             Du=sy[:, None] * self.Du if self.p else None, dt=self.dt)
 
 
-def _input_indices(name: str, indices: Any, m: int) -> list[int]:
-    """Validated, distinct input indices in ``[0, m)`` (at least one)."""
-    if isinstance(indices, int | np.integer) and not isinstance(indices, bool):
+def _input_indices(name: str, indices: Any, m: int,
+                   labels: Sequence[str] | None = None) -> list[int]:
+    """Validated, distinct input indices in ``[0, m)`` (at least one); names are
+    looked up in ``labels``."""
+    if isinstance(indices, int | np.integer | str) and not isinstance(indices, bool):
         indices = [indices]
     try:
         items = list(indices)
@@ -288,6 +445,11 @@ def _input_indices(name: str, indices: Any, m: int) -> list[int]:
         raise TypeError(f"{name} must be a sequence of input indices, got {indices!r}") from None
     out = []
     for i in items:
+        if isinstance(i, str):
+            if labels is None or i not in labels:
+                known = "no input names" if labels is None else f"inputs {list(labels)}"
+                raise DimensionError(f"{name}: no input named {i!r} ({known})")
+            i = list(labels).index(i)
         if isinstance(i, bool | np.bool_) or not isinstance(i, int | np.integer | float
                                                             | np.floating):
             raise TypeError(f"{name} must hold integer input indices, got {i!r}")
@@ -305,15 +467,31 @@ def _input_indices(name: str, indices: Any, m: int) -> list[int]:
     return out
 
 
-def require_system(sys: Any, name: str = "sys") -> LinearSystem:
-    """``sys`` if it is a :class:`LinearSystem`; otherwise a ``TypeError`` saying what to do.
+def _is_statespace(obj: Any) -> bool:
+    return all(hasattr(obj, a) for a in ("A", "B", "C", "D", "dt"))
 
-    A ``control.StateSpace`` (or anything with ``A, B, C, D``) is refused with
-    a pointer to :meth:`LinearSystem.from_statespace`, which needs to know
-    which inputs are disturbances.
+
+def require_system(sys: Any, name: str = "sys", *,
+                   disturbance_inputs: DisturbanceInputs = None) -> LinearSystem:
+    """``sys`` as a :class:`LinearSystem`, or a ``TypeError`` saying what to do.
+
+    A ``control.StateSpace`` is accepted when ``disturbance_inputs`` states
+    which of its inputs are disturbances (:meth:`LinearSystem.from_statespace`;
+    a continuous-time model must be converted there, with its sampling time);
+    without that statement it is refused: guessing would misread the model.
     """
     if isinstance(sys, LinearSystem):
+        if disturbance_inputs is not None:
+            raise TypeError(f"disturbance_inputs applies to a state-space model; {name} is "
+                            "already a LinearSystem (its disturbances are G's columns)")
         return sys
+    if _is_statespace(sys):
+        if disturbance_inputs is None:
+            raise TypeError(
+                f"{name} is a {type(sys).__name__}: say which of its inputs are disturbances "
+                "with disturbance_inputs=[...] (indices or input names), or convert it with "
+                "LinearSystem.from_statespace(ss, disturbance_inputs=[...])")
+        return LinearSystem.from_statespace(sys, disturbance_inputs)
     if all(hasattr(sys, a) for a in ("A", "B", "C", "D")):
         raise TypeError(
             f"{name} must be a LinearSystem, got {type(sys).__name__}: convert a state-space "

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from .existence import (
     BoundedDOReport,
@@ -81,8 +81,22 @@ class Diagnosis:
     def _header(self) -> str:
         s = self.system
         zs = ", ".join(_fmt_z(z) for z in self.zeros.zeros) or "none"
-        return (f"system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs; "
+        head = (f"system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs; "
                 f"finite invariant zeros: {zs}")
+        return head + ("\n  " + self._signals() if self._signals() else "")
+
+    def _signals(self) -> str:
+        """The system's signal names, when the user gave any (empty for default names)."""
+        s = self.system
+        groups = [("disturbances", s.disturbance_names, "d"), ("outputs", s.output_names, "y"),
+                  ("inputs", s.input_names, "u"), ("states", s.state_names, "x")]
+        custom = [(label, names) for label, names, prefix in groups
+                  if names != tuple(f"{prefix}{i}" for i in range(len(names)))]
+        if not custom:
+            return ""
+        parts = [f"{label} ({', '.join(names)})" for label, names in custom]
+        dt = f"; sampling time {s.dt:g} s" if s.dt is not None else ""
+        return "signals: " + "; ".join(parts) + dt
 
     def __repr__(self) -> str:
         width = max(len(v.design) for v in self.verdicts)
@@ -100,7 +114,8 @@ class Diagnosis:
 
     def to_markdown(self) -> str:
         """A Markdown table of the verdicts, with the deciding numbers."""
-        out = [f"**{self._header()}**", "",
+        head, *signals = self._header().split("\n")
+        out = [f"**{head}**", *[f"\n{line.strip()}" for line in signals], "",
                "| design | exists | deciding condition | numbers | why not |",
                "|---|---|---|---|---|"]
         for v in self.verdicts:
@@ -124,7 +139,8 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
+def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> Diagnosis:
     """For each observer design in the library, whether it exists for ``sys`` and why not.
 
     Designs and their deciding conditions:
@@ -147,7 +163,7 @@ def diagnose(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Diagnosis:
     >>> d.existing
     ['SMFDO', 'PIO', 'higher-order observer', 'modular observer']
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     bdo = bounded_do_exists(sys, rtol=rtol)
     rd = relative_degrees(sys, rtol=rtol)
     uio = uio_conditions(sys, rtol=rtol)

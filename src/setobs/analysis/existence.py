@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, null_space, solve_discrete_are
 
 from .._validation import as_matrix
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_FLOOR, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, orth_rows, rank_decision
 from .observability import ObservabilityReport, observability, observability_matrix
@@ -127,7 +127,8 @@ class BoundedDOReport:
                 f"margin={self.margin_decades:.1f} decades)")
 
 
-def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedDOReport:
+def bounded_do_exists(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> BoundedDOReport:
     """Whether a bounded disturbance observer exists (Li-Cong-Dong, Theorem 1, Remark 1, Cor. 1).
 
     The verdict is decided in the coordinate-free form of Remark 1 (orthogonal
@@ -159,7 +160,7 @@ def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedD
     >>> bounded_do_exists(chang2006()).satisfied
     True
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     n, q, l = sys.n, sys.q, sys.l
     Pb, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
     decisions: list[RankDecision] = []
@@ -167,7 +168,9 @@ def bounded_do_exists(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> BoundedD
     def explicit(blocks: int) -> tuple[RankDecision, RankDecision]:
         O = observability_matrix(Pb, Xb, blocks)
         IOG = ibar(blocks, l) @ O @ Gb
-        nP = max(float(np.linalg.norm(Pb, 2)), 1e-300)
+        # floor: the largest block scale stays <= 1e100 (Phi = 0 or nilpotent-small
+        # Phi overflowed here; those blocks are zero, any finite scale decides them)
+        nP = max(float(np.linalg.norm(Pb, 2)), 1e-100 ** (1.0 / max(blocks - 1, 1)))
         w = np.repeat([nP ** -k for k in range(blocks)], l)[:, None]  # a-priori block scales
         Oaug = np.hstack([O, IOG]) * w
         return rank_decision(O * w, rtol), rank_decision(Oaug, rtol)
@@ -339,9 +342,10 @@ def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
     return rank_decision(M, rtol)
 
 
-def pio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCondition:
+def pio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> ObserverCondition:
     """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable."""
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     rep: ObservabilityReport = observability(sys.augmented().A, sys.augmented().C, rtol=rtol)
     bad = rep.unstable_unobservable_modes
     pbh = _pbh_at_one(sys, rtol)
@@ -356,11 +360,12 @@ def pio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCon
                              "augmented pair [[Phi, G], [0, I]], [Xi, 0] detectable", nums, reason)
 
 
-def higher_order_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCondition:
+def higher_order_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> ObserverCondition:
     """Higher-order observer (Fu-Wang) with ``d = G d*``: the pair with state
     ``(x, d*, Delta d*)``, ``[[Phi, G, 0], [0, I, I], [0, 0, I]]``, ``[Xi, 0, 0]``
     must be detectable (stable roots of eq. (10) for some gains)."""
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     n, q = sys.n, sys.q
     A = np.block([[sys.Phi, sys.G, np.zeros((n, q))],
                   [np.zeros((q, n)), np.eye(q), np.eye(q)],
@@ -377,7 +382,8 @@ def higher_order_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Ob
                              nums, reason)
 
 
-def modular_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObserverCondition:
+def modular_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> ObserverCondition:
     """Modular Luenberger observer (modular-observer paper, Sec. VIII, eqs. (45)-(52)).
 
     With ``F = Phi``, ``P = G``, ``H = Xi``, ``Q = 0``, ``S = I_q``: a
@@ -387,7 +393,7 @@ def modular_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> Observe
     needs ``(S, H V + Q) = (I, Xi V)`` detectable, i.e. ``rank(Xi V) = q``.
     ``L0`` is taken from a DARE (any stabilising gain gives the same rank).
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     rep = observability(sys.Phi, sys.Xi, rtol=rtol)
     nums: dict = {"n_o": rep.n_observable, "detectable": rep.detectable}
     if not rep.detectable:

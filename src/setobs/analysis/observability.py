@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals
 
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, orth_rows
 
@@ -189,14 +189,16 @@ class ObservabilityDecomposition:
         return int(self.T_o.shape[0])
 
 
-def augmented_observability(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ObservabilityReport:
+def augmented_observability(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> ObservabilityReport:
     """Observability report of the augmented pair ``(A, C)`` of eqs. (9)-(11)."""
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     aug = sys.augmented()
     return observability(aug.A, aug.C, rtol=rtol)
 
 
-def observability_decomposition(sys: LinearSystem, *, rtol: float = RANK_RTOL,
+def observability_decomposition(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL,
                                 balance: bool = False,
                                 disturbance_scale: ArrayLike | None = None
                                 ) -> ObservabilityDecomposition:
@@ -214,7 +216,7 @@ def observability_decomposition(sys: LinearSystem, *, rtol: float = RANK_RTOL,
     disturbance_scale : array_like, shape (q,), optional
         Magnitudes ``S`` of the disturbance increments, used by the balancing.
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     aug = sys.augmented()
     A, E, C, Gam = aug.A, aug.E, aug.C, aug.Gamma
     dz = dy = None

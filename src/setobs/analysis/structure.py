@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import PRODUCT_RTOL, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, rank_decision
 from .zeros import ZerosResult, invariant_zeros
@@ -67,7 +67,8 @@ class RelativeDegreeResult:
                 f"diagonal={self.diagonal}, sum={sum(r or 0 for r in self.degrees)} vs n={self.n})")
 
 
-def relative_degrees(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> RelativeDegreeResult:
+def relative_degrees(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> RelativeDegreeResult:
     """Disturbance relative degrees ``r_i`` and ``V0`` of ``(Phi, G, Xi)``.
 
     A row ``c_i A^(k-1) E`` counts as nonzero when its norm exceeds
@@ -83,7 +84,7 @@ def relative_degrees(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> RelativeD
     >>> relative_degrees(chen_gao_lin_example1()).degrees
     (2, 4, 3)
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     A, E, C = sys.Phi, sys.G, sys.Xi
     n = sys.n
     Ab, Eb, Cb, _, _, _ = balance_system(A, E, C)
@@ -230,10 +231,11 @@ class UIOResult:
         return self.condition_b and self.delay is not None
 
 
-def uio_conditions(sys: LinearSystem, *, rtol: float = RANK_RTOL,
+def uio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL,
                    unit_tol: float = UNIT_CIRCLE_TOL) -> UIOResult:
     """UIO conditions (a), (b) for ``(Phi, G, Xi)`` and the delay for the augmented system."""
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     _, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
     dG = rank_decision(Gb, rtol)
     dXG = rank_decision(Xb @ Gb, rtol, scale=float(np.linalg.norm(Xb, 2) * np.linalg.norm(Gb, 2)))

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, svd
 
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, rank_decision
 
@@ -169,7 +169,8 @@ def system_zeros(
     return ZerosResult(zeros, normal_rank, normal_rank == n + m, n, m, decisions)
 
 
-def invariant_zeros(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ZerosResult:
+def invariant_zeros(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
+    rtol: float = RANK_RTOL) -> ZerosResult:
     """Finite invariant zeros of ``(Phi, G, Xi)``: where ``[[Phi - zI, G], [Xi, 0]]`` loses rank.
 
     Robust to infinite zeros (no huge spurious values): see :func:`system_zeros`.
@@ -183,5 +184,5 @@ def invariant_zeros(sys: LinearSystem, *, rtol: float = RANK_RTOL) -> ZerosResul
     >>> [round(float(v.real), 5) for v in z]
     [1.26095]
     """
-    sys = require_system(sys)
+    sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     return system_zeros(sys.Phi, sys.G, sys.Xi, rtol=rtol)

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, SetobsError
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 
 __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
 
@@ -65,8 +65,9 @@ class PointObserver:
 
     name = "observer"
 
-    def __init__(self, sys: LinearSystem) -> None:
-        self.sys = require_system(sys)
+    def __init__(self, sys: LinearSystem, *,
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
+        self.sys = require_system(sys, disturbance_inputs=disturbance_inputs)
         self.delay = 0
 
     @property
@@ -81,7 +82,10 @@ class PointObserver:
     def _check(self, y: ArrayLike, u: ArrayLike | None):
         yv = as_vector("y", y, size=self.sys.l)
         if self.sys.p:
-            uv = np.zeros(self.sys.p) if u is None else as_vector("u", u, size=self.sys.p)
+            if u is None:
+                raise DimensionError(f"u is required: the system has {self.sys.p} input(s) "
+                                     "(pass zeros explicitly if none was applied)")
+            uv = as_vector("u", u, size=self.sys.p)
         else:
             uv = np.zeros(0)
         return yv, uv
@@ -104,6 +108,10 @@ class PointObserver:
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
         Ua = None
+        if self.sys.p and U is None:
+            raise DimensionError(f"U is required: the system has {self.sys.p} input(s) "
+                                 f"({', '.join(self.sys.input_names)}); pass zeros explicitly "
+                                 "if none was applied")
         if U is not None:
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] < N:

@@ -8,7 +8,7 @@ from scipy.linalg import solve_discrete_are
 
 from .._validation import as_matrix
 from ..analysis import observability
-from ..systems import LinearSystem
+from ..systems import DisturbanceInputs, LinearSystem
 from .base import DesignError, PointObserver
 
 __all__ = ["DescriptorObserver"]
@@ -50,8 +50,10 @@ class DescriptorObserver(PointObserver):
     name = "descriptor observer"
 
     def __init__(self, sys: LinearSystem, F: ArrayLike, Q_w: ArrayLike | None = None,
-                 R_w: ArrayLike | None = None) -> None:
-        super().__init__(sys)
+                 R_w: ArrayLike | None = None,
+                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         n, q, ly, p = sys.n, sys.q, sys.l, sys.p
         F_a = as_matrix("F", F, rows=ly)
         ln = F_a.shape[1]

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_discrete_are, solve_sylvester
-from scipy.optimize import linear_sum_assignment
-from scipy.signal import place_poles
 
 from .._validation import as_matrix
 from ..analysis import (
@@ -20,7 +17,8 @@ from ..analysis import (
     pio_conditions,
     pio_error_poles,
 )
-from ..systems import LinearSystem
+from ..systems import DisturbanceInputs, LinearSystem
+from ._gains import default_poles, lqe_gain, place_gain
 from .base import DesignError, StateSpaceObserver
 
 __all__ = [
@@ -50,39 +48,33 @@ FU_WANG_HO_GAINS = {
 
 def _place(A: NDArray[np.float64], C: NDArray[np.float64], poles: Sequence[complex],
            check: str = "poles") -> NDArray[np.float64]:
-    """Observer gain ``L`` with ``eig(A - L C) = poles`` (scipy ``place_poles`` on the dual).
+    """Observer gain with ``eig(A - L C) = poles`` (see :func:`._gains.place_gain`)."""
+    return place_gain(A, C, poles, check)
 
-    ``check="poles"``: the placed eigenvalues must match ``poles`` (1e-6 relative);
-    ``check="radius"``: only the spectral radius is checked (for repeated poles,
-    e.g. a nilpotent target, whose computed eigenvalues are ill-conditioned).
-    """
-    try:
-        poles = np.asarray(poles, dtype=complex).reshape(-1)
-    except (TypeError, ValueError):
-        raise DesignError(f"poles must be a sequence of numbers, got {poles!r}",
-                          "poles") from None
-    if not np.isfinite(poles).all():
-        raise DesignError(f"poles must be finite, got {poles.tolist()}", "poles")
-    if poles.size != A.shape[0]:
-        raise DesignError(f"need {A.shape[0]} poles, got {poles.size}", "pole count")
-    if check == "poles" and C.shape[0] == 1 and len(set(np.round(poles, 12))) < poles.size:
-        raise DesignError("repeated poles cannot be placed with a single output", "poles")
-    with warnings.catch_warnings():
-        # YT's robustness iteration may stop early; placement accuracy is checked below.
-        warnings.simplefilter("ignore", UserWarning)
-        res = place_poles(A.T, C.T, poles, method="YT")
-    L = res.gain_matrix.T
-    got = np.linalg.eigvals(A - L @ C)
-    if check == "radius":
-        rho = float(np.abs(got).max())
-        if rho > float(np.abs(poles).max()) + 1e-6:
-            raise DesignError(f"pole placement failed (spectral radius {rho:.3g})", "poles")
-        return L
-    dist = np.abs(got[:, None] - poles[None, :])
-    r, c = linear_sum_assignment(dist)
-    if dist[r, c].max() > 1e-6 * max(1.0, float(np.abs(poles).max())):
-        raise DesignError(f"pole placement inaccurate: got {np.round(got, 6)}", "poles")
-    return L
+
+def _cov(name: str, value: ArrayLike | None, dim: int, default: float | None
+         ) -> NDArray[np.float64]:
+    """A covariance matrix from a scalar (times I), a vector (diagonal) or a matrix."""
+    if value is None:
+        if default is None:
+            raise DesignError(f"design='lqe' needs {name}", "covariance")
+        value = default
+    v = np.asarray(value, dtype=float)
+    if v.ndim == 0:
+        return float(v) * np.eye(dim)
+    if v.ndim == 1:
+        if v.size != dim:
+            raise DesignError(f"{name} must have {dim} entries, got {v.size}", "covariance")
+        return np.diag(v)
+    return as_matrix(name, v, rows=dim, cols=dim)
+
+
+def _lqe_augmented(A: NDArray[np.float64], C: NDArray[np.float64], blocks: list[NDArray],
+                   R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """LQE gain of an augmented pair whose noise covariance is block-diagonal."""
+    from scipy.linalg import block_diag
+
+    return lqe_gain(A, C, block_diag(*blocks), R)
 
 
 def design_pio(sys: LinearSystem, poles: Sequence[complex]) -> dict[str, NDArray[np.float64]]:
@@ -112,7 +104,15 @@ class PIO(StateSpaceObserver):
         Gains. Default: designed with :func:`design_pio` at ``poles``.
     poles : sequence, optional
         Error poles (``n + q``); default the Fu-Wang/Chang set
-        ``{0.1, 0.2, 0.3 +- 0.5j, 0.4}`` padded with 0.5 when ``n + q > 5``.
+        ``{0.1, 0.2, 0.3 +- 0.5j, 0.4}`` when ``n + q = 5``, otherwise ``n + q``
+        distinct real poles evenly spread over ``[0.1, 0.5]``
+        (:func:`default_poles`). With unobservable (stable) modes of the
+        augmented pair, only the observable part's poles are placed.
+    design : {"poles", "lqe"}
+        ``"lqe"``: the steady-state Kalman predictor gain of the augmented
+        model (:func:`lqe_gain`) from ``process_cov`` (``x``, default 0),
+        ``increment_cov`` (``dd``) and ``measurement_cov`` (``y``): scalars
+        (times ``I``), vectors (diagonal) or matrices.
     check_stability : bool
         Raise :class:`DesignError` for given gains whose error system is not
         stable (default ``False``: the printed Fu-Wang gains are unstable and are
@@ -122,13 +122,25 @@ class PIO(StateSpaceObserver):
     name = "PIO"
 
     def __init__(self, sys: LinearSystem, P: ArrayLike | None = None, L: ArrayLike | None = None,
-                 *, poles: Sequence[complex] | None = None, check_stability: bool = False) -> None:
-        super().__init__(sys)
+                 *, poles: Sequence[complex] | None = None, check_stability: bool = False,
+                 design: str = "poles", process_cov: ArrayLike | None = None,
+                 increment_cov: ArrayLike | None = None,
+                 measurement_cov: ArrayLike | None = None,
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         n, q = sys.n, sys.q
-        if P is None or L is None:
+        _check_design(design, poles, P is not None or L is not None)
+        if (P is None or L is None) and design == "lqe":
+            a = sys.augmented()
+            K = _lqe_augmented(a.A, a.C, [_cov("process_cov", process_cov, n, 0.0),
+                                          _cov("increment_cov", increment_cov, q, None)],
+                               _cov("measurement_cov", measurement_cov, sys.l, None))
+            P_a, L_a = K[:n], K[n:]
+        elif P is None or L is None:
             if poles is None:
                 base = [0.1, 0.2, 0.3 + 0.5j, 0.3 - 0.5j, 0.4]
-                poles = (base + [0.5] * (n + q))[: n + q] if n + q != 5 else base
+                poles = base if n + q == 5 else default_poles(n + q)
             g = design_pio(sys, poles)
             P_a, L_a = g["P"], g["L"]
         else:
@@ -153,6 +165,16 @@ class PIO(StateSpaceObserver):
         """The SFODO baseline of Li-Cong-Dong Fig. 1(b): the PIO with the gains printed
         in Fu-Wang (``P0'``, ``L0'``). Its error system is unstable (pole near -1.37)."""
         return cls(sys, CHANG2006_PIO_GAINS["P"], CHANG2006_PIO_GAINS["L"])
+
+
+def _check_design(design: str, poles, gains_given: bool) -> None:
+    if design not in ("poles", "lqe"):
+        raise DesignError(f"design must be 'poles' or 'lqe', got {design!r}", "design")
+    if design == "lqe" and poles is not None:
+        raise DesignError("give poles (design='poles') or covariances (design='lqe'), "
+                          "not both", "design")
+    if design == "lqe" and gains_given:
+        raise DesignError("design='lqe' computes the gains: do not pass them", "design")
 
 
 def _ho_matrices(sys: LinearSystem):
@@ -196,7 +218,11 @@ class HigherOrderObserver(StateSpaceObserver):
     ``d_hat+ = d_hat + L0 (y - y_hat) + Delta d_hat + L1 (Delta y - Delta y_hat)``.
     Implemented in the equivalent state ``(x_hat, d_hat, v)``; its error poles
     are the roots of eq. (10) (with ``E = G``). Default gains place the poles
-    ``{0.1, 0.2, 0.3 +- 0.5j, 0.4}`` padded with 0.5 and 0.45.
+    ``{0.1, 0.2, 0.3 +- 0.5j, 0.4, 0.5, 0.45}`` when ``n + 2q = 7`` (the
+    example's size), otherwise ``n + 2q`` distinct real poles spread over
+    ``[0.1, 0.5]``. ``design="lqe"``: the steady-state Kalman predictor gain of
+    the model ``(x, d*, Delta d*)`` with ``process_cov`` on ``x`` (default 0),
+    ``increment_cov`` on the second difference of ``d*`` and ``measurement_cov``.
 
     Notes
     -----
@@ -209,13 +235,26 @@ class HigherOrderObserver(StateSpaceObserver):
 
     def __init__(self, sys: LinearSystem, P0: ArrayLike | None = None,
                  L0: ArrayLike | None = None, L1: ArrayLike | None = None, *,
-                 poles: Sequence[complex] | None = None) -> None:
-        super().__init__(sys)
+                 poles: Sequence[complex] | None = None, design: str = "poles",
+                 process_cov: ArrayLike | None = None, increment_cov: ArrayLike | None = None,
+                 measurement_cov: ArrayLike | None = None,
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         n, q, l = sys.n, sys.q, sys.l
-        if P0 is None or L0 is None or L1 is None:
+        _check_design(design, poles, P0 is not None or L0 is not None or L1 is not None)
+        if (P0 is None or L0 is None or L1 is None) and design == "lqe":
+            A, C = _ho_matrices(sys)
+            K = _lqe_augmented(A, C, [_cov("process_cov", process_cov, n, 0.0),
+                                      np.zeros((q, q)),
+                                      _cov("increment_cov", increment_cov, q, None)],
+                               _cov("measurement_cov", measurement_cov, l, None))
+            g = _ho_gains_from_injection(K, n, q)
+            P0_a, L0_a, L1_a = g["P0"], g["L0"], g["L1"]
+        elif P0 is None or L0 is None or L1 is None:
             if poles is None:
-                poles = ([0.1, 0.2, 0.3 + 0.5j, 0.3 - 0.5j, 0.4, 0.5, 0.45]
-                         + [0.35] * (n + 2 * q))[: n + 2 * q]
+                poles = ([0.1, 0.2, 0.3 + 0.5j, 0.3 - 0.5j, 0.4, 0.5, 0.45] if n + 2 * q == 7
+                         else default_poles(n + 2 * q))
             g = design_higher_order(sys, poles)
             P0_a, L0_a, L1_a = g["P0"], g["L0"], g["L1"]
         else:
@@ -266,8 +305,10 @@ class ModularObserver(StateSpaceObserver):
     name = "modular observer"
 
     def __init__(self, sys: LinearSystem, L0: ArrayLike | None = None, Lw: ArrayLike | None = None,
-                 *, w_poles: Sequence[complex] | None = None) -> None:
-        super().__init__(sys)
+                 *, w_poles: Sequence[complex] | None = None,
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         cond = modular_conditions(sys)
         if not cond.exists:
             raise DesignError(f"modular observer: {cond.reason}", cond.condition)

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag, lstsq
 
 from ..analysis import invariant_zeros, relative_degrees
-from ..systems import LinearSystem
+from ..systems import DisturbanceInputs, LinearSystem
 from .base import DesignError, StateSpaceObserver
 
 __all__ = ["MBESO", "VariantMBESO", "decoupled_gain", "mbeso_impulse_response"]
@@ -140,8 +140,10 @@ class MBESO(StateSpaceObserver):
     name = "MB-ESO"
 
     def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
-                 x0: ArrayLike | None = None, d0: ArrayLike | None = None) -> None:
-        super().__init__(sys)
+                 x0: ArrayLike | None = None, d0: ArrayLike | None = None,
+                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         rd = _check_assumption1(sys, "MB-ESO")
         if not rd.diagonal:
             raise DesignError("MB-ESO (16) needs a diagonal V0 (Theorem 2); V0 = "
@@ -185,8 +187,10 @@ class VariantMBESO(MBESO):
     name = "variant MB-ESO"
 
     def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
-                 x0: ArrayLike | None = None, d0: ArrayLike | None = None) -> None:
-        StateSpaceObserver.__init__(self, sys)
+                 x0: ArrayLike | None = None, d0: ArrayLike | None = None,
+                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+        StateSpaceObserver.__init__(self, sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         rd = _check_assumption1(sys, "variant MB-ESO")
         V0inv = np.linalg.inv(rd.V0)
         r = rd.degrees

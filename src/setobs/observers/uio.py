@@ -10,9 +10,9 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import lstsq, svd
 
 from ..analysis import uio_conditions, uio_delay
-from ..systems import LinearSystem
+from ..systems import DisturbanceInputs, LinearSystem
+from ._gains import place_gain
 from .base import DesignError, PointObserver
-from .luenberger import _place
 
 __all__ = ["DelayedUIO"]
 
@@ -54,8 +54,10 @@ class DelayedUIO(PointObserver):
 
     name = "delayed UIO"
 
-    def __init__(self, sys: LinearSystem, poles: Sequence[complex] | float = 0.0) -> None:
-        super().__init__(sys)
+    def __init__(self, sys: LinearSystem, poles: Sequence[complex] | float = 0.0,
+                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
         cond = uio_conditions(sys)
         if not cond.delayed_uio_exists:
             zs = ", ".join(f"{z.real:.6g}" for z in cond.unstable_zeros)
@@ -84,7 +86,7 @@ class DelayedUIO(PointObserver):
         pol = np.full(N, float(poles)) if np.ndim(poles) == 0 else np.asarray(poles, complex)
         if pol.size != N:
             raise DesignError(f"need {N} poles, got {pol.size}", "poles")
-        Zbar = _place(A1, Cbar, pol, check="radius")
+        Zbar = place_gain(A1, Cbar, pol, check="radius")
         K = F + Zbar @ U[:, :r].T @ Pi
         self.J, self.K, self.O, self.M, self.Nu, self.B = A - K @ O, K, O, M, Nu, B
         self.tau = tau

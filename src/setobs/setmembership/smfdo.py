@@ -24,7 +24,7 @@ from ..geometry.box import box_center
 from ..geometry.fastlp import _pow2_inverse
 from ..geometry.lp import _U, _gamma
 from ..geometry.zonotope import box_center_radius
-from ..systems import LinearSystem, require_system
+from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
 from ._window import WindowModel, model_rtol
 
@@ -471,8 +471,9 @@ class SMFDO:
         data_rtol: float = DATA_RTOL,
         keep_sets: bool = False,
         fast: bool = True,
+        disturbance_inputs: DisturbanceInputs = None,
     ) -> None:
-        sys = require_system(sys, "sys")
+        sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
         window = _check_window(window)
         if reset is not None:
             if reset not in ("raise", "box"):

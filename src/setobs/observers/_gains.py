@@ -1,0 +1,251 @@
+"""Observer gains: pole placement that works on every detectable pair, and the LQE gain.
+
+Used by all Luenberger-type observers. Placement works on the observable part
+of the pair only (orthogonal observability decomposition), so a detectable but
+unobservable pair (which the existence checks approve) gets a gain, and its
+unobservable modes are checked to be stable. Poles repeated more often than
+the output rank, e.g. a dead-beat target with one output, are placed with
+Ackermann's formula on the observable part (single output) or spread apart.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import null_space, orth, solve_discrete_are
+from scipy.signal import place_poles
+
+from .base import DesignError
+
+__all__ = ["default_poles", "lqe_gain", "place_gain"]
+
+#: Relative size of the spread used for repeated poles that the output rank
+#: cannot place exactly (several outputs).
+POLE_SPREAD = 1e-2
+
+
+def default_poles(count: int, lo: float = 0.1, hi: float = 0.5) -> list[complex]:
+    """``count`` distinct real poles spread evenly over ``[lo, hi]`` (closed under
+    conjugation, placeable with a single output)."""
+    if count <= 0:
+        return []
+    if count == 1:
+        return [0.5 * (lo + hi)]
+    return list(np.linspace(lo, hi, count))
+
+
+def _observable_split(A: NDArray[np.float64], C: NDArray[np.float64]):
+    """Orthonormal bases ``V_o`` (observable) and ``V_u`` (unobservable subspace)."""
+    n = A.shape[0]
+    blocks, M = [], C
+    for _ in range(n):
+        blocks.append(M)
+        M = M @ A
+    O = np.vstack(blocks)
+    scale = max(1.0, float(np.abs(O).max(initial=0.0)))
+    V_u = null_space(O, rcond=1e-10 * scale / max(1.0, float(np.abs(O).max(initial=1.0))))
+    V_o = orth(O.T) if V_u.shape[1] else np.eye(n)
+    if V_o.shape[1] + V_u.shape[1] != n:  # rank decision in the grey zone: use all of it
+        return np.eye(n), np.zeros((n, 0))
+    return V_o, V_u
+
+
+def _ackermann(A: NDArray[np.float64], c: NDArray[np.float64], poles: NDArray) -> NDArray:
+    """Single-output gain ``L`` with ``char(A - L c) = prod (z - p)``: Ackermann's formula
+    on the dual, ``L = p(A) O^-1 e_n`` with ``O = [c; c A; ...]``."""
+    n = A.shape[0]
+    coeffs = np.real(np.poly(poles))
+    O = np.vstack([c @ np.linalg.matrix_power(A, i) for i in range(n)])
+    pA = np.zeros_like(A)
+    for a in coeffs:
+        pA = pA @ A + a * np.eye(n)
+    e = np.zeros(n)
+    e[-1] = 1.0
+    return (pA @ np.linalg.solve(O, e)).reshape(n, 1)
+
+
+def _place_observable(A, C, poles, check):
+    n = A.shape[0]
+    rank_c = np.linalg.matrix_rank(C)
+    mult = max(int(np.sum(np.abs(poles - p) < 1e-12)) for p in poles) if n else 0
+    if n == 0:
+        return np.zeros((0, C.shape[0]))
+    if mult <= rank_c:
+        with warnings.catch_warnings():
+            # YT's robustness iteration may stop early; accuracy is checked by the caller.
+            warnings.simplefilter("ignore", UserWarning)
+            return place_poles(A.T, C.T, poles, method="YT").gain_matrix.T
+    if C.shape[0] == 1 or rank_c == 1:
+        # one independent output: Ackermann on the best-conditioned output combination
+        u, s, vt = np.linalg.svd(C, full_matrices=False)
+        c = s[0] * vt[:1]
+        L1 = _ackermann(A, c, poles)
+        return L1 @ u[:, :1].T
+    if check == "poles":
+        raise DesignError(f"poles repeated {mult} times cannot be placed with "
+                          f"{rank_c} independent outputs", "poles")
+    spread = poles + POLE_SPREAD * max(1.0, float(np.abs(poles).max())) * np.arange(n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return place_poles(A.T, C.T, spread, method="YT").gain_matrix.T
+
+
+def place_gain(A: ArrayLike, C: ArrayLike, poles: Sequence[complex],
+               check: str = "poles") -> NDArray[np.float64]:
+    """Observer gain ``L`` with ``eig(A - L C)`` at ``poles`` on the observable part.
+
+    Parameters
+    ----------
+    A, C : array_like
+        The pair ``(A, C)``; it must be detectable.
+    poles : sequence of complex
+        ``n`` target eigenvalues, closed under conjugation. When the pair has
+        ``n_u`` unobservable modes, the first ``n - n_u`` poles are placed and the
+        unobservable modes (which no gain moves) must be inside the unit circle.
+    check : {"poles", "radius"}
+        ``"poles"``: the characteristic polynomial of the observable part must
+        match the target's (1e-6 relative on its coefficients; insensitive to the
+        ill-conditioning of repeated roots); ``"radius"``: only stability and a
+        spectral radius at most ``max|poles|`` plus the spread used for repeated
+        poles are required.
+
+    Raises
+    ------
+    DesignError
+        On a bad pole list, an undetectable pair, or an inaccurate placement.
+    """
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    try:
+        p = np.asarray(poles, dtype=complex).reshape(-1)
+    except (TypeError, ValueError):
+        raise DesignError(f"poles must be a sequence of numbers, got {poles!r}",
+                          "poles") from None
+    n = A.shape[0]
+    if not np.isfinite(p).all():
+        raise DesignError(f"poles must be finite, got {p.tolist()}", "poles")
+    if p.size != n:
+        raise DesignError(f"need {n} poles, got {p.size}", "pole count")
+    if not np.allclose(np.sort_complex(p), np.sort_complex(p.conj()), atol=1e-12):
+        raise DesignError(f"poles must be closed under conjugation, got {p.tolist()}", "poles")
+    V_o, V_u = _observable_split(A, C)
+    n_o = V_o.shape[1]
+    if V_u.shape[1]:
+        unobs = np.linalg.eigvals(V_u.T @ A @ V_u)
+        if np.abs(unobs).max() >= 1.0:
+            raise DesignError("the pair is not detectable: unobservable mode(s) "
+                              f"{np.round(unobs[np.abs(unobs) >= 1.0], 6).tolist()}",
+                              "detectable")
+        # keep a conjugate-closed subset of the requested poles
+        p = _conjugate_closed_prefix(p, n_o)
+    A11, C1 = V_o.T @ A @ V_o, C @ V_o
+    # independent output combinations only (redundant outputs trouble place_poles)
+    U, sv, Vt = np.linalg.svd(C1, full_matrices=False)
+    r = int((sv > 1e-12 * max(1.0, float(sv.max(initial=0.0)))).sum())
+    C1r = sv[:r, None] * Vt[:r]
+    with np.errstate(all="ignore"):
+        if r == n_o and n_o:
+            # every observable coordinate is measured: L1 C1 = A11 - M, M real with
+            # eigenvalues p (block-diagonal real form), so L1 = (A11 - M) C1r^-1 U^T
+            L1 = (A11 - _real_block(p)) @ np.linalg.inv(C1r) @ U[:, :r].T
+        else:
+            L1 = np.real_if_close(_place_observable(A11, C1r, p, check)) @ U[:, :r].T
+    L = np.real(V_o @ L1)
+    got = np.linalg.eigvals(A11 - L1 @ C1) if n_o else np.zeros(0)
+    rho_all = float(np.abs(np.linalg.eigvals(A - L @ C)).max(initial=0.0))
+    if check == "radius":
+        allow = float(np.abs(p).max(initial=0.0)) + POLE_SPREAD * n + 1e-6
+        if rho_all >= 1.0 or float(np.abs(got).max(initial=0.0)) > allow:
+            raise DesignError(f"pole placement failed (spectral radius {rho_all:.3g})", "poles")
+        return L
+    want = np.real(np.poly(p))
+    have = np.real(np.poly(A11 - L1 @ C1)) if n_o else np.ones(1)
+    scale = max(1.0, float(np.abs(want).max()))
+    if np.abs(have - want).max() > 1e-6 * scale or rho_all >= 1.0:
+        raise DesignError(f"pole placement inaccurate: got {np.round(got, 6)}", "poles")
+    return L
+
+
+def _real_block(p: NDArray) -> NDArray[np.float64]:
+    """A real block-diagonal matrix with eigenvalues ``p`` (conjugate-closed)."""
+    blocks: list[NDArray] = []
+    used = np.zeros(p.size, bool)
+    for i, z in enumerate(p):
+        if used[i]:
+            continue
+        used[i] = True
+        if abs(z.imag) < 1e-12:
+            blocks.append(np.array([[z.real]]))
+            continue
+        j = next(j for j in range(p.size) if not used[j] and abs(p[j] - z.conjugate()) < 1e-12)
+        used[j] = True
+        blocks.append(np.array([[z.real, z.imag], [-z.imag, z.real]]))
+    from scipy.linalg import block_diag
+
+    return block_diag(*blocks) if blocks else np.zeros((0, 0))
+
+
+def _conjugate_closed_prefix(p: NDArray, m: int) -> NDArray:
+    """``m`` of the poles ``p``, in order, keeping conjugate pairs together."""
+    out: list[complex] = []
+    used = np.zeros(p.size, bool)
+    for i, z in enumerate(p):
+        if used[i] or len(out) >= m:
+            continue
+        if abs(z.imag) < 1e-12:
+            out.append(z.real)
+            used[i] = True
+            continue
+        if len(out) + 2 > m:
+            continue
+        j = next(j for j in range(p.size) if not used[j] and j != i
+                 and abs(p[j] - z.conjugate()) < 1e-12)
+        out += [z, p[j]]
+        used[[i, j]] = True
+    while len(out) < m:  # only complex pairs were left: fill with real poles
+        out.append(0.5)
+    return np.asarray(out, dtype=complex)
+
+
+def lqe_gain(A: ArrayLike, C: ArrayLike, Q: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
+    """Steady-state Kalman predictor gain (discrete LQE) for ``x+ = A x + w``, ``y = C x + v``.
+
+    ``L = A P C^T (C P C^T + R)^-1`` with ``P`` the stabilising solution of
+    ``P = A P A^T - A P C^T (C P C^T + R)^-1 C P A^T + Q`` (``cov w = Q``,
+    ``cov v = R``), so that ``x^+ = A x^ + L (y - C x^)`` is the one-step
+    predictor of the Kalman filter in steady state.
+
+    Raises
+    ------
+    DesignError
+        If the Riccati equation has no stabilising solution (e.g. an
+        undetectable pair, or a noise-free mode on the unit circle).
+    """
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    R = np.asarray(R, dtype=float)
+    if Q.shape != A.shape:
+        raise DesignError(f"process covariance must be {A.shape}, got {Q.shape}", "covariance")
+    if R.shape != (C.shape[0], C.shape[0]):
+        raise DesignError(f"measurement covariance must be {(C.shape[0],) * 2}, got {R.shape}",
+                          "covariance")
+    for name, M in (("process", Q), ("measurement", R)):
+        if not np.allclose(M, M.T) or np.linalg.eigvalsh(0.5 * (M + M.T)).min() < 0:
+            raise DesignError(f"the {name} covariance must be symmetric positive semidefinite",
+                              "covariance")
+    if np.linalg.eigvalsh(0.5 * (R + R.T)).min() <= 0:
+        raise DesignError("the measurement covariance must be positive definite", "covariance")
+    try:
+        P = solve_discrete_are(A.T, C.T, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise DesignError(f"no stabilising Riccati solution (discrete LQE): {exc}",
+                          "LQE") from None
+    L = A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + R)
+    if np.abs(np.linalg.eigvals(A - L @ C)).max() >= 1.0:
+        raise DesignError("the LQE gain does not stabilise the error system (a noise-free "
+                          "mode on the unit circle?)", "LQE")
+    return L

@@ -1,0 +1,133 @@
+"""python-control in and out, keyword constructors, names in reports."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import cont2discrete
+
+import setobs as so
+from setobs import LinearSystem
+from setobs.exceptions import DimensionError
+
+control = pytest.importorskip("control")
+
+J, Bf, TS = 1.2e-4, 7.03e-5, 1e-3
+A_C = np.array([[0.0, 1.0], [0.0, -Bf / J]])
+B_C = np.array([[0.0, 0.0], [1.0 / J, -1.0 / J]])  # inputs: tau, tau_L
+
+
+def _motor_ss(dt=0):
+    return control.ss(A_C, B_C, [[1.0, 0.0]], [[0.0, 0.0]], dt, inputs=["tau", "tau_L"],
+                      outputs=["theta"], states=["theta", "omega"])
+
+
+def test_continuous_statespace_is_discretised_with_a_zero_order_hold():
+    """Against scipy's cont2discrete (ZOH) of the same model; names travel."""
+    sys = LinearSystem.from_statespace(_motor_ss(), disturbance_inputs=["tau_L"], dt=TS)
+    Ad, Bd, *_ = cont2discrete((A_C, B_C, np.eye(2), np.zeros((2, 2))), TS, method="zoh")
+    np.testing.assert_allclose(sys.Phi, Ad, rtol=1e-12)
+    np.testing.assert_allclose(sys.Gamma, Bd[:, :1], rtol=1e-12)
+    np.testing.assert_allclose(sys.G, Bd[:, 1:], rtol=1e-12)
+    assert (sys.input_names, sys.disturbance_names) == (("tau",), ("tau_L",))
+    assert sys.state_names == ("theta", "omega") and sys.output_names == ("theta",)
+    assert sys.dt == TS
+    # the library's own servo-motor example is the same model
+    ex = so.examples.servo_motor()
+    np.testing.assert_allclose(sys.Phi, ex.Phi, rtol=1e-12)
+    np.testing.assert_allclose(sys.G, ex.G, rtol=1e-12)
+
+
+def test_discrete_statespace_keeps_feedthrough_and_round_trips():
+    rng = np.random.default_rng(0)
+    A, B = 0.5 * rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
+    C, D = rng.normal(size=(2, 3)), np.hstack([rng.normal(size=(2, 2)), np.zeros((2, 1))])
+    ss = control.ss(A, B, C, D, 0.1, inputs=["u1", "u2", "w"], outputs=["p", "v"])
+    sys = LinearSystem.from_statespace(ss, disturbance_inputs="w")
+    np.testing.assert_array_equal(sys.Du, D[:, :2])
+    assert sys.dt == 0.1 and sys.input_names == ("u1", "u2")
+    back = sys.to_statespace()
+    assert back.dt == 0.1 and list(back.input_labels) == ["u1", "u2", "w"]
+    assert list(back.output_labels) == ["p", "v"]
+    for name in "ABCD":
+        np.testing.assert_array_equal(getattr(back, name), getattr(ss, name))
+    # python-control's own simulation of the exported model = the model's equations
+    N = 30
+    U = rng.normal(size=(N, 2))
+    Dd = np.cumsum(rng.normal(size=(N, 1)), axis=0)
+    resp = control.forced_response(back, T=np.arange(N) * 0.1, U=np.hstack([U, Dd]).T)
+    x, Y = np.zeros(3), np.empty((N, 2))
+    for k in range(N):
+        Y[k] = sys.Xi @ x + sys.Du @ U[k]
+        x = sys.Phi @ x + sys.Gamma @ U[k] + sys.G @ Dd[k]
+    np.testing.assert_allclose(resp.outputs.T, Y, rtol=1e-10, atol=1e-10)
+
+
+def test_from_matrices_both_ways_of_stating_the_disturbance():
+    A, B, C = [[1.0, 0.1], [0.0, 1.0]], [[0.0, 0.0], [0.1, -0.1]], [[1.0, 0.0]]
+    a = LinearSystem.from_matrices(A=A, B=B, C=C, disturbance_inputs=[1],
+                                   input_names=["u", "load"])
+    b = LinearSystem.from_matrices(A=A, B=[[0.0], [0.1]], C=C, G=[[0.0], [-0.1]])
+    for name in ("Phi", "G", "Xi", "Gamma"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.disturbance_names == ("load",) and a.input_names == ("u",)
+    c = LinearSystem.from_matrices(A=A_C, B=B_C, C=[[1.0, 0.0]], disturbance_inputs=1,
+                                   continuous=True, dt=TS)
+    np.testing.assert_allclose(c.Phi, so.examples.servo_motor().Phi, rtol=1e-12)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({}, "state which inputs are disturbances"),
+    ({"G": [[1.0], [0.0]], "disturbance_inputs": [0]}, "either G or disturbance_inputs"),
+    ({"disturbance_inputs": ["load"]}, "no input named 'load'"),
+    ({"disturbance_inputs": [0], "D": [[1.0, 0.0]]}, "D columns of the disturbance"),
+    ({"disturbance_inputs": [0], "continuous": True}, "needs the sampling time dt"),
+    ({"disturbance_inputs": [2]}, "index 2 is out of range"),
+])
+def test_from_matrices_bad_input(kwargs, match):
+    with pytest.raises(DimensionError, match=match):
+        LinearSystem.from_matrices(A=np.eye(2), B=np.ones((2, 2)), C=[[1.0, 0.0]], **kwargs)
+
+
+def test_from_matrices_is_keyword_only():
+    with pytest.raises(TypeError):
+        LinearSystem.from_matrices(np.eye(2), np.ones((2, 1)), [[1.0, 0.0]])
+
+
+def test_statespace_accepted_wherever_a_system_is_taken():
+    """With disturbance_inputs stated: diagnose, the SMFDO and the observers give the
+    same results as on the converted LinearSystem; without it a clear TypeError."""
+    ss = _motor_ss()
+    sys = LinearSystem.from_statespace(ss, ["tau_L"], dt=TS)
+    dss = control.c2d(ss, TS)
+    rep = so.analysis.diagnose(dss, disturbance_inputs=["tau_L"])
+    assert rep.existing == so.analysis.diagnose(sys).existing
+    rng = np.random.default_rng(1)
+    Y, U = np.cumsum(rng.normal(size=(20, 1)), axis=0) * 1e-3, rng.normal(size=(20, 1)) * 0.01
+    r1 = so.SMFDO(dss, increment_set=[0.1], measurement_noise=1e-3,
+                  disturbance_inputs=[1]).run(Y, U)
+    r2 = so.SMFDO(sys, increment_set=[0.1], measurement_noise=1e-3).run(Y, U)
+    np.testing.assert_allclose(r1.lo, r2.lo, rtol=1e-9, atol=1e-12)
+    p1 = so.observers.PIO(dss, disturbance_inputs="tau_L").run(Y, U).d_hat
+    np.testing.assert_allclose(p1, so.observers.PIO(sys).run(Y, U).d_hat, rtol=1e-9)
+    with pytest.raises(TypeError, match=r"say which of its inputs are disturbances"):
+        so.analysis.diagnose(ss)
+    with pytest.raises(DimensionError, match=r"continuous-time: give the sampling time.*dt=Ts"):
+        so.analysis.diagnose(ss, disturbance_inputs=[1])
+    with pytest.raises(TypeError, match="already a LinearSystem"):
+        so.analysis.diagnose(sys, disturbance_inputs=[0])
+    with pytest.raises(DimensionError, match="differs from the model's sampling time"):
+        LinearSystem.from_statespace(dss, [1], dt=0.5)
+
+
+def test_signal_names_in_the_diagnosis():
+    sys = LinearSystem.from_statespace(_motor_ss(), ["tau_L"], dt=TS)
+    text = repr(so.analysis.diagnose(sys))
+    assert "disturbances (tau_L); outputs (theta); inputs (tau)" in text
+    assert "sampling time 0.001 s" in text
+    assert "signals" not in repr(so.analysis.diagnose(so.examples.chang2006()))
+
+
+def test_positional_constructor_warns_loudly_in_its_docstring():
+    assert "second** matrix" in LinearSystem.__doc__
+    assert "from_matrices" in LinearSystem.__doc__
