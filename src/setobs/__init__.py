@@ -19,7 +19,7 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
-from .setmembership import SMFDO, ModelInvalidatedError
+from .setmembership import SMFDO, ModelInvalidatedError, calibrate_noise, noise_tradeoff
 from .systems import LinearSystem
 
 __version__ = "0.1.0"
@@ -37,9 +37,11 @@ __all__ = [
     "UnboundedSetError",
     "__version__",
     "analysis",
+    "calibrate_noise",
     "compare",
     "examples",
     "geometry",
+    "noise_tradeoff",
     "observers",
     "plotting",
     "setmembership",

@@ -1,5 +1,6 @@
 """Set-membership disturbance observation: the SMFDO and worst-case-optimal estimates."""
 
+from .calibrate import NoiseCalibration, NoiseTradeoff, calibrate_noise, noise_tradeoff
 from .estimates import PointEstimate, chebyshev_center, interval_center
 from .smfdo import (
     SMFDO,
@@ -15,9 +16,13 @@ __all__ = [
     "ExistenceError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
+    "NoiseCalibration",
+    "NoiseTradeoff",
     "PointEstimate",
     "SMFDOResult",
     "SMFDOStep",
+    "calibrate_noise",
     "chebyshev_center",
     "interval_center",
+    "noise_tradeoff",
 ]
