@@ -62,7 +62,7 @@ def test_check_output_formats(tmp_path, capsys):
     [
         (None, ".json", "no such file"),
         ("{not json", ".json", "could not read"),
-        ('{"Phi": [[1]], "Xi": [[1]]}', ".json", "missing matrix 'G'"),
+        ('{"Phi": [[1]], "Xi": [[1]]}', ".json", "disturbance channels are not stated"),
         ('{"Phi": [[1, 2]], "G": [[1]], "Xi": [[1]]}', ".json", "Phi must be square"),
         ("x", ".txt", "unsupported file type"),
     ],
@@ -117,3 +117,164 @@ def test_check_example_names_and_all(capsys):
     assert "V0 is not diagonal" in out  # Example 1
     assert main(["check", "cgl1", "--format", "markdown"]) == 0
     assert "| variant MB-ESO | yes |" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------- models
+J_, B_ = 1.2e-4, 7.03e-5
+MOTOR_CT = {"A": [[0.0, 1.0], [0.0, -B_ / J_]], "B": [[0.0, 0.0], [1 / J_, -1 / J_]],
+            "C": [[1.0, 0.0]], "D": [[0.0, 0.0]], "continuous": True,
+            "input_names": ["tau", "tau_L"], "disturbance_inputs": ["tau_L"],
+            "output_names": ["theta"]}
+
+
+@pytest.mark.parametrize("fmt", ["yaml", "json", "mat", "npz"])
+def test_model_files_in_control_naming(tmp_path, fmt):
+    """A, B, C, D with disturbance_inputs and a continuous-time flag: the same model
+    as the library's servo motor (ZOH at the record's sampling time)."""
+    from setobs.io import load_model
+
+    d = dict(MOTOR_CT)
+    f = tmp_path / f"m.{fmt}"
+    if fmt == "yaml":
+        f.write_text(yaml.safe_dump(d))
+    elif fmt == "json":
+        f.write_text(json.dumps(d))
+    else:  # MATLAB convention: Ts = 0 is continuous; indices for the disturbance inputs
+        arrs = {k: np.asarray(d[k]) for k in "ABCD"}
+        arrs |= {"Ts": 0.0, "disturbance_inputs": np.array([1])}
+        if fmt == "mat":
+            savemat(f, arrs)
+        else:
+            np.savez(f, **arrs)
+    sys_ = load_model(f, dt=1e-3)
+    ref = so.examples.servo_motor()
+    np.testing.assert_allclose(sys_.Phi, ref.Phi, rtol=1e-12)
+    np.testing.assert_allclose(sys_.G, ref.G, rtol=1e-12)
+    np.testing.assert_allclose(sys_.Gamma, ref.Gamma, rtol=1e-12)
+    assert sys_.dt == 1e-3 and sys_.q == 1 and sys_.p == 1
+
+
+def test_check_discretises_a_continuous_model_with_its_Ts(tmp_path, capsys):
+    """`setobs check` no longer analyses continuous-time matrices as discrete: the
+    servo motor's invariant zero is -0.9998 after ZOH at 1 ms (none in continuous
+    time, where treating A as discrete would put the pole at 1 + ... on the wrong
+    side)."""
+    f = tmp_path / "m.yaml"
+    f.write_text(yaml.safe_dump({**MOTOR_CT, "Ts": 1e-3}))
+    assert main(["check", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "finite invariant zeros: -0.999805" in out and "sampling time 0.001 s" in out
+    f2 = tmp_path / "m2.yaml"
+    f2.write_text(yaml.safe_dump(MOTOR_CT))
+    assert main(["check", str(f2)]) == 2
+    assert "continuous-time model needs a sampling time" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------- estimate
+def _motor_record(tmp_path, N=400, seed=0, noise=1e-4, gap=None):
+    """Own simulation of the ZOH motor with a slowly varying load torque; CSV with
+    a header, time column, position and commanded torque."""
+    rng = np.random.default_rng(seed)
+    sys_ = so.examples.servo_motor()
+    tau = 0.05 + 0.01 * np.sin(np.arange(N) * 0.02)
+    d = 0.03 + np.cumsum(rng.uniform(-1e-3, 1e-3, N))
+    x = np.zeros(2)
+    Y = np.empty(N)
+    for k in range(N):
+        Y[k] = x[0] + noise * rng.uniform(-1, 1)
+        x = sys_.Phi @ x + sys_.Gamma[:, 0] * tau[k] + sys_.G[:, 0] * d[k]
+    if gap is not None:
+        Y[gap] = np.nan
+    f = tmp_path / "rec.csv"
+    lines = ["t,theta,tau"] + [
+        f"{k * 1e-3:.6f},{'' if np.isnan(y) else repr(float(y))},{float(u)!r}"
+        for k, (y, u) in enumerate(zip(Y, tau, strict=True))]
+    f.write_text("\n".join(lines) + "\n")
+    return f, d
+
+
+def test_estimate_end_to_end_contains_the_truth(tmp_path, capsys):
+    rec, d = _motor_record(tmp_path, gap=slice(200, 210))
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    out = tmp_path / "out"
+    assert main(["estimate", str(rec), "--model", str(model), "--outputs", "theta",
+                 "--inputs", "tau", "--time", "t", "--increment", "1e-3", "--noise", "1e-4",
+                 "--out", str(out), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "steps 400" in text and "first inconsistent step: none" in text
+    import pandas as pd
+
+    df = pd.read_csv(out / "estimate.csv")
+    assert list(df.columns) == ["time", "tau_L", "tau_L_lo", "tau_L_hi", "radius", "status"]
+    np.testing.assert_allclose(df["time"], np.arange(400) * 1e-3, atol=1e-9)
+    ok = np.isfinite(df["tau_L_lo"])
+    assert ok.sum() > 350
+    assert np.all(df["tau_L_lo"][ok] <= d[ok] + 1e-12) and np.all(d[ok] <= df["tau_L_hi"][ok]
+                                                                   + 1e-12)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["steps"] == 400 and summary["first_inconsistent_step"] is None
+    assert abs(summary["sampling_time"] - 1e-3) < 1e-12
+    assert (out / "estimate.png").stat().st_size > 10_000
+
+
+def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
+    """--calibrate finds a bound at most the simulated noise that the record
+    accepts; a too small bound reports the first inconsistent step (not a crash)."""
+    rec, _ = _motor_record(tmp_path, noise=2e-4)
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    args = ["estimate", str(rec), "--model", str(model), "--outputs", "1", "--inputs", "2",
+            "--dt", "1e-3", "--increment", "1e-3", "--no-plot", "--no-progress"]
+    assert main([*args, "--calibrate", "--out", str(tmp_path / "a")]) == 0
+    text = capsys.readouterr().out
+    noise = float(text.split("calibrated noise: theta ")[1].split()[0])
+    assert 0 < noise <= 2e-4 * (1 + 1e-6) + 1e-7
+    assert "first inconsistent step: none" in text
+    assert main([*args, "--noise", "1e-6", "--out", str(tmp_path / "b")]) == 0
+    summary = json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert summary["first_inconsistent_step"] is not None
+    assert summary["statuses"].get("skipped", 0) > 0
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    (["--outputs", "nope"], "no column 'nope'"),
+    (["--outputs", "theta", "--increment", "-1"], "--increment must be finite and nonneg"),
+    (["--outputs", "theta", "--increment", "1,2"], "--increment needs 1 or 1 values"),
+    (["--outputs", "theta", "--window", "ten"], "--window must be an integer"),
+    (["--outputs", "theta,t"], "the model has 1 output(s), the record 2"),
+    (["--outputs", "theta", "--no-inputs"], "name the input columns with --inputs"),
+    (["--outputs", "theta", "--dt", "0.5"], "disagrees with the time column"),
+])
+def test_estimate_bad_options_exit_2(tmp_path, capsys, extra, match):
+    rec, _ = _motor_record(tmp_path, N=30)
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    args = ["estimate", str(rec), "--model", str(model), "--time", "t", "--inputs", "tau",
+            "--increment", "1e-3", "--no-plot", "--no-progress", "--out", str(tmp_path / "o")]
+    if "--increment" in extra:
+        i = args.index("--increment")
+        del args[i : i + 2]
+    if "--no-inputs" in extra:
+        i = args.index("--inputs")
+        del args[i : i + 2]
+        extra = [e for e in extra if e != "--no-inputs"]
+    assert main([*args, *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("setobs: error:") and match in err and "\n" not in err, err
+
+
+def test_estimate_bad_record_files(tmp_path, capsys):
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,theta,tau\n0,1,x\n")
+    cases = [(tmp_path / "missing.csv", "no such file"), (bad, "non-numeric entry")]
+    npz = tmp_path / "two.npz"
+    np.savez(npz, a=np.zeros((5, 3)), b=np.zeros((5, 3)))
+    cases.append((npz, "name the data matrix with --variable"))
+    for f, match in cases:
+        assert main(["estimate", str(f), "--model", str(model), "--outputs", "1",
+                     "--inputs", "2", "--dt", "1e-3", "--increment", "1"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert match in err and "\n" not in err, err

@@ -1,8 +1,9 @@
 """Command line: a thin layer over the public API.
 
 ``setobs demo`` (the main job), ``setobs check FILE`` (which observers exist for
-a system), ``setobs study CONFIG`` (a Monte Carlo campaign). Bad input prints one
-line on stderr and exits with code 2.
+a system), ``setobs estimate RECORD --model FILE`` (certified disturbance bounds
+from a measured record), ``setobs study CONFIG`` (a Monte Carlo campaign). Bad
+input prints one line on stderr and exits with code 2.
 """
 
 from __future__ import annotations
@@ -22,8 +23,6 @@ from .exceptions import SetobsError
 from .systems import LinearSystem
 
 EXIT_BAD_INPUT = 2
-_ALIASES = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
-            "Gamma": ("Gamma", "B", "B0")}
 
 
 class CLIError(Exception):
@@ -89,57 +88,11 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
 
 
 # ---------------------------------------------------------------------------- check
-def _pick(data: dict[str, Any], key: str, required: bool = True):
-    for name in _ALIASES[key]:
-        if name in data:
-            try:
-                M = np.asarray(data[name], dtype=float)
-            except (TypeError, ValueError):
-                raise CLIError(f"matrix {name!r} must be a numeric matrix (a list of rows of "
-                               f"numbers), got {str(data[name])[:60]!r}") from None
-            if M.ndim > 2:
-                raise CLIError(f"matrix {name!r} must be 2-D, got {M.ndim} dimensions")
-            return M
-    if required:
-        raise CLIError(f"missing matrix {key!r} (accepted names: {', '.join(_ALIASES[key])})")
-    return None
+def load_system(path: str | Path, dt: float | None = None) -> LinearSystem:
+    """A :class:`LinearSystem` from a model file (:func:`setobs.io.load_model`)."""
+    from .io import load_model
 
-
-def load_system(path: str | Path) -> LinearSystem:
-    """A :class:`LinearSystem` from ``.json``, ``.yaml``/``.yml``, ``.npz`` or ``.mat``.
-
-    The file holds matrices named ``Phi``, ``G``, ``Xi`` (aliases ``A``/``E``/``C``)
-    and optionally ``Gamma`` (alias ``B``).
-    """
-    p = Path(path)
-    if not p.exists():
-        raise CLIError(f"no such file: {p}")
-    suffix = p.suffix.lower()
-    try:
-        if suffix == ".json":
-            data = json.loads(p.read_text())
-        elif suffix in (".yaml", ".yml"):
-            import yaml
-
-            data = yaml.safe_load(p.read_text())
-        elif suffix == ".npz":
-            with np.load(p) as z:
-                data = {k: z[k] for k in z.files}
-        elif suffix == ".mat":
-            from scipy.io import loadmat
-
-            data = {k: v for k, v in loadmat(p).items() if not k.startswith("__")}
-        else:
-            raise CLIError(f"unsupported file type {suffix!r} (use .json, .yaml, .npz or .mat)")
-    except CLIError:
-        raise
-    except Exception as exc:  # parse errors of any reader
-        raise CLIError(f"could not read {p}: {exc}") from None
-    if not isinstance(data, dict):
-        raise CLIError(f"{p} must contain a mapping of matrices")
-    Gamma = _pick(data, "Gamma", required=False)
-    return LinearSystem(_pick(data, "Phi"), _pick(data, "G"), _pick(data, "Xi"),
-                        Gamma if Gamma is not None and Gamma.size else None)
+    return load_model(path, dt=dt)
 
 
 def _jsonable(v: Any) -> Any:
@@ -182,6 +135,121 @@ def _print_report(d, fmt: str) -> None:
         print(json.dumps(out, indent=2))
     else:
         print(repr(d))
+
+
+# ---------------------------------------------------------------------------- estimate
+def _numbers(name: str, text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        vals = [float(v) for v in str(text).replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise CLIError(f"{name} must be a number or comma-separated numbers, got "
+                       f"{text!r}") from None
+    if not vals or any(not np.isfinite(v) or v < 0 for v in vals):
+        raise CLIError(f"{name} must be finite and nonnegative, got {text!r}")
+    return vals
+
+
+def _per_channel(name: str, vals: list[float], dim: int) -> np.ndarray:
+    if len(vals) == 1:
+        return np.full(dim, vals[0])
+    if len(vals) != dim:
+        raise CLIError(f"{name} needs 1 or {dim} values, got {len(vals)}")
+    return np.asarray(vals)
+
+
+def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None,
+             time_col: str | None = None, dt: float | None = None,
+             variable: str | None = None, decimate: int = 1, increment: str,
+             noise: str | None = None, calibrate: bool = False, window: int | None = 10,
+             out: str | None = None, plot: bool = True, progress: bool | None = None,
+             on_inconsistent: str = "skip") -> int:
+    """Certified disturbance bounds from a measured record (CSV + plot + summary)."""
+    import time as _time
+
+    from .io import load_model, load_record
+    from .setmembership import SMFDO, calibrate_noise
+
+    rec = load_record(record, outputs=outputs, inputs=inputs, time=time_col, dt=dt,
+                      variable=variable, decimate=decimate)
+    sys_ = load_model(model, dt=rec.dt)
+    if rec.Y.shape[1] != sys_.l:
+        raise CLIError(f"the model has {sys_.l} output(s), the record {rec.Y.shape[1]} "
+                       f"(--outputs {outputs})")
+    if sys_.p and rec.U is None:
+        raise CLIError(f"the model has {sys_.p} input(s): name the input columns with --inputs")
+    if rec.U is not None and rec.U.shape[1] != sys_.p:
+        raise CLIError(f"the model has {sys_.p} input(s), the record {rec.U.shape[1]} "
+                       f"(--inputs {inputs})")
+    inc = _per_channel("--increment", _numbers("--increment", increment), sys_.q)
+    if calibrate and noise is not None:
+        shape = _per_channel("--noise (shape for --calibrate)", _numbers("--noise", noise),
+                             sys_.l)
+    else:
+        shape = None
+    t0 = _time.perf_counter()
+    if calibrate:
+        cal = calibrate_noise(sys_, rec.Y, rec.U, increment=inc, shape=shape)
+        v = cal.radii
+        pairs = ", ".join(f"{n} {r:.6g}" for n, r in zip(sys_.output_names, v, strict=True))
+        print(f"calibrated noise: {pairs} (LP over {cal.samples} samples)")
+    elif noise is not None:
+        v = _per_channel("--noise", _numbers("--noise", noise), sys_.l)
+    else:
+        v = None
+    obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
+                on_inconsistent=on_inconsistent)
+    N = rec.Y.shape[0]
+    show = (N >= 2000 and sys.stderr.isatty()) if progress is None else progress
+    import warnings
+
+    from .setmembership import ModelInvalidatedWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelInvalidatedWarning)
+        res = obs.run(rec.Y, rec.U, progress=show)
+    elapsed = _time.perf_counter() - t0
+    out_dir = Path(out or Path(record).with_suffix("").name + "_estimate")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    df = res.to_pandas(dt=rec.dt, names=sys_.disturbance_names)
+    df.insert(0, "time", rec.t[: len(df)])
+    df.to_csv(out_dir / "estimate.csv", index=False)
+    statuses = {str(k): int(c) for k, c in zip(*np.unique(res.status, return_counts=True),
+                                              strict=True)}
+    first = res.first_inconsistent
+    summary = {"record": str(record), "model": str(model), "steps": int(N),
+               "sampling_time": rec.dt, "window": window, "increment": inc.tolist(),
+               "noise": None if v is None else np.asarray(v).tolist(),
+               "calibrated": bool(calibrate), "statuses": statuses,
+               "first_inconsistent_step": first,
+               "first_inconsistent_time": None if first is None else float(rec.t[first]),
+               "seconds": round(elapsed, 3)}
+    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(f"steps {N}; statuses: " + ", ".join(f"{k} {c}" for k, c in statuses.items())
+          + f"; first inconsistent step: {first if first is not None else 'none'}"
+          + (f" (t = {rec.t[first]:g} s)" if first is not None and rec.dt else "")
+          + f"; {elapsed:.2f} s")
+    written = [out_dir / "estimate.csv", out_dir / "summary.json"]
+    if plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from .plotting import plot_estimate_band
+
+        fig, axes = plt.subplots(sys_.q, 1, figsize=(8, 2.6 * sys_.q), sharex=True,
+                                 squeeze=False)
+        for i in range(sys_.q):
+            plot_estimate_band(res, component=i, ax=axes[i, 0], t=rec.t)
+        axes[0, 0].set_title(f"certified disturbance bounds: {Path(record).name}")
+        fig.tight_layout()
+        fig.savefig(out_dir / "estimate.png", dpi=110)
+        plt.close(fig)
+        written.append(out_dir / "estimate.png")
+    print("wrote " + ", ".join(str(w) for w in written))
+    return 0
 
 
 # ---------------------------------------------------------------------------- study
@@ -258,6 +326,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma); "
                                  "or an example name (chang2006, cgl1, ...), or 'all'")
     pc.add_argument("--format", choices=["text", "markdown", "json"], default="text")
+    pe = sub.add_parser("estimate", help="certified disturbance bounds from a measured record")
+    pe.add_argument("record", help="the record: .csv (header optional), .mat or .npz")
+    pe.add_argument("--model", required=True,
+                    help="model file (.yaml/.json/.mat/.npz): Phi, G, Xi (, Gamma, Du) or "
+                         "A, B, C, D with G or disturbance_inputs; Ts; continuous: true")
+    pe.add_argument("--outputs", required=True, help="output columns (names or indices, "
+                                                     "comma-separated)")
+    pe.add_argument("--inputs", help="input columns (names or indices)")
+    pe.add_argument("--time", dest="time_col", help="time column (sets the sampling time)")
+    pe.add_argument("--dt", type=float, help="sampling time (without a time column)")
+    pe.add_argument("--variable", help="data matrix in a .mat/.npz record")
+    pe.add_argument("--decimate", type=int, default=1, help="keep every k-th sample "
+                                                           "(continuous models)")
+    pe.add_argument("--increment", required=True,
+                    help="disturbance increment bound per sample (one or q numbers)")
+    pe.add_argument("--noise", help="measurement-noise radii (one or l numbers); with "
+                                    "--calibrate: the shape to scale")
+    pe.add_argument("--calibrate", action="store_true",
+                    help="use the smallest noise bound that makes the record consistent")
+    pe.add_argument("--window", default="10", help="SMFDO window delta, or 'exact'")
+    pe.add_argument("--on-inconsistent", choices=["skip", "reset", "raise"], default="skip")
+    pe.add_argument("--out", help="output directory")
+    pe.add_argument("--no-plot", action="store_true")
+    pe.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None)
     ps = sub.add_parser("study", help="run a Monte Carlo campaign from a YAML file")
     ps.add_argument("config")
     ps.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler address")
@@ -266,7 +358,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_usage(sys.stderr)
-        print("setobs: error: a command is required (demo, check or study; see --help)",
+        print("setobs: error: a command is required (demo, check, estimate or study; see "
+              "--help)",
               file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
@@ -274,6 +367,21 @@ def main(argv: Sequence[str] | None = None) -> int:
             return demo(args.out, args.steps, args.seed)
         if args.command == "check":
             return check(args.file, args.format)
+        if args.command == "estimate":
+            if args.window in ("exact", "none", "None"):
+                window = None
+            else:
+                try:
+                    window = int(args.window)
+                except ValueError:
+                    raise CLIError(f"--window must be an integer or 'exact', got "
+                                   f"{args.window!r}") from None
+            return estimate(args.record, args.model, outputs=args.outputs, inputs=args.inputs,
+                            time_col=args.time_col, dt=args.dt, variable=args.variable,
+                            decimate=args.decimate, increment=args.increment,
+                            noise=args.noise, calibrate=args.calibrate, window=window,
+                            out=args.out, plot=not args.no_plot, progress=args.progress,
+                            on_inconsistent=args.on_inconsistent)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

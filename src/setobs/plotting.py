@@ -23,7 +23,7 @@ def _ax(ax):
 
 
 def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: int = 0,
-                       ax: Any = None, label: str = "SMFDO") -> Any:
+                       ax: Any = None, label: str = "SMFDO", t: ArrayLike | None = None) -> Any:
     """Estimate, its certified interval ``[lo, hi]`` and the truth (like Li-Cong-Dong Fig. 1(a)).
 
     Parameters
@@ -32,17 +32,30 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
     truth : array_like, shape (N, q), optional
     component : int
         Disturbance component to draw.
+    t : array_like, shape (N,), optional
+        Time axis; default ``k dt`` when the result knows the sampling time
+        (``result.dt``), else the step ``k``. The y label is the disturbance's
+        name (``result.names``).
     """
     ax = _ax(ax)
-    k = np.arange(result.lo.shape[0])
+    N = result.lo.shape[0]
+    dt = getattr(result, "dt", None)
+    if t is not None:
+        k = np.asarray(t, dtype=float)[:N]
+        xlabel = "time [s]"
+    elif dt:
+        k, xlabel = np.arange(N) * dt, "time [s]"
+    else:
+        k, xlabel = np.arange(N), "k"
+    names = getattr(result, "names", ()) or ()
     lo, hi = result.lo[:, component], result.hi[:, component]
     ok = np.isfinite(lo) & np.isfinite(hi)
     ax.fill_between(k[ok], lo[ok], hi[ok], alpha=0.3, label=f"{label} interval")
     ax.plot(k, result.estimate[:, component], lw=1.2, label=f"{label} estimate")
     if truth is not None:
         ax.plot(k, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
-    ax.set_xlabel("k")
-    ax.set_ylabel(f"d[{component}]")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(names[component] if len(names) > component else f"d[{component}]")
     ax.legend(loc="best", fontsize=7)
     return ax
 

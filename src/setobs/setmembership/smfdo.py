@@ -7,9 +7,9 @@ import numbers
 import threading
 import warnings
 from collections import OrderedDict, deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -144,6 +144,10 @@ class SMFDOResult:
         inconsistent with the model (status ``"skipped"`` or ``"reset"``): a
         fault-detection result (the model, the uncertainty sets or the sensor
         failed there). ``None`` if every measurement was consistent.
+    dt : float or None
+        The system's sampling time (for time axes).
+    names : tuple of str
+        The disturbance names (for tables and plot labels).
     """
 
     estimate: NDArray[np.float64]
@@ -153,6 +157,34 @@ class SMFDOResult:
     steps: list[SMFDOStep]
     status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
     first_inconsistent: int | None = None
+    dt: float | None = None
+    names: tuple[str, ...] = ()
+
+    def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
+        """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
+        (the estimate and its certified interval), then ``radius`` and ``status``.
+
+        The index is the time ``k dt`` (named ``"time"``) when a sampling time is
+        known (``dt`` or the system's), else the step ``k``.
+        """
+        import pandas as pd
+
+        N, q = self.lo.shape
+        nm = list(names) if names is not None else (list(self.names) or
+                                                      [f"d{i}" for i in range(q)])
+        if len(nm) != q:
+            raise DimensionError(f"names must have {q} entries, got {len(nm)}")
+        cols: dict[str, Any] = {}
+        for i, name in enumerate(nm):
+            cols[name] = self.estimate[:, i]
+            cols[f"{name}_lo"] = self.lo[:, i]
+            cols[f"{name}_hi"] = self.hi[:, i]
+        cols["radius"] = self.radius
+        cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
+        step = dt if dt is not None else self.dt
+        index = (pd.Index(np.arange(N) * step, name="time") if step
+                 else pd.RangeIndex(N, name="k"))
+        return pd.DataFrame(cols, index=index)
 
     @property
     def consistent(self) -> bool:
@@ -1077,7 +1109,8 @@ class SMFDO:
         raise ModelInvalidatedError(msg + " (no reset box explains it)", k)
 
     @with_single_threaded_blas
-    def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
+    def run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
+            progress: bool = False) -> SMFDOResult:
         """Process a whole record from the current state.
 
         Parameters
@@ -1099,6 +1132,8 @@ class SMFDO:
         SMFDOResult
             ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``radius`` and
             ``status`` ``(N,)``, ``first_inconsistent``.
+        progress : bool
+            Show a progress bar (tqdm, on stderr) over the record.
 
         Warns
         -----
@@ -1127,11 +1162,22 @@ class SMFDO:
         with_u = self._Du is not None
         self._in_run = True
         try:
+            bar = None
+            if progress:
+                from tqdm.auto import tqdm
+
+                bar = tqdm(total=N, unit="step", desc="SMFDO", mininterval=0.5)
             for j in range(N):
+                if bar is not None and j % 200 == 0 and j:
+                    bar.update(200)
                 u = Ua[j - 1] if (Ua is not None and j >= 1) else None
                 steps.append(self.update(Ya[j], u, u=Ua[j] if with_u else None))
+            if bar is not None:
+                bar.update(N - bar.n)
         finally:
             self._in_run = False
+            if progress and bar is not None:
+                bar.close()
         if Ua is not None and Ua.shape[0] == N and N:
             self._u_pending = Ua[N - 1].copy()
         q = self.sys.q
@@ -1154,6 +1200,8 @@ class SMFDO:
             steps,
             status,
             first,
+            self.sys.dt,
+            tuple(self.sys.disturbance_names),
         )
 
     def __repr__(self) -> str:
