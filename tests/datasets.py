@@ -23,3 +23,8 @@ def shared_data(relative: str) -> Path | None:
 
 
 HSM150 = shared_data("hsm150/idf_pos_0.06_1.mat")
+
+if HSM150 is None and os.environ.get("SETOBS_REQUIRE_DATA") == "1":
+    raise RuntimeError("SETOBS_REQUIRE_DATA=1 but the HSM150 record was not found "
+                       "($SETOBS_DATA, <repo>/../shared/data, /work/shared/data): the tests "
+                       "that need it would silently skip")

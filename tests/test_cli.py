@@ -278,3 +278,23 @@ def test_estimate_bad_record_files(tmp_path, capsys):
                      "--inputs", "2", "--dt", "1e-3", "--increment", "1"]) == 2
         err = capsys.readouterr().err.strip()
         assert match in err and "\n" not in err, err
+
+
+def test_study_on_the_users_own_model_file(tmp_path, capsys):
+    """A study YAML naming a model file (relative to the YAML): the campaign runs
+    on that plant (here the paper example written in A, B, C naming with G)."""
+    s = so.examples.chang2006()
+    (tmp_path / "plant.yaml").write_text(yaml.safe_dump(
+        {"A": s.Phi.tolist(), "G": s.G.tolist(), "C": s.Xi.tolist(), "Ts": 0.1}))
+    cfg = {"scenario": {"system": "plant.yaml", "horizon": 15},
+           "observers": [{"name": "SMFDO", "kind": "smfdo", "params": {"window": 5}}],
+           "runs": 2, "seed": 1, "out": str(tmp_path / "out")}
+    f = tmp_path / "study.yaml"
+    f.write_text(yaml.safe_dump(cfg))
+    assert main(["study", str(f), "--processes", "1"]) == 0
+    meta = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    assert meta["scenario"]["system"].endswith("plant.yaml")
+    import pandas as pd
+
+    table = pd.read_csv(tmp_path / "out" / "results.csv")
+    assert len(table) == 2 * 15 and (table["contained"] == 1).all()

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+
+from tests.datasets import HSM150
 
 NOTEBOOK_DIR = Path(__file__).parents[1] / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
@@ -12,6 +15,12 @@ NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
 def test_notebook_runs(path):
+    if path.name.startswith("07") and HSM150 is None:
+        # the real record stays outside the repository; CI has it and says so
+        if os.environ.get("SETOBS_REQUIRE_DATA") == "1":
+            pytest.fail("SETOBS_REQUIRE_DATA=1 but the HSM150 record was not found "
+                        "($SETOBS_DATA, ../shared/data, /work/shared/data)")
+        pytest.skip("the HSM150 record is not available here")
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     nb = nbformat.read(path, as_version=4)
@@ -25,5 +34,5 @@ def test_notebook_runs(path):
     assert not errors
 
 
-def test_there_are_six_notebooks():
-    assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06"]
+def test_there_are_seven_notebooks():
+    assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07"]

@@ -272,8 +272,15 @@ def study(config: str, dask: str | None = None, out: str | None = None,
     unknown = set(cfg) - {"scenario", "observers", "runs", "seed", "reference_window", "out"}
     if unknown:
         raise CLIError(f"unknown keys in {p}: {sorted(unknown)}")
+    sc_cfg = dict(cfg.get("scenario") or {})
+    from .studies import EXAMPLE_SYSTEMS
+
+    system = sc_cfg.get("system")
+    if isinstance(system, str) and system not in EXAMPLE_SYSTEMS:
+        # a model file, relative to the configuration file
+        sc_cfg["system"] = str((p.parent / system) if not Path(system).is_absolute() else system)
     try:
-        scenario = Scenario(**(cfg.get("scenario") or {}))
+        scenario = Scenario(**sc_cfg)
         specs = [ObserverSpec(o["name"], o["kind"], o.get("params") or {})
                  for o in cfg.get("observers") or []]
     except (TypeError, KeyError) as exc:

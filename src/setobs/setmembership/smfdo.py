@@ -1191,7 +1191,8 @@ class SMFDO:
                 f"uncertainty sets (first at k={first}) and were "
                 f"{'skipped' if what == 'skip' else 'handled by a reset'}: the bands at "
                 "those steps are not the model's consistent sets (see result.status, "
-                "result.first_inconsistent)", ModelInvalidatedWarning, stacklevel=2)
+                "result.first_inconsistent)", ModelInvalidatedWarning,
+                stacklevel=3)  # run -> the BLAS-limit wrapper -> the caller
         return SMFDOResult(
             np.array([s.estimate for s in steps]).reshape(N, q),
             np.array([s.lo for s in steps]).reshape(N, q),

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
+from os import PathLike
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -55,8 +57,11 @@ class Scenario:
 
     Attributes
     ----------
-    system : str
-        Name in :data:`EXAMPLE_SYSTEMS`.
+    system : str, path or LinearSystem
+        A name in :data:`EXAMPLE_SYSTEMS`, a model file (any format
+        :func:`setobs.io.load_model` reads: ``Phi, G, Xi`` or ``A, B, C, D``
+        with the disturbance channels), or a :class:`LinearSystem` (the
+        user's own plant).
     horizon : int
         Number of steps ``N``.
     increment : float
@@ -76,7 +81,7 @@ class Scenario:
         Initial disturbance (default: generator-specific).
     """
 
-    system: str = "chang2006"
+    system: str | LinearSystem = "chang2006"
     horizon: int = 100
     increment: float = 1.0
     x0_box: float | None = 1.0
@@ -86,9 +91,16 @@ class Scenario:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.system not in EXAMPLE_SYSTEMS:
-            raise DimensionError(f"unknown system {self.system!r}; choose from "
-                                 f"{sorted(EXAMPLE_SYSTEMS)}")
+        if isinstance(self.system, PathLike):
+            object.__setattr__(self, "system", str(self.system))
+        if isinstance(self.system, LinearSystem):
+            pass
+        elif not isinstance(self.system, str):
+            raise TypeError(f"system must be an example name, a model file or a LinearSystem, "
+                            f"got {type(self.system).__name__}")
+        elif self.system not in EXAMPLE_SYSTEMS and not Path(self.system).is_file():
+            raise DimensionError(f"unknown system {self.system!r}: neither an example "
+                                 f"({', '.join(sorted(EXAMPLE_SYSTEMS))}) nor a model file")
         if self.generator not in GENERATORS:
             raise DimensionError(f"unknown generator {self.generator!r}; choose from "
                                  f"{list(GENERATORS)}")
@@ -100,12 +112,25 @@ class Scenario:
             raise DimensionError(f"noise_std must be nonnegative, got {self.noise_std}")
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-data form (for metadata files)."""
-        return asdict(self)
+        """Plain-data form (for metadata files); a :class:`LinearSystem` becomes its
+        matrices."""
+        if not isinstance(self.system, LinearSystem):
+            return asdict(self)
+        sys = self.system
+        out = asdict(replace(self, system="chang2006"))
+        out["system"] = {"Phi": sys.Phi.tolist(), "G": sys.G.tolist(), "Xi": sys.Xi.tolist(),
+                         "Gamma": sys.Gamma.tolist(), "Du": sys.Du.tolist(), "dt": sys.dt}
+        return out
 
     def build_system(self) -> LinearSystem:
         """The scenario's :class:`LinearSystem`."""
-        return EXAMPLE_SYSTEMS[self.system]()
+        if isinstance(self.system, LinearSystem):
+            return self.system
+        if self.system in EXAMPLE_SYSTEMS:
+            return EXAMPLE_SYSTEMS[self.system]()
+        from ..io import load_model
+
+        return load_model(self.system)
 
     def increment_set(self, q: int) -> ConstrainedZonotope:
         """``{dd : |dd_i| <= increment}``."""
