@@ -141,7 +141,8 @@ def test_model_files_in_control_naming(tmp_path, fmt):
         f.write_text(json.dumps(d))
     else:  # MATLAB convention: Ts = 0 is continuous; indices for the disturbance inputs
         arrs = {k: np.asarray(d[k]) for k in "ABCD"}
-        arrs |= {"Ts": 0.0, "disturbance_inputs": np.array([1])}
+        arrs |= {"Ts": 0.0, "disturbance_inputs": np.array([1]),
+                 "input_names": np.array(["tau", "tau_L"])}
         if fmt == "mat":
             savemat(f, arrs)
         else:
@@ -152,6 +153,7 @@ def test_model_files_in_control_naming(tmp_path, fmt):
     np.testing.assert_allclose(sys_.G, ref.G, rtol=1e-12)
     np.testing.assert_allclose(sys_.Gamma, ref.Gamma, rtol=1e-12)
     assert sys_.dt == 1e-3 and sys_.q == 1 and sys_.p == 1
+    assert sys_.input_names == ("tau",) and sys_.disturbance_names == ("tau_L",)
 
 
 def test_check_discretises_a_continuous_model_with_its_Ts(tmp_path, capsys):

@@ -103,15 +103,9 @@ def _names(data: dict, key: str) -> list[str] | None:
     v = data[key]
     if isinstance(v, str):
         return [v]
-    if isinstance(v, np.ndarray):  # .mat char matrix / cell array, .npz string array
-        flat = [x for x in np.asarray(v, dtype=object).reshape(-1)]
-        out = []
-        for x in flat:
-            x = np.asarray(x).reshape(-1)[0] if isinstance(x, np.ndarray) else x
-            out.append(str(x).strip())
-        if v.dtype.kind == "U" and v.ndim == 2 and v.shape[0] > 1:  # char matrix rows
-            out = ["".join(r).strip() for r in v]
-        return out
+    if isinstance(v, np.ndarray):  # .mat char matrix (padded) / cell array, .npz strings
+        return [str(np.asarray(x).reshape(-1)[0] if isinstance(x, np.ndarray) else x).strip()
+                for x in np.asarray(v, dtype=object).reshape(-1)]
     if isinstance(v, list | tuple):
         return [str(x) for x in v]
     raise ModelFileError(f"{key!r} must be a list of names, got {v!r}")
