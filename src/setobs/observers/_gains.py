@@ -15,9 +15,10 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import null_space, orth, solve_discrete_are
+from scipy.linalg import block_diag, solve_discrete_are
 from scipy.signal import place_poles
 
+from ..analysis import observability, observability_matrix
 from .base import DesignError
 
 __all__ = ["default_poles", "lqe_gain", "place_gain"]
@@ -37,28 +38,12 @@ def default_poles(count: int, lo: float = 0.1, hi: float = 0.5) -> list[complex]
     return list(np.linspace(lo, hi, count))
 
 
-def _observable_split(A: NDArray[np.float64], C: NDArray[np.float64]):
-    """Orthonormal bases ``V_o`` (observable) and ``V_u`` (unobservable subspace)."""
-    n = A.shape[0]
-    blocks, M = [], C
-    for _ in range(n):
-        blocks.append(M)
-        M = M @ A
-    O = np.vstack(blocks)
-    scale = max(1.0, float(np.abs(O).max(initial=0.0)))
-    V_u = null_space(O, rcond=1e-10 * scale / max(1.0, float(np.abs(O).max(initial=1.0))))
-    V_o = orth(O.T) if V_u.shape[1] else np.eye(n)
-    if V_o.shape[1] + V_u.shape[1] != n:  # rank decision in the grey zone: use all of it
-        return np.eye(n), np.zeros((n, 0))
-    return V_o, V_u
-
-
 def _ackermann(A: NDArray[np.float64], c: NDArray[np.float64], poles: NDArray) -> NDArray:
     """Single-output gain ``L`` with ``char(A - L c) = prod (z - p)``: Ackermann's formula
     on the dual, ``L = p(A) O^-1 e_n`` with ``O = [c; c A; ...]``."""
     n = A.shape[0]
     coeffs = np.real(np.poly(poles))
-    O = np.vstack([c @ np.linalg.matrix_power(A, i) for i in range(n)])
+    O = observability_matrix(A, c, n)
     pA = np.zeros_like(A)
     for a in coeffs:
         pA = pA @ A + a * np.eye(n)
@@ -68,29 +53,22 @@ def _ackermann(A: NDArray[np.float64], c: NDArray[np.float64], poles: NDArray) -
 
 
 def _place_observable(A, C, poles, check):
-    n = A.shape[0]
-    rank_c = np.linalg.matrix_rank(C)
-    mult = max(int(np.sum(np.abs(poles - p) < 1e-12)) for p in poles) if n else 0
+    """Gain for an observable pair whose ``C`` has full row rank."""
+    n, rank_c = A.shape[0], C.shape[0]
     if n == 0:
-        return np.zeros((0, C.shape[0]))
-    if mult <= rank_c:
-        with warnings.catch_warnings():
-            # YT's robustness iteration may stop early; accuracy is checked by the caller.
-            warnings.simplefilter("ignore", UserWarning)
-            return place_poles(A.T, C.T, poles, method="YT").gain_matrix.T
-    if C.shape[0] == 1 or rank_c == 1:
-        # one independent output: Ackermann on the best-conditioned output combination
-        u, s, vt = np.linalg.svd(C, full_matrices=False)
-        c = s[0] * vt[:1]
-        L1 = _ackermann(A, c, poles)
-        return L1 @ u[:, :1].T
-    if check == "poles":
-        raise DesignError(f"poles repeated {mult} times cannot be placed with "
-                          f"{rank_c} independent outputs", "poles")
-    spread = poles + POLE_SPREAD * max(1.0, float(np.abs(poles).max())) * np.arange(n)
+        return np.zeros((0, rank_c))
+    mult = max(int(np.sum(np.abs(poles - p) < 1e-12)) for p in poles)
+    if mult > rank_c and rank_c == 1:
+        return _ackermann(A, C, poles)
+    if mult > rank_c:
+        if check == "poles":
+            raise DesignError(f"poles repeated {mult} times cannot be placed with "
+                              f"{rank_c} independent outputs", "poles")
+        poles = poles + POLE_SPREAD * max(1.0, float(np.abs(poles).max())) * np.arange(n)
     with warnings.catch_warnings():
+        # YT's robustness iteration may stop early; accuracy is checked by the caller.
         warnings.simplefilter("ignore", UserWarning)
-        return place_poles(A.T, C.T, spread, method="YT").gain_matrix.T
+        return place_poles(A.T, C.T, poles, method="YT").gain_matrix.T
 
 
 def place_gain(A: ArrayLike, C: ArrayLike, poles: Sequence[complex],
@@ -131,15 +109,14 @@ def place_gain(A: ArrayLike, C: ArrayLike, poles: Sequence[complex],
         raise DesignError(f"need {n} poles, got {p.size}", "pole count")
     if not np.allclose(np.sort_complex(p), np.sort_complex(p.conj()), atol=1e-12):
         raise DesignError(f"poles must be closed under conjugation, got {p.tolist()}", "poles")
-    V_o, V_u = _observable_split(A, C)
-    n_o = V_o.shape[1]
-    if V_u.shape[1]:
-        unobs = np.linalg.eigvals(V_u.T @ A @ V_u)
-        if np.abs(unobs).max() >= 1.0:
-            raise DesignError("the pair is not detectable: unobservable mode(s) "
-                              f"{np.round(unobs[np.abs(unobs) >= 1.0], 6).tolist()}",
-                              "detectable")
-        # keep a conjugate-closed subset of the requested poles
+    # the library's observability staircase and rank policy (as in the existence checks)
+    rep = observability(A, C)
+    if not rep.detectable:
+        raise DesignError("the pair is not detectable: unobservable mode(s) "
+                          f"{np.round(rep.unstable_unobservable_modes, 6).tolist()}",
+                          "detectable")
+    V_o, n_o = rep.observable_rows.T, rep.n_observable
+    if n_o < n:  # keep a conjugate-closed subset of the requested poles
         p = _conjugate_closed_prefix(p, n_o)
     A11, C1 = V_o.T @ A @ V_o, C @ V_o
     # independent output combinations only (redundant outputs trouble place_poles)
@@ -169,44 +146,39 @@ def place_gain(A: ArrayLike, C: ArrayLike, poles: Sequence[complex],
     return L
 
 
-def _real_block(p: NDArray) -> NDArray[np.float64]:
-    """A real block-diagonal matrix with eigenvalues ``p`` (conjugate-closed)."""
-    blocks: list[NDArray] = []
+def _conjugate_groups(p: NDArray) -> list[NDArray]:
+    """The poles ``p`` in order as groups: a real pole, or a conjugate pair."""
+    groups: list[NDArray] = []
     used = np.zeros(p.size, bool)
     for i, z in enumerate(p):
         if used[i]:
             continue
         used[i] = True
         if abs(z.imag) < 1e-12:
-            blocks.append(np.array([[z.real]]))
+            groups.append(np.array([z.real], dtype=complex))
             continue
         j = next(j for j in range(p.size) if not used[j] and abs(p[j] - z.conjugate()) < 1e-12)
         used[j] = True
-        blocks.append(np.array([[z.real, z.imag], [-z.imag, z.real]]))
-    from scipy.linalg import block_diag
+        groups.append(np.array([z, p[j]]))
+    return groups
 
+
+def _real_block(p: NDArray) -> NDArray[np.float64]:
+    """A real block-diagonal matrix with eigenvalues ``p`` (conjugate-closed)."""
+    blocks = [np.array([[g[0].real]]) if g.size == 1 else
+              np.array([[g[0].real, g[0].imag], [-g[0].imag, g[0].real]])
+              for g in _conjugate_groups(p)]
     return block_diag(*blocks) if blocks else np.zeros((0, 0))
 
 
 def _conjugate_closed_prefix(p: NDArray, m: int) -> NDArray:
-    """``m`` of the poles ``p``, in order, keeping conjugate pairs together."""
+    """``m`` of the poles ``p``, in order, keeping conjugate pairs together (real
+    poles 0.5 fill up when only pairs would overshoot)."""
     out: list[complex] = []
-    used = np.zeros(p.size, bool)
-    for i, z in enumerate(p):
-        if used[i] or len(out) >= m:
-            continue
-        if abs(z.imag) < 1e-12:
-            out.append(z.real)
-            used[i] = True
-            continue
-        if len(out) + 2 > m:
-            continue
-        j = next(j for j in range(p.size) if not used[j] and j != i
-                 and abs(p[j] - z.conjugate()) < 1e-12)
-        out += [z, p[j]]
-        used[[i, j]] = True
-    while len(out) < m:  # only complex pairs were left: fill with real poles
-        out.append(0.5)
+    for g in _conjugate_groups(p):
+        if len(out) + g.size <= m:
+            out += list(g)
+    out += [0.5] * (m - len(out))
     return np.asarray(out, dtype=complex)
 
 

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_discrete_are, solve_sylvester
+from scipy.linalg import block_diag, solve_discrete_are, solve_sylvester
 
 from .._validation import as_matrix
 from ..analysis import (
@@ -46,12 +46,6 @@ FU_WANG_HO_GAINS = {
 }
 
 
-def _place(A: NDArray[np.float64], C: NDArray[np.float64], poles: Sequence[complex],
-           check: str = "poles") -> NDArray[np.float64]:
-    """Observer gain with ``eig(A - L C) = poles`` (see :func:`._gains.place_gain`)."""
-    return place_gain(A, C, poles, check)
-
-
 def _cov(name: str, value: ArrayLike | None, dim: int, default: float | None
          ) -> NDArray[np.float64]:
     """A covariance matrix from a scalar (times I), a vector (diagonal) or a matrix."""
@@ -69,14 +63,6 @@ def _cov(name: str, value: ArrayLike | None, dim: int, default: float | None
     return as_matrix(name, v, rows=dim, cols=dim)
 
 
-def _lqe_augmented(A: NDArray[np.float64], C: NDArray[np.float64], blocks: list[NDArray],
-                   R: NDArray[np.float64]) -> NDArray[np.float64]:
-    """LQE gain of an augmented pair whose noise covariance is block-diagonal."""
-    from scipy.linalg import block_diag
-
-    return lqe_gain(A, C, block_diag(*blocks), R)
-
-
 def design_pio(sys: LinearSystem, poles: Sequence[complex]) -> dict[str, NDArray[np.float64]]:
     """PIO gains ``P`` (n x l), ``L`` (q x l) placing the error poles (n + q of them).
 
@@ -87,7 +73,7 @@ def design_pio(sys: LinearSystem, poles: Sequence[complex]) -> dict[str, NDArray
     if not cond.exists:
         raise DesignError(f"PIO: {cond.reason}", cond.condition)
     a = sys.augmented()
-    K = _place(a.A, a.C, poles)
+    K = place_gain(a.A, a.C, poles)
     return {"P": K[: sys.n], "L": K[sys.n :]}
 
 
@@ -133,9 +119,9 @@ class PIO(StateSpaceObserver):
         _check_design(design, poles, P is not None or L is not None)
         if (P is None or L is None) and design == "lqe":
             a = sys.augmented()
-            K = _lqe_augmented(a.A, a.C, [_cov("process_cov", process_cov, n, 0.0),
-                                          _cov("increment_cov", increment_cov, q, None)],
-                               _cov("measurement_cov", measurement_cov, sys.l, None))
+            K = lqe_gain(a.A, a.C, block_diag(_cov("process_cov", process_cov, n, 0.0),
+                                              _cov("increment_cov", increment_cov, q, None)),
+                         _cov("measurement_cov", measurement_cov, sys.l, None))
             P_a, L_a = K[:n], K[n:]
         elif P is None or L is None:
             if poles is None:
@@ -201,7 +187,7 @@ def design_higher_order(sys: LinearSystem, poles: Sequence[complex]
     if not cond.exists:
         raise DesignError(f"higher-order observer: {cond.reason}", cond.condition)
     A, C = _ho_matrices(sys)
-    K = _place(A, C, poles)
+    K = place_gain(A, C, poles)
     n, q = sys.n, sys.q
     return _ho_gains_from_injection(K, n, q)
 
@@ -245,10 +231,10 @@ class HigherOrderObserver(StateSpaceObserver):
         _check_design(design, poles, P0 is not None or L0 is not None or L1 is not None)
         if (P0 is None or L0 is None or L1 is None) and design == "lqe":
             A, C = _ho_matrices(sys)
-            K = _lqe_augmented(A, C, [_cov("process_cov", process_cov, n, 0.0),
-                                      np.zeros((q, q)),
-                                      _cov("increment_cov", increment_cov, q, None)],
-                               _cov("measurement_cov", measurement_cov, l, None))
+            K = lqe_gain(A, C, block_diag(_cov("process_cov", process_cov, n, 0.0),
+                                          np.zeros((q, q)),
+                                          _cov("increment_cov", increment_cov, q, None)),
+                         _cov("measurement_cov", measurement_cov, l, None))
             g = _ho_gains_from_injection(K, n, q)
             P0_a, L0_a, L1_a = g["P0"], g["L0"], g["L1"]
         elif P0 is None or L0 is None or L1 is None:
@@ -327,7 +313,7 @@ class ModularObserver(StateSpaceObserver):
         if Lw is None:
             if w_poles is None:
                 w_poles = list(0.5 + 0.01 * np.arange(q))
-            Lw_a = _place(S, HV, w_poles)
+            Lw_a = place_gain(S, HV, w_poles)
         else:
             Lw_a = as_matrix("Lw", Lw, rows=q, cols=l)
         self.L0, self.Lw, self.V = L0_a, Lw_a, V
