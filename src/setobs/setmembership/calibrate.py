@@ -139,18 +139,16 @@ class _RecordLP:
         nx = (n + q) * N
         self.nx = nx
         # x_k at columns k*(n+q) .. +n, d_k at +n .. +n+q
-        xi = lambda k: k * (n + q)  # noqa: E731
         # ---- dynamics: x_{k+1} - Phi x_k - G d_k = Gamma u_k (+ w_k)
-        rows_dyn = []
         if N > 1:
             base = sp.kron(sp.eye(N - 1), sp.hstack([sp.csr_matrix(-sys.Phi),
                                                       sp.csr_matrix(-sys.G)]), format="csr")
             left = sp.hstack([base, sp.csr_matrix((n * (N - 1), n + q))], format="csr")
             shift = sp.kron(sp.eye(N - 1), sp.hstack([sp.eye(n), sp.csr_matrix((n, q))]))
             right = sp.hstack([sp.csr_matrix((n * (N - 1), n + q)), shift], format="csr")
-            Mdyn = (left + right).tocsr()
-            bu = (U[:N - 1] @ sys.Gamma.T).reshape(-1) if U is not None else np.zeros(n * (N - 1))
-            rows_dyn = [Mdyn, bu]
+            self.Mdyn = (left + right).tocsr()
+            self.bu = (U[:N - 1] @ sys.Gamma.T).reshape(-1) if U is not None else np.zeros(
+                n * (N - 1))
             # ---- increments: d_{k+1} - d_k
             dsel = sp.kron(sp.eye(N - 1), sp.hstack([sp.csr_matrix((q, n)), sp.eye(q)]))
             Minc = (sp.hstack([sp.csr_matrix((q * (N - 1), n + q)), dsel])
@@ -158,7 +156,6 @@ class _RecordLP:
             self.Minc = Minc
         else:
             self.Minc = sp.csr_matrix((0, nx))
-        self.dyn = rows_dyn
         self.w = process_noise
         # ---- outputs: residual r_k = y_k - Du u_k - Xi x_k for measured entries
         Yc = Y - (U[:N] @ sys.Du.T if (U is not None and sys.p) else 0.0)
@@ -167,7 +164,7 @@ class _RecordLP:
         self.kk, self.ii = kk, ii
         cols, data, rr = [], [], []
         for j in range(n):
-            cols.append(xi(kk) + j)
+            cols.append(kk * (n + q) + j)
             data.append(sys.Xi[ii, j])
             rr.append(np.arange(kk.size))
         self.Mout = sp.csr_matrix((np.concatenate(data), (np.concatenate(rr),
@@ -207,7 +204,7 @@ class _RecordLP:
             blocks.append(sp.hstack([self.Minc, -sp.eye(n_dd), sp.csr_matrix((n_dd, nv))]))
             lo.append(np.zeros(n_dd))
             hi.append(np.zeros(n_dd))
-            Mdyn, bu = self.dyn
+            Mdyn, bu = self.Mdyn, self.bu
             blocks.append(sp.hstack([Mdyn, sp.csr_matrix((Mdyn.shape[0], n_dd + nv))]))
             rw = 0.0 if self.w is None else np.tile(self.w, N - 1)
             lo.append(bu - rw)
@@ -247,6 +244,18 @@ class _LPSolution(NamedTuple):
     x: NDArray[np.float64]   # trajectory, then the noise variables
     fun: float
     message: str
+
+
+def _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs):
+    """Validated inputs of both entry points: the system, the record's LP, the
+    increment radii and the noise shape."""
+    sys, Ya, Ua = _prepare(sys, Y, U, disturbance_inputs)
+    inc = _radii("increment", increment, sys.q)
+    w = None if process_noise is None else _radii("process_noise", process_noise, sys.n)
+    r_v = np.ones(sys.l) if shape is None else _radii("shape", shape, sys.l)
+    if (r_v <= 0).any():
+        raise DimensionError(f"shape radii must be positive, got {r_v}")
+    return sys, _RecordLP(sys, Ya, Ua, w), inc, r_v
 
 
 def _prepare(sys, Y, U, disturbance_inputs):
@@ -319,13 +328,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     >>> round(float(calibrate_noise(sys, Y, increment=0.0).minimal[0]), 6)
     0.5
     """
-    sys, Ya, Ua = _prepare(sys, Y, U, disturbance_inputs)
-    inc = _radii("increment", increment, sys.q)
-    w = None if process_noise is None else _radii("process_noise", process_noise, sys.n)
-    r_v = np.ones(sys.l) if shape is None else _radii("shape", shape, sys.l)
-    if (r_v <= 0).any():
-        raise DimensionError(f"shape radii must be positive, got {r_v}")
-    lp = _RecordLP(sys, Ya, Ua, w)
+    sys, lp, inc, r_v = _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs)
     res = lp.solve(inc, r_v, per_channel)
     if per_channel:
         minimal = np.maximum(res.x[lp.nx:], 0.0)
@@ -356,13 +359,9 @@ def noise_tradeoff(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, 
     :func:`calibrate_noise`). Pairs above the curve are consistent, pairs
     below are not; ``alpha`` never increases with ``beta``.
     """
-    sys, Ya, Ua = _prepare(sys, Y, U, disturbance_inputs)
-    inc = _radii("increment", increment, sys.q)
-    w = None if process_noise is None else _radii("process_noise", process_noise, sys.n)
-    r_v = np.ones(sys.l) if shape is None else _radii("shape", shape, sys.l)
+    sys, lp, inc, r_v = _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs)
     b = np.logspace(-3, 3, 13) if betas is None else np.asarray(betas, dtype=float).reshape(-1)
     if b.size == 0 or (b < 0).any() or not np.isfinite(b).all():
         raise DimensionError(f"betas must be finite and nonnegative, got {b}")
-    lp = _RecordLP(sys, Ya, Ua, w)
     alpha = np.array([max(float(lp.solve(beta * inc, r_v, False).x[lp.nx]), 0.0) for beta in b])
     return NoiseTradeoff(b, alpha, inc, r_v, tuple(sys.output_names))
