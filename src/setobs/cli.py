@@ -20,7 +20,6 @@ import numpy as np
 from . import __version__
 from .analysis import diagnose
 from .exceptions import SetobsError
-from .systems import LinearSystem
 
 EXIT_BAD_INPUT = 2
 
@@ -88,13 +87,6 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
 
 
 # ---------------------------------------------------------------------------- check
-def load_system(path: str | Path, dt: float | None = None) -> LinearSystem:
-    """A :class:`LinearSystem` from a model file (:func:`setobs.io.load_model`)."""
-    from .io import load_model
-
-    return load_model(path, dt=dt)
-
-
 def _jsonable(v: Any) -> Any:
     if isinstance(v, np.ndarray):
         return _jsonable(v.tolist())
@@ -119,7 +111,9 @@ def check(target: str, fmt: str = "text") -> int:
             if target == "all":
                 print()
         return 0
-    _print_report(diagnose(load_system(target)), fmt)
+    from .io import load_model
+
+    _print_report(diagnose(load_model(target)), fmt)
     return 0
 
 

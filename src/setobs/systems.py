@@ -327,17 +327,16 @@ class LinearSystem:
                     disturbance_names = [in_names[i] for i in idx]
             else:
                 u_names = None
+        if not Bu.shape[1]:  # no control inputs
+            Bu = Du = u_names = None
         names = {"state_names": state_names, "output_names": output_names,
-                 "disturbance_names": disturbance_names,
-                 "input_names": u_names if Bu.shape[1] else None}
+                 "disturbance_names": disturbance_names, "input_names": u_names}
         if continuous:
             if dt is None:
                 raise DimensionError("a continuous-time model needs the sampling time dt "
                                      "to be discretised (zero-order hold)")
-            return cls.from_continuous(A_a, Bu if Bu.shape[1] else None, Gd, C_a, dt,
-                                       Du=Du if Bu.shape[1] else None, **names)
-        return cls(A_a, Gd, C_a, Bu if Bu.shape[1] else None,
-                   Du=Du if Bu.shape[1] else None, dt=dt, **names)
+            return cls.from_continuous(A_a, Bu, Gd, C_a, dt, Du=Du, **names)
+        return cls(A_a, Gd, C_a, Bu, Du=Du, dt=dt, **names)
 
     @classmethod
     def from_statespace(cls, ss: Any, disturbance_inputs: Sequence[int | str] | int | str,
@@ -382,8 +381,6 @@ class LinearSystem:
                                      f"{ss_dt}")
             if dt is None:
                 dt = None if ss_dt in (None, True) else float(ss_dt)
-        if disturbance_inputs is None:
-            raise DimensionError("state which inputs are disturbances (disturbance_inputs)")
         return cls.from_matrices(A=A, B=B, C=C, D=D, disturbance_inputs=disturbance_inputs,
                                  dt=dt, continuous=continuous, **names)
 

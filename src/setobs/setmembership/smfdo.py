@@ -1160,13 +1160,13 @@ class SMFDO:
                     "input), or continue with update(y, u_prev)")
         steps = []
         with_u = self._Du is not None
+        bar = None
+        if progress:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=N, unit="step", desc="SMFDO", mininterval=0.5)
         self._in_run = True
         try:
-            bar = None
-            if progress:
-                from tqdm.auto import tqdm
-
-                bar = tqdm(total=N, unit="step", desc="SMFDO", mininterval=0.5)
             for j in range(N):
                 if bar is not None and j % 200 == 0 and j:
                     bar.update(200)
@@ -1176,7 +1176,7 @@ class SMFDO:
                 bar.update(N - bar.n)
         finally:
             self._in_run = False
-            if progress and bar is not None:
+            if bar is not None:
                 bar.close()
         if Ua is not None and Ua.shape[0] == N and N:
             self._u_pending = Ua[N - 1].copy()
