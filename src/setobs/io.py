@@ -33,9 +33,6 @@ __all__ = ["ModelFileError", "Record", "load_model", "load_record"]
 
 _KEYS = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
          "Gamma": ("Gamma", "B", "B0"), "Du": ("Du", "D")}
-_OTHER = {"Ts", "dt", "continuous", "disturbance_inputs", "state_names", "input_names",
-          "output_names", "disturbance_names"}
-
 
 class ModelFileError(SetobsError, ValueError):
     """A model or record file cannot be read or is inconsistent (one-line message)."""
@@ -72,7 +69,7 @@ def _read_mapping(p: Path) -> dict[str, Any]:
     return data
 
 
-def _matrix(data: dict, key: str) -> tuple[str, NDArray] | None:
+def _matrix(data: dict, key: str) -> NDArray | None:
     for name in _KEYS[key]:
         if name in data:
             try:
@@ -82,7 +79,7 @@ def _matrix(data: dict, key: str) -> tuple[str, NDArray] | None:
                                      f"of numbers), got {str(data[name])[:60]!r}") from None
             if M.ndim > 2:
                 raise ModelFileError(f"matrix {name!r} must be 2-D, got {M.ndim} dimensions")
-            return name, np.atleast_2d(M) if M.size else M.reshape(0, 0)
+            return np.atleast_2d(M) if M.size else None
     return None
 
 
@@ -159,18 +156,13 @@ def _system_from_mapping(data: dict, dt: float | None, p: Path) -> LinearSystem:
         continuous, Ts = True, None
     if Ts is not None and Ts < 0:  # MATLAB: Ts = -1, discrete with unspecified sampling
         Ts = None
-    if continuous:
-        if Ts is None:
-            Ts = dt
-        elif dt is not None and abs(dt - Ts) > 1e-9 * Ts:
-            raise ModelFileError(f"{p}: the model's Ts = {Ts:g} differs from the record's "
-                                 f"sampling time {dt:g}")
-        if Ts is None:
-            raise ModelFileError(f"{p}: a continuous-time model needs a sampling time (Ts in "
-                                 "the file, or --dt / the record's time column)")
-    elif dt is not None and Ts is not None and abs(dt - Ts) > 1e-9 * Ts:
-        raise ModelFileError(f"{p}: the discrete model's Ts = {Ts:g} differs from the "
-                             f"record's sampling time {dt:g}")
+    if dt is not None and Ts is not None and abs(dt - Ts) > 1e-9 * Ts:
+        raise ModelFileError(f"{p}: the model's Ts = {Ts:g} differs from the record's "
+                             f"sampling time {dt:g}")
+    Ts = dt if Ts is None else Ts
+    if continuous and Ts is None:
+        raise ModelFileError(f"{p}: a continuous-time model needs a sampling time (Ts in "
+                             "the file, or --dt / the record's time column)")
     dist = None
     if "disturbance_inputs" in data:
         v = data["disturbance_inputs"]
@@ -184,11 +176,8 @@ def _system_from_mapping(data: dict, dt: float | None, p: Path) -> LinearSystem:
             "or disturbance_inputs (the columns of B that are disturbances)")
     names = {k: _names(data, k) for k in ("state_names", "input_names", "output_names",
                                           "disturbance_names")}
-    return LinearSystem.from_matrices(
-        A=Phi[1], C=Xi[1], B=None if B is None or B[1].size == 0 else B[1],
-        D=None if D is None or D[1].size == 0 else D[1], G=None if G is None else G[1],
-        disturbance_inputs=dist, dt=Ts if continuous or Ts is not None else dt,
-        continuous=continuous, **names)
+    return LinearSystem.from_matrices(A=Phi, C=Xi, B=B, D=D, G=G, disturbance_inputs=dist,
+                                      dt=Ts, continuous=continuous, **names)
 
 
 @dataclass(frozen=True)
