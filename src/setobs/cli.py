@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from ._lazy import optional_import
 from .analysis import diagnose
 from .exceptions import SetobsError
 
@@ -195,7 +196,13 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
                 on_inconsistent=on_inconsistent)
     N = rec.Y.shape[0]
-    show = (N >= 2000 and sys.stderr.isatty()) if progress is None else progress
+    if progress is None:  # automatic: long records on a terminal, when tqdm is installed
+        import importlib.util
+
+        show = (N >= 2000 and sys.stderr.isatty()
+                and importlib.util.find_spec("tqdm") is not None)
+    else:
+        show = progress
     import warnings
 
     from .setmembership import ModelInvalidatedWarning
@@ -250,7 +257,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
 def study(config: str, dask: str | None = None, out: str | None = None,
           processes: int | None = None) -> int:
     """Run a campaign from a YAML configuration (see the README)."""
-    import yaml
+    yaml = optional_import("yaml", extra="yaml", feature="setobs study (YAML configuration)")
 
     from .studies import ObserverSpec, Scenario, run_campaign
 

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._lazy import optional_import
 from .exceptions import SetobsError
 from .systems import LinearSystem
 
@@ -46,8 +47,7 @@ def _read_mapping(p: Path) -> dict[str, Any]:
         if suffix == ".json":
             data = json.loads(p.read_text())
         elif suffix in (".yaml", ".yml"):
-            import yaml
-
+            yaml = optional_import("yaml", extra="yaml", feature="reading a .yaml model file")
             data = yaml.safe_load(p.read_text())
         elif suffix == ".npz":
             with np.load(p, allow_pickle=False) as z:

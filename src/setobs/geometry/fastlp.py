@@ -44,8 +44,11 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
+from .._lazy import lazy_module
 from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
-from . import _simplex
+
+# The compiled simplex (numba) compiles/loads on the first batch, not on import.
+_simplex = lazy_module("setobs.geometry._simplex")
 
 __all__ = ["FixedStructureLP", "LPState", "hull_from_bounds", "hull_objectives"]
 

@@ -61,11 +61,11 @@ import math
 import threading
 from dataclasses import dataclass, field
 
-import highspy
 import numpy as np
 from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
+from .._lazy import lazy_module
 from ..exceptions import EmptySetError
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 
@@ -73,15 +73,12 @@ __all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_b
 
 _U = np.finfo(np.float64).eps / 2.0
 _TINY = np.finfo(np.float64).tiny
-_INF = highspy.kHighsInf
+_INF = math.inf  # HiGHS's kHighsInf
 #: Relative certification gap above which duals are recomputed from the basis.
 _REFINE_GAP = 1e-9
-_DECIDED = (
-    highspy.HighsModelStatus.kOptimal,
-    highspy.HighsModelStatus.kUnbounded,
-    highspy.HighsModelStatus.kInfeasible,
-    highspy.HighsModelStatus.kUnboundedOrInfeasible,
-)
+
+# HiGHS loads on the first LP, not on ``import setobs``.
+highspy = lazy_module("highspy")
 
 
 def _gamma(k: int) -> float:

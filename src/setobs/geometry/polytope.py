@@ -15,8 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
-from scipy.spatial import ConvexHull, QhullError
 
 from .._validation import as_matrix, as_vector
 from ..exceptions import EmptySetError, SolverError, UnboundedSetError
@@ -137,6 +135,8 @@ class _VerifiedHull:
             s1, a = self._query(u)
             s2, b = self._query(-u)
             return np.array([b, a]), np.array([u, -u]), np.array([s1, s2])
+        from scipy.spatial import ConvexHull, QhullError
+
         Y = (self.points - p0) @ B  # local coordinates
         confirmed: dict[tuple, tuple[NDArray[np.float64], float]] = {}
         while True:
@@ -285,6 +285,8 @@ def cz_from_hpolytope(H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
     UnboundedSetError
         If it is unbounded.
     """
+    from scipy.optimize import linprog
+
     H_a = as_matrix("H", H)
     k_a = as_vector("k", k, size=H_a.shape[0])
     n = H_a.shape[1]

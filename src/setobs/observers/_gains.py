@@ -16,7 +16,6 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag, solve_discrete_are
-from scipy.signal import place_poles
 
 from ..analysis import observability, observability_matrix
 from .base import DesignError
@@ -68,6 +67,8 @@ def _place_observable(A, C, poles, check):
     with warnings.catch_warnings():
         # YT's robustness iteration may stop early; accuracy is checked by the caller.
         warnings.simplefilter("ignore", UserWarning)
+        from scipy.signal import place_poles  # scipy.signal is slow to import
+
         return place_poles(A.T, C.T, poles, method="YT").gain_matrix.T
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._lazy import optional_import
 from ..exceptions import SolverError, UnboundedSetError
 from ..geometry import ConstrainedZonotope
 
@@ -67,7 +68,7 @@ def chebyshev_center(Z: ConstrainedZonotope) -> PointEstimate:
     UnboundedSetError
         If the set is unbounded.
     """
-    import cvxpy as cp
+    cp = optional_import("cvxpy", extra="qp", feature="chebyshev_center")
 
     if not Z.is_bounded:
         raise UnboundedSetError("the Chebyshev centre of an unbounded set does not exist")

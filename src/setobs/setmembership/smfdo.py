@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._blas import with_single_threaded_blas
+from .._lazy import progress_bar
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
 from ..analysis.existence import BoundedDOReport
@@ -1160,24 +1161,18 @@ class SMFDO:
                     "input), or continue with update(y, u_prev)")
         steps = []
         with_u = self._Du is not None
-        bar = None
-        if progress:
-            from tqdm.auto import tqdm
-
-            bar = tqdm(total=N, unit="step", desc="SMFDO", mininterval=0.5)
+        bar = progress_bar(progress, total=N, unit="step", desc="SMFDO", mininterval=0.5)
         self._in_run = True
         try:
             for j in range(N):
-                if bar is not None and j % 200 == 0 and j:
+                if j % 200 == 0 and j:
                     bar.update(200)
                 u = Ua[j - 1] if (Ua is not None and j >= 1) else None
                 steps.append(self.update(Ya[j], u, u=Ua[j] if with_u else None))
-            if bar is not None:
-                bar.update(N - bar.n)
+            bar.update(N - bar.n)
         finally:
             self._in_run = False
-            if bar is not None:
-                bar.close()
+            bar.close()
         if Ua is not None and Ua.shape[0] == N and N:
             self._u_pending = Ua[N - 1].copy()
         q = self.sys.q

@@ -8,7 +8,6 @@ import os
 import platform
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from importlib import metadata as _md
 from pathlib import Path
@@ -16,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._lazy import progress_bar
 from ..exceptions import DimensionError
 from .scenarios import Scenario, rng_for_run
 
@@ -241,7 +241,6 @@ def run_campaign(
         ``table``: pandas DataFrame sorted by ``(run, observer order, k)``.
     """
     import pandas as pd
-    from tqdm.auto import tqdm
 
     if (isinstance(runs, bool) or not isinstance(runs, int | np.integer | float)
             or int(runs) != runs or runs < 1):
@@ -278,7 +277,7 @@ def run_campaign(
         else:
             todo.append(r)
     t0 = time.perf_counter()
-    bar = tqdm(total=len(todo), disable=not progress or not todo, desc="runs")
+    bar = progress_bar(bool(progress and todo), total=len(todo), desc="runs")
 
     def store(r: int, rows: list[dict[str, Any]]) -> None:
         df = pd.DataFrame(rows)
@@ -301,6 +300,8 @@ def run_campaign(
             for r in todo:
                 store(r, run_one(*args, r, base_seed, reference_window))
         else:
+            from concurrent.futures import ProcessPoolExecutor, as_completed
+
             with ProcessPoolExecutor(max_workers=processes) as ex:
                 futs2 = {ex.submit(run_one, *args, r, base_seed, reference_window): r
                          for r in todo}
