@@ -66,7 +66,7 @@ def sizes(kmax: int) -> list[dict]:
     for k, y in enumerate(Y[:kmax + 1]):
         obs.update(y)
         if k in (2, 5, 10, 20, 30, 50, 100, 150):
-            Z = obs._Z
+            Z = obs.posterior_set
             t0 = time.perf_counter()
             R = Z.reduce_exact()
             rows.append({"k": k, "n_gen": Z.n_gen, "n_con": Z.n_con, "reduced_n_gen": R.n_gen,

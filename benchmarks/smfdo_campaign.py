@@ -63,18 +63,18 @@ def hull_PZ_times(sys, sc, trs):
         obs.reset_state()
         for k, y in enumerate(tr.Y):
             obs.update(y)
-            if k >= 15 and isinstance(obs._Z_src, tuple):
-                inst.append(obs._Z_src)
+            if k >= 15 and obs.fast_path_instance is not None:
+                inst.append(obs.fast_path_instance)
     model = inst[0][0]
     lp = FixedStructureLP(model.A, hull_objectives(obs.P @ model.G), model.free, model.radius)
     state = lp.new_state()  # warm-started from step to step, as in the SMFDO
     fast_t, ref_t, sets, maxdiff = [], [], [], 0.0
-    for m, c, b, h, _, _ in inst:
+    for m, c, b, h in inst:
         if m is not model:
             continue
         Pc = obs.P @ c
         t0 = time.perf_counter()
-        bounds, ok = lp._minimize_all(b, h, state)
+        bounds, ok = lp.minimize_all_unchecked(b, h, state)
         lo = np.nextafter(bounds[0::2] + Pc, -np.inf)
         hi = np.nextafter(Pc - bounds[1::2], np.inf)
         fast_t.append(time.perf_counter() - t0)

@@ -98,7 +98,7 @@ def cripple_highs(monkeypatch) -> None:
     """Make every HiGHS model stop before its first iteration (simplex and IPM)."""
     from setobs.geometry.lp import FactorPolytope
 
-    original = FactorPolytope._new_highs
+    original = FactorPolytope.new_highs
 
     def crippled():
         hs = original()
@@ -106,7 +106,7 @@ def cripple_highs(monkeypatch) -> None:
         hs.setOptionValue("ipm_iteration_limit", 0)
         return hs
 
-    monkeypatch.setattr(FactorPolytope, "_new_highs", staticmethod(crippled))
+    monkeypatch.setattr(FactorPolytope, "new_highs", staticmethod(crippled))
 
 
 def cdd_vertices(Z: ConstrainedZonotope) -> np.ndarray:

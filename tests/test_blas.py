@@ -14,11 +14,11 @@ from setobs.geometry.lp import FactorPolytope
 
 
 def blas_threads() -> list[int]:
-    return [lib.num_threads for lib in _blas._blas_libs()]
+    return [lib.num_threads for lib in _blas.blas_libraries()]
 
 
 def test_numpy_and_scipy_blas_are_controlled():
-    ours = {lib.filepath for lib in _blas._blas_libs()}
+    ours = {lib.filepath for lib in _blas.blas_libraries()}
     loaded = {info["filepath"] for info in threadpool_info() if info["user_api"] == "blas"
               and ("numpy" in info["filepath"] or "scipy" in info["filepath"])}
     assert loaded <= ours
@@ -26,28 +26,28 @@ def test_numpy_and_scipy_blas_are_controlled():
 
 @pytest.fixture
 def two_threads():
-    libs = _blas._blas_libs()
+    libs = _blas.blas_libraries()
     if not libs:
         pytest.skip("no BLAS library with a thread pool is loaded")
     saved = [lib.num_threads for lib in libs]
     # (threadpoolctl's own threadpool_limits is ignored from a thread that is not
     # its "controlling thread", which another test's threads may have become)
     for lib in libs:
-        _blas._set_threads(lib, 2)
+        _blas.set_num_threads(lib, 2)
     assert blas_threads() == [2] * len(libs)
     yield
     for lib, n in zip(libs, saved, strict=True):
-        _blas._set_threads(lib, n)
+        _blas.set_num_threads(lib, n)
 
 
 def spy_minimize(monkeypatch, seen):
-    orig = FactorPolytope._minimize
+    orig = FactorPolytope.minimize_under_lock
 
     def spy(self, *args):
         seen.append(blas_threads())
         return orig(self, *args)
 
-    monkeypatch.setattr(FactorPolytope, "_minimize", spy)
+    monkeypatch.setattr(FactorPolytope, "minimize_under_lock", spy)
 
 
 def test_lp_queries_run_single_threaded_and_restore(monkeypatch, two_threads):
@@ -83,7 +83,7 @@ def test_nested_and_threaded_use_restores_the_setting(monkeypatch, two_threads):
         t.join()
     assert not errors
     assert seen and all(all(n == 1 for n in s) for s in seen)
-    assert _blas._depth == 0
+    assert _blas.guard_depth() == 0
     assert all(n == 2 for n in blas_threads())
 
 

@@ -16,6 +16,7 @@ import setobs as so
 from setobs import observers as obs
 from setobs.exceptions import DimensionError, EmptySetError, SolverError
 from setobs.geometry import Box, ConstrainedZonotope
+from setobs.geometry.zonotope import factor_polytope
 from setobs.setmembership import ExistenceError, ModelInvalidatedError
 from setobs.studies import ObserverSpec, Scenario, rng_for_run
 
@@ -47,7 +48,7 @@ def test_value_objects_round_trip_equal():
         for name in ("G", "c", "A", "b", "h", "b_err", "c_err"):
             assert np.array_equal(getattr(W, name), getattr(Z, name))
         assert W.interval_hull() == Z.interval_hull()
-    fp = Z._lp()
+    fp = factor_polytope(Z)
     for f in _roundtrips(fp):
         assert f.minimize(np.ones(Z.n_gen)).bound == fp.minimize(np.ones(Z.n_gen)).bound
 

@@ -12,14 +12,20 @@ from . import (
     tolerances,
 )
 from .exceptions import (
+    DesignError,
     DimensionError,
     EmptySetError,
+    ExistenceError,
+    ModelFileError,
+    ModelInvalidatedError,
+    ModelInvalidatedWarning,
     SetobsError,
     SolverError,
+    SolverWarning,
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
-from .setmembership import SMFDO, ModelInvalidatedError, calibrate_noise, noise_tradeoff
+from .setmembership import SMFDO, calibrate_noise, noise_tradeoff
 from .systems import LinearSystem
 
 __version__ = "0.1.0"
@@ -28,12 +34,17 @@ __all__ = [
     "SMFDO",
     "Box",
     "ConstrainedZonotope",
+    "DesignError",
     "DimensionError",
     "EmptySetError",
+    "ExistenceError",
     "LinearSystem",
+    "ModelFileError",
     "ModelInvalidatedError",
+    "ModelInvalidatedWarning",
     "SetobsError",
     "SolverError",
+    "SolverWarning",
     "UnboundedSetError",
     "__version__",
     "analysis",

@@ -46,7 +46,7 @@ def blas_limit_enabled() -> bool:
                                                                               "off")
 
 
-def _blas_libs() -> list[Any]:
+def blas_libraries() -> list[Any]:
     """The BLAS libraries loaded in this process (numpy's and scipy's OpenBLAS, MKL, ...)."""
     global _libs
     if _libs is None:
@@ -58,7 +58,7 @@ def _blas_libs() -> list[Any]:
     return _libs
 
 
-def _set_threads(lib: Any, n: int) -> None:
+def set_num_threads(lib: Any, n: int) -> None:
     """Set a BLAS library's thread count from any thread.
 
     threadpoolctl (>= 3.6) lets only one "controlling" Python thread change a
@@ -89,11 +89,11 @@ class _SingleThreadedBLAS:
         with _lock:
             if _depth == 0:
                 _saved.clear()
-                for lib in _blas_libs():
+                for lib in blas_libraries():
                     n = lib.num_threads
                     if n != 1:
                         _saved.append((lib, n))
-                        _set_threads(lib, 1)
+                        set_num_threads(lib, 1)
             _depth += 1
             self._active = True
         return self
@@ -107,8 +107,13 @@ class _SingleThreadedBLAS:
             self._active = False
             if _depth == 0:
                 for lib, n in _saved:
-                    _set_threads(lib, n)
+                    set_num_threads(lib, n)
                 _saved.clear()
+
+
+def guard_depth() -> int:
+    """How many :func:`single_threaded_blas` regions are open now (0 when none)."""
+    return _depth
 
 
 def single_threaded_blas() -> _SingleThreadedBLAS:

@@ -292,10 +292,10 @@ def study(config: str, dask: str | None = None, out: str | None = None,
             raise CLIError(f"{key} must be an integer, got {val!r}")
     ref_window = cfg.get("reference_window", 20)
     if ref_window is not None:
-        from .setmembership.smfdo import _check_window
+        from .setmembership.smfdo import check_window
 
         try:
-            _check_window(ref_window)
+            check_window(ref_window)
         except (TypeError, ValueError) as exc:
             raise CLIError(f"reference_window: {exc}") from None
     out_dir = Path(out or cfg.get("out") or p.with_suffix("").name + "_results")

@@ -7,9 +7,19 @@ has the same meaning the subclass also derives from it, so that
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .analysis.existence import BoundedDOReport
+
 __all__ = [
+    "DesignError",
     "DimensionError",
     "EmptySetError",
+    "ExistenceError",
+    "ModelFileError",
+    "ModelInvalidatedError",
+    "ModelInvalidatedWarning",
     "SetobsError",
     "SolverError",
     "SolverWarning",
@@ -56,3 +66,63 @@ class SolverWarning(RuntimeWarning):
     The answer is still a guaranteed outer bound (it may be ``+-inf``); only its
     tightness was lost.
     """
+
+
+class DesignError(SetobsError, ValueError):
+    """The observer design's existence condition fails for this system.
+
+    Attributes
+    ----------
+    condition : str
+        The condition that failed.
+    """
+
+    def __init__(self, message: str, condition: str = "") -> None:
+        super().__init__(message)
+        self.condition = condition
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.condition))
+
+
+class ExistenceError(SetobsError, ValueError):
+    """No bounded disturbance observer exists for the system (Theorem 1 fails).
+
+    Attributes
+    ----------
+    report : BoundedDOReport
+        The analysis report (ranks, margins, unrecoverable directions).
+    """
+
+    def __init__(self, message: str, report: BoundedDOReport) -> None:
+        super().__init__(message)
+        self.report = report
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.report))
+
+
+class ModelInvalidatedError(SetobsError, RuntimeError):
+    """The data are inconsistent with the model: the posterior set is (certified) empty.
+
+    Attributes
+    ----------
+    step : int
+        The time step ``k`` at which the measurement could not be explained.
+    """
+
+    def __init__(self, message: str, step: int) -> None:
+        super().__init__(message)
+        self.step = step
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.step))
+
+
+class ModelInvalidatedWarning(RuntimeWarning):
+    """Measurements were inconsistent with the model and were skipped, or the
+    filter was reset (``on_inconsistent="skip"`` or ``"reset"``)."""
+
+
+class ModelFileError(SetobsError, ValueError):
+    """A model or record file cannot be read or is inconsistent (one-line message)."""

@@ -27,17 +27,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._lazy import optional_import
-from .exceptions import SetobsError
+from .exceptions import ModelFileError
 from .systems import LinearSystem
 
 __all__ = ["ModelFileError", "Record", "load_model", "load_record"]
 
 _KEYS = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
          "Gamma": ("Gamma", "B", "B0"), "Du": ("Du", "D")}
-
-class ModelFileError(SetobsError, ValueError):
-    """A model or record file cannot be read or is inconsistent (one-line message)."""
-
 
 def _read_mapping(p: Path) -> dict[str, Any]:
     if not p.exists():

@@ -24,15 +24,28 @@ Policy
 from __future__ import annotations
 
 __all__ = [
+    "CALIBRATION_ATOL",
+    "CALIBRATION_RTOL",
     "DATA_RTOL",
+    "ELIMINATION_ERR_RTOL",
+    "ELIMINATION_PIVOT_TOL",
+    "EQUILIBRATION_FLOOR",
+    "FASTLP_BOUNDED_CLEAR",
+    "FASTLP_CONSISTENCY_RTOL",
+    "FASTLP_GAP_RTOL",
+    "FASTLP_RANK_GREY",
+    "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
     "FRAGILE_MARGIN_DECADES",
+    "LP_REFINE_GAP",
     "PRODUCT_RTOL",
     "RANK_FLOOR",
     "RANK_RTOL",
+    "REDUNDANT_BOUND_MARGIN",
     "UNBOUNDED_RADIUS",
     "UNBOUNDED_REDUCED_COST_TOL",
     "UNIT_CIRCLE_TOL",
+    "VERTEX_RTOL",
     "ZERO_TOL",
 ]
 
@@ -85,3 +98,52 @@ FRAGILE_MARGIN_DECADES: float = 2.0
 
 #: Invariant zeros with |z| within this of the unit circle are reported as marginal.
 UNIT_CIRCLE_TOL: float = 1e-8
+
+# ---- the compiled fast path (setobs.geometry.fastlp)
+#: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
+#: direction is unbounded below, and below which it is bounded; in between the
+#: direction is left to the reference path.
+FASTLP_UNBOUNDED_CLEAR: float = 1e-6
+FASTLP_BOUNDED_CLEAR: float = 1e-12
+#: Accepted gap between the certified bound and the simplex objective.
+FASTLP_GAP_RTOL: float = 1e-9
+#: Relative size of the singular values that make a structure unusable (rank
+#: decisions between these and 1 would have to be made; the reference path
+#: does not make them, so the fast path does not either).
+FASTLP_RANK_GREY: float = 1e-6
+#: Relative residual of the data on the left null space of ``A`` (redundant rows)
+#: above which the reduced LP is not trusted (the reference path decides emptiness).
+FASTLP_CONSISTENCY_RTOL: float = 1e-11
+#: Norms below this fraction of the largest are rounding level: equilibration
+#: leaves them at the scale of the largest instead of blowing them up (a column
+#: of 1e-17 entries left by a rotated basis must not become a unit column, whose
+#: factor would then have a range of 1e-17 and an objective weight of 1e17).
+EQUILIBRATION_FLOOR: float = 1e-10
+
+# ---- the HiGHS reference LPs (setobs.geometry.lp)
+#: Relative certification gap above which duals are recomputed from the basis.
+LP_REFINE_GAP: float = 1e-9
+
+# ---- vertex enumeration (setobs.geometry.polytope)
+#: Relative tolerance of the vertex enumeration: a facet of the found hull is
+#: confirmed when the certified support in its normal exceeds its offset by at
+#: most this times the set's size; flat directions have certified width below it.
+VERTEX_RTOL: float = 1e-9
+
+# ---- exact reduction (setobs.geometry.reduction)
+#: Relative margin by which a factor's certified interval must lie inside its
+#: bound for :func:`reduce_exact` to call the bound redundant.
+REDUNDANT_BOUND_MARGIN: float = 1e-9
+#: Budget of the certified rounding of ``c`` and ``b`` that :func:`reduce_exact`
+#: may add, relative to the size of the set's data (it stops eliminating there).
+ELIMINATION_ERR_RTOL: float = 1e-12
+#: Smallest pivot, relative to the largest entry of its row, that
+#: :func:`reduce_exact` eliminates with (partial pivoting).
+ELIMINATION_PIVOT_TOL: float = 1e-3
+
+# ---- noise calibration (setobs.setmembership.calibrate)
+#: Relative margin added to the LP optimum in the recommended bound (outward).
+CALIBRATION_RTOL: float = 1e-6
+#: Absolute margin (data units) added to the recommended bound: HiGHS's primal
+#: feasibility tolerance, by which its optimum may undercut the true minimum.
+CALIBRATION_ATOL: float = 1e-7

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from setobs import ConstrainedZonotope
 from setobs.exceptions import SolverWarning
 from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
+from setobs.geometry.zonotope import factor_polytope
 from tests.conftest import cripple_highs, exact_extremes, random_cz
 
 seeds = st.integers(0, 2**32 - 1)
@@ -41,8 +42,8 @@ def test_sloppy_solver_duals_still_give_outer_bounds(seed):
     fp = FactorPolytope(Z.A, Z.b, Z.h)
     for i in range(2):
         out = fp.minimize(Z.G[i])
-        hs = fp._get_model()
-        y = np.asarray(hs.getSolution().row_dual) * fp._pow2_scale(Z.G[i])
+        hs = fp.highs_model()
+        y = np.asarray(hs.getSolution().row_dual) * fp.objective_scale(Z.G[i])
         e = np.zeros(2)
         e[i] = 1.0
         exact_min = exact_extremes(Z, e)[0] - Fraction(float(Z.c[i]))
@@ -80,10 +81,10 @@ def test_total_solver_failure_gives_a_wider_certified_box_and_a_warning(seed):
     Z = random_cz(rng, n=2, n_g=5, n_c=2)
     with pytest.MonkeyPatch.context() as mp:
         cripple_highs(mp)
-        mp.setattr(FactorPolytope, "_compiled", lambda self, w, we, wp: None)
+        mp.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
         with pytest.warns(SolverWarning, match="failed under every solver setting"):
             box = Z.interval_hull()
-        assert Z._lp().fallbacks > 0
+        assert factor_polytope(Z).fallbacks > 0
     for i in range(2):
         e = np.zeros(2)
         e[i] = 1.0
@@ -94,14 +95,14 @@ def test_total_solver_failure_gives_a_wider_certified_box_and_a_warning(seed):
 def test_highs_infeasible_claim_is_checked(monkeypatch):
     """If HiGHS claims infeasibility on a feasible set, we must not report it empty."""
     Z = ConstrainedZonotope(np.eye(2), np.zeros(2), [[1.0, 1.0]], [0.5])
-    fp = Z._lp()
-    real_solve = FactorPolytope._solve
+    fp = factor_polytope(Z)
+    real_solve = FactorPolytope.solve_objective
 
     def lying_solve(self, hs, w, scale):
         real_solve(self, hs, w, scale)
         return highspy.HighsModelStatus.kInfeasible
 
-    monkeypatch.setattr(FactorPolytope, "_solve", lying_solve)
+    monkeypatch.setattr(FactorPolytope, "solve_objective", lying_solve)
     out = fp.minimize(np.array([1.0, 0.0]))
     # Relaxed-and-certified: still a valid bound for min xi_1 = -0.5.
     assert out.bound <= -0.5 and out.bound > -0.5 - 1e-6
@@ -147,7 +148,7 @@ def test_certificates_with_unbounded_factors_against_exact_rational_lps(seed):
     pinvU = np.ascontiguousarray(np.linalg.pinv(A[:, :f].T))
     hs = FactorPolytope(A, b, h)
     hs.minimize(w)
-    y = np.asarray(hs._get_model().getSolution().row_dual)
+    y = np.asarray(hs.highs_model().getSolution().row_dual)
     for yy in (y, y + 1e-3 * rng.normal(size=m), rng.normal(size=m)):
         ref, _ = lagrangian_lower_bound(w, A, b, h, yy.copy())
         comp, _ = _simplex.certify(w, A, b, h, yy.copy(), fidx, pinvU, 1e8, 1e-10,

@@ -14,7 +14,7 @@ from matplotlib.patches import Polygon
 from scipy.spatial import ConvexHull
 
 from setobs import ConstrainedZonotope, EmptySetError, UnboundedSetError
-from setobs.geometry.plotting import polygon_2d
+from setobs.geometry import polygon_2d
 from tests.conftest import cdd_vertices, exact_factor_vertices, random_cz
 from tests.oracles import exact_hpolytope_vertices
 

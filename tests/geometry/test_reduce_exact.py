@@ -130,7 +130,7 @@ def test_exact_mode_posterior_of_the_paper_example(rng):
     obs = so.SMFDO(sys, window=None)
     for y in Y[:6]:
         obs.update(y)
-    Z = obs._Z
+    Z = obs.posterior_set
     R = Z.reduce_exact()
     assert (Z.n_gen, Z.n_con) == (15, 12)
     assert R.n_con <= 2 and R.n_gen <= 6

@@ -24,47 +24,23 @@ import numpy as np
 from scipy.linalg import expm, logm
 
 import setobs as so
-from setobs.observers import PIO, HigherOrderObserver
+from setobs.studies import error_orders
 
 TS = [0.1, 0.05, 0.025, 0.0125]
-GX, GW = np.polynomial.legendre.leggauss(10)
 
 
 def f(t):
     return np.array([0.3 * np.sin(t) + 0.5 * np.cos(0.3 * t), 0.2 * np.cos(0.5 * t) + 2.0])
 
 
-def steady_state_errors(H, Fc, C, tmax=40.0, t_ss=25.0):
-    errs = {"PIO": [], "HO": []}
-    for T in TS:
-        sys = so.LinearSystem.from_continuous(H, None, Fc, C, T)
-        N = round(tmax / T)
-        taus, ws = 0.5 * T * (GX + 1), 0.5 * T * GW
-        kern = [expm(H * t) @ Fc for t in taus]
-        x, X, Y = np.zeros(H.shape[0]), [], []
-        for k in range(N):
-            X.append(x)
-            Y.append(C @ x)
-            d = sum(w * (K @ f((k + 1) * T - t)) for w, K, t in zip(ws, kern, taus, strict=True))
-            x = sys.Phi @ x + d
-        X, Y = np.array(X), np.array(Y)
-        ss = slice(int(t_ss / T), N)
-        for name, obs in (("PIO", PIO(sys)), ("HO", HigherOrderObserver(sys))):
-            errs[name].append(np.abs(X[ss] - obs.run(Y).x_hat[ss]).max())
-    return {k: np.array(v) for k, v in errs.items()}
-
-
-def slope(e):
-    return np.polyfit(np.log(TS), np.log(e), 1)[0]
-
-
 def test_orders_hold_on_a_minimum_phase_plant():
     H = np.array([[0, 1, 0], [-1, -1, 0], [0, 0, -1.0]])
     Fc = np.array([[0, 0], [1, 0], [0, 1.0]])
     C = np.array([[1.0, 0, 0], [0, 0, 1.0]])
-    e = steady_state_errors(H, Fc, C)
-    assert slope(e["PIO"]) > 1.6  # claimed 2
-    assert slope(e["HO"]) > 2.5  # claimed 3
+    res = error_orders(H, Fc, C, f, TS)
+    e = res.errors
+    assert res.slope("PIO") > 1.6  # claimed 2
+    assert res.slope("HO") > 2.5  # claimed 3
     # Local slope between the two finest sampling times approaches the claims.
     assert np.log2(e["PIO"][-2] / e["PIO"][-1]) > 1.9
     assert np.log2(e["HO"][-2] / e["HO"][-1]) > 2.7
@@ -80,6 +56,7 @@ def test_orders_fail_on_the_papers_nonminimum_phase_example():
                                atol=1e-12)
     z = so.analysis.invariant_zeros(A).zeros[0].real
     assert np.log(z) / T0 > 2.0  # right-half-plane zero of the continuous plant
-    e = steady_state_errors(H, Fc, A.Xi)
-    assert slope(e["PIO"]) < 0.6 and slope(e["HO"]) < 0.8  # far from 2 and 3
+    res = error_orders(H, Fc, A.Xi, f, TS)
+    e = res.errors
+    assert res.slope("PIO") < 0.6 and res.slope("HO") < 0.8  # far from 2 and 3
     assert e["PIO"][-1] > 0.4 * e["PIO"][0]  # essentially no decrease

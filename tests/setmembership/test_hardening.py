@@ -256,7 +256,7 @@ def test_a_fallback_step_is_flagged_and_warned_once(monkeypatch):
     from tests.conftest import cripple_highs
 
     cripple_highs(monkeypatch)
-    monkeypatch.setattr(FactorPolytope, "_compiled", lambda self, w, we, wp: None)
+    monkeypatch.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
     sys_ = so.examples.chang2006()
     Y, D = simulate(sys_, 12, np.random.default_rng(0), np.zeros(3), [0, 0], 1.0)
     with pytest.warns(SolverWarning, match="warned once") as rec:

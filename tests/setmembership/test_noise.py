@@ -21,7 +21,7 @@ from setobs import ConstrainedZonotope, DimensionError, LinearSystem
 from setobs.setmembership import ModelInvalidatedError, ModelInvalidatedWarning
 from tests.datasets import HSM150
 from tests.oracles import exact_history_bounds
-from tests.setmembership.test_soundness_campaign import _random_case, run_windows
+from tests.setmembership.test_soundness_campaign import random_case, run_windows
 
 EPS = np.finfo(float).eps
 
@@ -234,7 +234,7 @@ def test_radius_grows_at_most_linearly_with_the_noise_size():
 # ---------------------------------------------------------------- soundness campaign
 def _noisy_case(seed, N_windowed=500, windows=(3, 10, 20)):
     rng = np.random.default_rng(10_000 + seed)
-    sys = _random_case(rng)
+    sys = random_case(rng)
     scale = 10.0 ** rng.uniform(-2, 1)
     r_inc = 10.0 ** rng.uniform(-2, 0, sys.q)
     r_v = scale * 10.0 ** rng.uniform(-3, 0, sys.l)

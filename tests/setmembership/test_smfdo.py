@@ -324,10 +324,12 @@ def test_coordinate_shortcut_equals_direct_hull_of_PZ():
     Y, _ = simulate(sys, 30, rng, x0=[0.1, 0.2, 0.3], d0=[0.0, 1.0])
     obs = so.SMFDO(sys, window=5, keep_sets=True,
                    initial_state_set=box(-np.ones(3), np.ones(3)))
-    assert obs._P_coords is not None
+    assert obs.hull_from_state
     for st in obs.run(Y).steps[1:]:
         direct = st.disturbance_set.interval_hull()
-        lo, hi = obs._outward(direct.lo, direct.hi)
+        # the documented outward margin: margin * max(1, |lo|, |hi|) per coordinate
+        scale = np.maximum(1.0, np.maximum(np.abs(direct.lo), np.abs(direct.hi)))
+        lo, hi = direct.lo - obs.margin * scale, direct.hi + obs.margin * scale
         np.testing.assert_allclose(st.lo, lo, rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(st.hi, hi, rtol=1e-10, atol=1e-10)
 

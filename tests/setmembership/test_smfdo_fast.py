@@ -64,7 +64,7 @@ def _lp_instances(obs, Y, U=None):
         before = obs.stats["fast"]
         obs.update(y, None if U is None or j == 0 else U[j - 1])
         if obs.stats["fast"] > before:
-            model, _, b, h, _, _ = obs._Z_src
+            model, _, b, h = obs.fast_path_instance
             yield model, b, h
 
 
@@ -129,7 +129,7 @@ def test_fast_equals_reference_with_inputs_rotated_basis_and_constrained_increme
                dict(window=6, increment_set=[0.3], initial_state_set=X0,
                     initial_disturbance_set=D0)):
         fast = so.SMFDO(s3, **kw)
-        assert fast._P_coords is None  # the P Z hull has its own LPs
+        assert not fast.hull_from_state  # the P Z hull has its own LPs
         rf, rr = fast.run(Y, U), so.SMFDO(s3, fast=False, **kw).run(Y, U)
         _close(rf.lo, rr.lo)
         _close(rf.hi, rr.hi)
@@ -259,8 +259,8 @@ def test_window_structures_are_shared_between_instances():
     kw = dict(window=7, increment_set=sc.increment_set(2),
               initial_state_set=sc.initial_state_set(3))
     so.SMFDO(sys, **kw).run(trs[0].Y)
-    n_models = len(smfdo_module._MODELS)
+    n_models = len(smfdo_module.MODEL_CACHE)
     obs = so.SMFDO(sys, **kw)
     obs.run(trs[1].Y)
-    assert len(smfdo_module._MODELS) == n_models
+    assert len(smfdo_module.MODEL_CACHE) == n_models
     assert obs.stats["fast"] == 100

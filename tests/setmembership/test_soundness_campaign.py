@@ -17,7 +17,7 @@ import setobs as so
 from setobs import LinearSystem
 
 
-def _random_case(rng):
+def random_case(rng):
     """A random system satisfying Theorem 1, with its data (own simulator)."""
     while True:
         n = int(rng.integers(1, 6))
@@ -58,7 +58,7 @@ def _simulate(sys, N, rng):
 
 def _one(seed: int) -> tuple[int, int, list[str]]:
     rng = np.random.default_rng(seed)
-    sys = _random_case(rng)
+    sys = random_case(rng)
     exact = seed % 25 == 0
     N = 60 if exact else 400
     Y, D, U, r = _simulate(sys, N, rng)
@@ -104,7 +104,7 @@ def _large_initial_state(seed: int) -> tuple[int, int, list[str]]:
     from tests.setmembership.test_smfdo import simulate
 
     rng = np.random.default_rng(1000 + seed)
-    sys = _random_case(rng)
+    sys = random_case(rng)
     x0 = rng.normal(size=sys.n) * 10.0 ** rng.uniform(7, 9)
     U = rng.normal(size=(80, sys.p)) if sys.p else None
     Y, D = simulate(sys, 80, rng, x0, rng.normal(size=sys.q), 1.0, U)

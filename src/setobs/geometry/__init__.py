@@ -2,7 +2,7 @@
 
 from .box import Box
 from .lp import EmptinessReport, FactorPolytope, LPOutcome
-from .polytope import HRep, cz_from_hpolytope, to_hrep, vertices
+from .polytope import HRep, cz_from_hpolytope, polygon_2d, to_hrep, vertices
 from .reduction import reduce_exact, reduce_order, remove_redundancy, rescale
 from .zonotope import ConstrainedZonotope
 
@@ -14,6 +14,7 @@ __all__ = [
     "HRep",
     "LPOutcome",
     "cz_from_hpolytope",
+    "polygon_2d",
     "reduce_exact",
     "reduce_order",
     "remove_redundancy",

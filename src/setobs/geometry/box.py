@@ -120,3 +120,11 @@ class Box:
         return bool(np.array_equal(self._lo, other._lo) and np.array_equal(self._hi, other._hi))
 
     __hash__ = None  # type: ignore[assignment]
+
+
+def trusted_box(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> Box:
+    """Package-internal: a :class:`Box` from float64 vectors known to be valid; no copy.
+
+    The arrays are made read-only. Not in ``__all__``; no stability promise.
+    """
+    return Box._trusted(lo, hi)

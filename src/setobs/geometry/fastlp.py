@@ -45,47 +45,27 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import lazy_module
-from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
+from .._rounding import pow2_inverse
+from ..tolerances import (
+    EQUILIBRATION_FLOOR,
+    FASTLP_BOUNDED_CLEAR,
+    FASTLP_CONSISTENCY_RTOL,
+    FASTLP_GAP_RTOL,
+    FASTLP_RANK_GREY,
+    FASTLP_UNBOUNDED_CLEAR,
+    UNBOUNDED_RADIUS,
+    UNBOUNDED_REDUCED_COST_TOL,
+)
 
 # The compiled simplex (numba) compiles/loads on the first batch, not on import.
 _simplex = lazy_module("setobs.geometry._simplex")
 
 __all__ = ["FixedStructureLP", "LPState", "hull_from_bounds", "hull_objectives"]
 
-#: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
-#: direction is unbounded below, and below which it is bounded; in between the
-#: direction is left to the reference path.
-_UNBOUNDED_CLEAR = 1e-6
-_BOUNDED_CLEAR = 1e-12
-#: Accepted gap between the certified bound and the simplex objective.
-GAP_RTOL = 1e-9
-#: Relative size of the singular values that make a structure unusable (rank
-#: decisions between these and 1 would have to be made; the reference path
-#: does not make them, so the fast path does not either).
-_RANK_GREY = 1e-6
-#: Relative residual of the data on the left null space of ``A`` (redundant rows)
-#: above which the reduced LP is not trusted (the reference path decides emptiness).
-_CONSISTENCY_RTOL = 1e-11
-
-
-def _pow2_inverse(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Powers of two ``s`` with ``s v`` in ``[0.5, 1)`` (1 where ``v`` is zero)."""
-    out = np.ones(v.size)
-    pos = v > 0
-    out[pos] = np.ldexp(1.0, -np.frexp(v[pos])[1])
-    return out
-
-
-#: Norms below this fraction of the largest are rounding level: equilibration
-#: leaves them at the scale of the largest instead of blowing them up (a column
-#: of 1e-17 entries left by a rotated basis must not become a unit column, whose
-#: factor would then have a range of 1e-17 and an objective weight of 1e17).
-_EQUILIBRATION_FLOOR = 1e-10
-
 
 def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
     top = float(norms.max(initial=0.0))
-    return np.where(norms < _EQUILIBRATION_FLOOR * top, top, norms)
+    return np.where(norms < EQUILIBRATION_FLOOR * top, top, norms)
 
 
 def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -197,16 +177,16 @@ class FixedStructureLP:
         # Equilibration by powers of two (exact): unit column norms, then unit
         # row norms. Working copy A' = R A S, W' = W S, factor bounds h / S; the
         # multiplier of the working LP maps back as y = R y'.
-        S = _pow2_inverse(_floored(np.linalg.norm(self.A, axis=0)))
-        R = _pow2_inverse(_floored(np.linalg.norm(self.A * S, axis=1)))
+        S = pow2_inverse(_floored(np.linalg.norm(self.A, axis=0)))
+        R = pow2_inverse(_floored(np.linalg.norm(self.A * S, axis=1)))
         self.S_B = np.ascontiguousarray(S[self.bidx])
         self.R = np.ascontiguousarray(R)
         As = R[:, None] * self.A * S
         Ws = self.W * S
         A_U = As[:, self.fidx]
         A_B = As[:, self.bidx]
-        # pinv(A'_U^T) for the working copy; the certificate refines y on the
-        # original columns with pinv(A_U^T) = R pinv(A'_U^T) S_U (A_U of full
+        # pinv(A'UNIT_ROUNDOFF^T) for the working copy; the certificate refines y on the
+        # original columns with pinv(A_U^T) = R pinv(A'UNIT_ROUNDOFF^T) S_U (A_U of full
         # column rank; any approximation only affects tightness, not validity)
         self.pinvU = np.ascontiguousarray(
             np.linalg.pinv(A_U.T) if (f and m) else np.zeros((m, f)))
@@ -215,8 +195,8 @@ class FixedStructureLP:
         anorm = float(np.linalg.norm(As, 2)) if As.size else 0.0
         if f and m:
             Us, s, _ = np.linalg.svd(A_U, full_matrices=True)
-            rank = int((s > _RANK_GREY * anorm).sum())
-            if ((s > 1e-14 * anorm) & (s <= _RANK_GREY * anorm)).any():
+            rank = int((s > FASTLP_RANK_GREY * anorm).sum())
+            if ((s > 1e-14 * anorm) & (s <= FASTLP_RANK_GREY * anorm)).any():
                 self._unusable("nearly dependent unbounded factor columns")
             Q2 = Us[:, rank:]
         else:
@@ -232,8 +212,8 @@ class FixedStructureLP:
             res = W_U - yU @ A_U
             scale = (np.abs(Ws) + np.abs(yU) @ np.abs(As)).max(axis=1)
             rel = np.abs(res).max(axis=1) / np.maximum(scale, np.finfo(float).tiny)
-            self.dirstat[rel > _BOUNDED_CLEAR] = 2
-            self.dirstat[rel > _UNBOUNDED_CLEAR] = 1
+            self.dirstat[rel > FASTLP_BOUNDED_CLEAR] = 2
+            self.dirstat[rel > FASTLP_UNBOUNDED_CLEAR] = 1
         self.Wred = np.ascontiguousarray(Ws[:, self.bidx] - yU @ A_B)
         # Redundant rows (more measurements than new factors, e.g. l > q in the
         # SMFDO): keep an orthonormal basis U1 of the row space of Q2^T A_B; the
@@ -243,8 +223,8 @@ class FixedStructureLP:
         Q0 = np.zeros((m, 0))
         if A_red.size:
             Ur, sv, _ = np.linalg.svd(A_red, full_matrices=True)
-            rank = int((sv > _RANK_GREY * anorm).sum())
-            if ((sv > 1e-14 * anorm) & (sv <= _RANK_GREY * anorm)).any():
+            rank = int((sv > FASTLP_RANK_GREY * anorm).sum())
+            if ((sv > 1e-14 * anorm) & (sv <= FASTLP_RANK_GREY * anorm)).any():
                 self._unusable("nearly redundant equality rows")
             if rank < A_red.shape[0]:
                 Q0 = Q2 @ Ur[:, rank:]
@@ -315,13 +295,13 @@ class FixedStructureLP:
         if not np.array_equal(np.isinf(h), self.free):
             raise ValueError("the unbounded factors differ from the structure's")
         st = self.new_state() if state is None else state
-        bounds, ok = self._minimize_all(np.ascontiguousarray(b, dtype=np.float64),
+        bounds, ok = self.minimize_all_unchecked(np.ascontiguousarray(b, dtype=np.float64),
                                         np.ascontiguousarray(h), st, b_err=b_err)
         if return_duals:
             return bounds.copy(), ok, st.ys.copy(), st.objs.copy()
         return bounds.copy(), ok
 
-    def _minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64], st: LPState,
+    def minimize_all_unchecked(self, b: NDArray[np.float64], h: NDArray[np.float64], st: LPState,
                       b_scale: float = 0.0, b_err: NDArray[np.float64] | None = None
                       ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """:meth:`minimize_all` for contiguous float arrays with the right free factors.
@@ -342,7 +322,7 @@ class FixedStructureLP:
             scale = max(float(np.abs(bs).max(initial=0.0)),
                         b_scale * float(self.R.max(initial=0.0)),
                         float((self._absAB @ hB).max(initial=0.0)), 1e-300)
-            slack = _CONSISTENCY_RTOL * scale + (self._absQ0.T @ (self.R * berr)
+            slack = FASTLP_CONSISTENCY_RTOL * scale + (self._absQ0.T @ (self.R * berr)
                                                  if b_err is not None else 0.0)
             if (np.abs(self.Q0.T @ bs) > slack).any():
                 return bounds, np.zeros(self.n_lp, dtype=bool)
@@ -350,6 +330,6 @@ class FixedStructureLP:
         _simplex.solve_batch(
             self.A, b, h, berr, self.fidx, self.pinvU_orig, self.Ared, self.AredT, bred, hB,
             self.W, self.Wred, self.yU, self.Q2, self.R, self.dirstat, st.bases, st.upper,
-            st.binv, st.npiv, self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, GAP_RTOL,
+            st.binv, st.npiv, self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL,
             bounds, st.objs, codes, st.ys)
         return bounds, codes == _simplex.OPTIMAL

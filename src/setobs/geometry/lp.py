@@ -66,28 +66,22 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import lazy_module
+from .._rounding import UNIT_ROUNDOFF, gamma, round_down
 from ..exceptions import EmptySetError
-from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
+from ..tolerances import (
+    FEASIBILITY_TOL,
+    LP_REFINE_GAP,
+    UNBOUNDED_RADIUS,
+    UNBOUNDED_REDUCED_COST_TOL,
+)
 
 __all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_bound"]
 
-_U = np.finfo(np.float64).eps / 2.0
 _TINY = np.finfo(np.float64).tiny
 _INF = math.inf  # HiGHS's kHighsInf
-#: Relative certification gap above which duals are recomputed from the basis.
-_REFINE_GAP = 1e-9
 
 # HiGHS loads on the first LP, not on ``import setobs``.
 highspy = lazy_module("highspy")
-
-
-def _gamma(k: int) -> float:
-    """Higham's bound ``k u / (1 - k u)`` on the relative error of a length-k dot product."""
-    return k * _U / (1.0 - k * _U)
-
-
-def _down(x: float) -> float:
-    return float(np.nextafter(x, -np.inf))
 
 
 @dataclass(frozen=True)
@@ -284,36 +278,36 @@ def lagrangian_lower_bound(
     abs_y = np.abs(y1) + np.abs(y2)
     scale_r = np.abs(w) + (np.abs(A).T @ abs_y if n_c else 0.0)
     r = w - A.T @ y1 - A.T @ y2 if n_c else w.copy()
-    err_r = 2.0 * _gamma(2 * n_c + 2) * scale_r
+    err_r = 2.0 * gamma(2 * n_c + 2) * scale_r
     if w_err is not None:
-        err_r = err_r + w_err * (1.0 + 4.0 * _U)
+        err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
     bound_r = np.abs(r) + err_r
     t2 = 0.0
     if unb.any():
         # Correctly rounded residual: |true| <= |ru| / (1 - u), plus an underflow guard.
-        ru_bound = np.abs(ru) / (1.0 - _U) + 2.0 * (2 * n_c + 1) * _TINY
+        ru_bound = np.abs(ru) / (1.0 - UNIT_ROUNDOFF) + 2.0 * (2 * n_c + 1) * _TINY
         if w_err is not None and w_pair is None:
-            ru_bound = ru_bound + w_err[unb] * (1.0 + 4.0 * _U)
+            ru_bound = ru_bound + w_err[unb] * (1.0 + 4.0 * UNIT_ROUNDOFF)
         # Negligible relative to the whole reduced-cost computation (norm-wise),
         # not to the unbounded column alone.
         scale_all = max(float(scale_r.max(initial=0.0)), _TINY)
         rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / scale_all
         if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
             return -np.inf, y1
-        t2 += radius * float(ru_bound.sum()) * (1.0 + _gamma(ru_bound.size + 1))
+        t2 += radius * float(ru_bound.sum()) * (1.0 + gamma(ru_bound.size + 1))
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
     # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
     t1 = _exact_dot([y1, y2], b) if n_c else 0.0
     tb = 0.0
     if b_err is not None and n_c:
-        tb = float(abs_y @ b_err) * (1.0 + _gamma(n_c + 2))
-    err = _U * abs(t1) + 2.0 * (
-        _gamma(n_g + 3) * t2
-        + _U * (abs(t1) + t2 + tb)
+        tb = float(abs_y @ b_err) * (1.0 + gamma(n_c + 2))
+    err = UNIT_ROUNDOFF * abs(t1) + 2.0 * (
+        gamma(n_g + 3) * t2
+        + UNIT_ROUNDOFF * (abs(t1) + t2 + tb)
         + 4.0 * (2 * n_c + 1) * _TINY
     )
-    return _down(t1 - t2 - tb - err), y1 + y2
+    return round_down(t1 - t2 - tb - err), y1 + y2
 
 
 def _simplex_limit(n_rows: int, n_cols: int) -> int:
@@ -401,7 +395,7 @@ class FactorPolytope:
 
     # -- model construction ------------------------------------------------
     @staticmethod
-    def _new_highs() -> highspy.Highs:
+    def new_highs() -> highspy.Highs:
         hs = highspy.Highs()
         hs.setOptionValue("output_flag", False)
         hs.setOptionValue("presolve", "off")
@@ -459,14 +453,14 @@ class FactorPolytope:
     def _build(self, row_lo, row_hi, cost, options: dict[str, object] | None = None
                ) -> highspy.Highs | None:
         """A HiGHS model of ``min cost^T xi, row_lo <= A xi <= row_hi, |xi| <= h``."""
-        hs = self._new_highs()
+        hs = self.new_highs()
         hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
         for key, val in (options or {}).items():
             hs.setOptionValue(key, val)
         lo, up = self._col_bounds()
         return hs if self._pass(hs, self.A, lo, up, row_lo, row_hi, cost) else None
 
-    def _get_model(self) -> highspy.Highs | None:
+    def highs_model(self) -> highspy.Highs | None:
         if self._model is None:
             self._model = self._build(self.b, self.b, np.zeros(self.n_g))
         return self._model
@@ -496,14 +490,14 @@ class FactorPolytope:
         )
 
     @staticmethod
-    def _pow2_scale(w: NDArray[np.float64]) -> float:
+    def objective_scale(w: NDArray[np.float64]) -> float:
         """A power of two close to ``max |w|`` (dividing by it is exact)."""
         m = float(np.abs(w).max(initial=0.0))
         if m == 0.0 or not np.isfinite(m):
             return 1.0
         return float(np.ldexp(1.0, np.frexp(m)[1]))
 
-    def _solve(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
+    def solve_objective(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
         hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w / scale)
         hs.run()
         return hs.getModelStatus()
@@ -540,9 +534,9 @@ class FactorPolytope:
         """
         w = np.asarray(w, dtype=np.float64)
         with self._lock:
-            return self._minimize(w, w_err, w_pair)
+            return self.minimize_under_lock(w, w_err, w_pair)
 
-    def _minimize(self, w, w_err, w_pair) -> LPOutcome:
+    def minimize_under_lock(self, w, w_err, w_pair) -> LPOutcome:
         if self.n_c == 0:
             # No constraints: the minimum over the box is analytic and exact.
             bound = self.certify(w, np.zeros(0), w_err, w_pair)
@@ -552,22 +546,22 @@ class FactorPolytope:
             return LPOutcome(bound, float(w @ point), point, "optimal")
         # HiGHS sees the objective divided by a power of two (exact), so that its
         # tolerances act on a unit-size problem; certification uses the true w.
-        scale = self._pow2_scale(w)
+        scale = self.objective_scale(w)
         best = -np.inf  # best certified bound of any multiplier (fallback answer)
         attempts = [None, *self._RETRIES]
         for i, options in enumerate(attempts):
-            hs = self._get_model() if i == 0 else self._build(
+            hs = self.highs_model() if i == 0 else self._build(
                 self.b, self.b, np.zeros(self.n_g), options)
             if hs is None:
                 continue
-            st = self._solve(hs, w, scale)
+            st = self.solve_objective(hs, w, scale)
             if st == highspy.HighsModelStatus.kOptimal:
                 sol = hs.getSolution()
                 y = np.asarray(sol.row_dual, dtype=np.float64) * scale
                 x = np.asarray(sol.col_value, dtype=np.float64)
                 bound = self.certify(w, y, w_err, w_pair)
                 obj = float(w @ x)
-                if np.isfinite(bound) and obj - bound > _REFINE_GAP * (1.0 + abs(obj)):
+                if np.isfinite(bound) and obj - bound > LP_REFINE_GAP * (1.0 + abs(obj)):
                     y_ref = self._basis_duals(hs, w)
                     if y_ref is not None:
                         bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
@@ -590,14 +584,14 @@ class FactorPolytope:
             y = np.asarray(hs.getSolution().row_dual, dtype=np.float64)
             if y.size == self.n_c and np.isfinite(y).all():
                 best = max(best, self.certify(w, y * scale, w_err, w_pair))
-        out = self._compiled(w, w_err, w_pair)
+        out = self.try_compiled(w, w_err, w_pair)
         if out is not None:
             return out
         best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
         self.fallbacks += 1
         return LPOutcome(best, np.nan, None, "fallback")
 
-    def _compiled(self, w, w_err, w_pair) -> LPOutcome | None:
+    def try_compiled(self, w, w_err, w_pair) -> LPOutcome | None:
         """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here."""
         from .fastlp import FixedStructureLP
 
@@ -681,7 +675,7 @@ class FactorPolytope:
             rep = self.emptiness()
             found = rep.violation_found if np.isfinite(rep.violation_found) else 1.0
             delta = self._row_scale() * max(2.0 * found, 2.0 * rep.tol)
-            scale = self._pow2_scale(w)
+            scale = self.objective_scale(w)
             y = None
             for options in (None, *self._RETRIES):
                 hs = self._build(self.b - delta, self.b + delta, w / scale, options)
@@ -707,8 +701,8 @@ class FactorPolytope:
             if np.isinf(bound):
                 return LPOutcome(-np.inf, obj, x, "unbounded" if x is not None else status)
             # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
-            relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * _gamma(self.n_c + 1))
-            return LPOutcome(_down(bound - relax), obj, x, status)
+            relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * gamma(self.n_c + 1))
+            return LPOutcome(round_down(bound - relax), obj, x, status)
 
     def _row_scale(self) -> NDArray[np.float64]:
         """Power-of-two row scales (so that scaling is exact in floating point)."""
@@ -759,7 +753,7 @@ class FactorPolytope:
         cost = np.concatenate([np.zeros(n_g), np.ones(2 * n_c)])
         sol = None
         for options in ({"simplex_strategy": 1}, *self._RETRIES):
-            hs = self._new_highs()
+            hs = self.new_highs()
             for key, val in options.items():
                 hs.setOptionValue(key, val)
             if not self._pass(hs, big, lo_c, up_c, bs, bs, cost):
@@ -780,9 +774,9 @@ class FactorPolytope:
             unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
             b_err=None if self.b_err is None else self.b_err / scale,
         )
-        norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * _gamma(n_c + 1))
+        norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * gamma(n_c + 1))
         if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
-            lower_inf = _down(lower / norm1)
+            lower_inf = round_down(lower / norm1)
         else:
             lower_inf = 0.0  # no positive certificate
         xc = np.clip(x, -self.h, self.h)

@@ -5,45 +5,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
-
-from ..exceptions import DimensionError, UnboundedSetError
+from ..exceptions import DimensionError
+from .polytope import polygon_2d
 from .zonotope import ConstrainedZonotope
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.patches import Patch
 
-__all__ = ["plot_cz", "polygon_2d"]
-
-
-def polygon_2d(Z: ConstrainedZonotope) -> NDArray[np.float64]:
-    """Vertices (counter-clockwise) of a bounded 2-D constrained zonotope.
-
-    The verified vertices of :func:`setobs.geometry.polytope.vertices` (support
-    LPs, every edge confirmed by a certified support value), in angular order.
-
-    Raises
-    ------
-    DimensionError
-        If ``Z`` is not 2-D.
-    UnboundedSetError
-        If ``Z`` is unbounded.
-    """
-    from .polytope import vertices
-
-    if Z.dim != 2:
-        raise DimensionError(f"polygon_2d needs a 2-D set, got dimension {Z.dim}")
-    try:
-        P = vertices(Z)
-    except UnboundedSetError:
-        raise UnboundedSetError("cannot draw an unbounded set; intersect it with a box "
-                                "first") from None
-    if len(P) <= 2:
-        return P
-    ctr = P.mean(axis=0)
-    return P[np.argsort(np.arctan2(P[:, 1] - ctr[1], P[:, 0] - ctr[0]))]
+__all__ = ["plot_cz"]
 
 
 def plot_cz(

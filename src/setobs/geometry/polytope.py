@@ -16,12 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._rounding import gamma
 from .._validation import as_matrix, as_vector
-from ..exceptions import EmptySetError, SolverError, UnboundedSetError
-from .lp import _gamma
-from .zonotope import ConstrainedZonotope
+from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from ..tolerances import VERTEX_RTOL
+from .zonotope import ConstrainedZonotope, hull_with_status, support_unwarned, trusted_cz
 
-__all__ = ["HRep", "cz_from_hpolytope", "to_hrep", "vertices"]
+__all__ = ["HRep", "cz_from_hpolytope", "polygon_2d", "to_hrep", "vertices"]
 
 
 @dataclass(frozen=True)
@@ -48,16 +49,10 @@ class HRep:
                     (np.abs(self.E @ xv - self.f) <= tol).all())
 
 
-#: Relative tolerance of the vertex enumeration: a facet of the found hull is
-#: confirmed when the certified support in its normal exceeds its offset by at
-#: most this times the set's size; flat directions have certified width below it.
-VERTEX_RTOL = 1e-9
-
-
 def _support_pair(Z: ConstrainedZonotope, d: NDArray[np.float64]
                   ) -> tuple[float, NDArray[np.float64]]:
     """Certified support value and a maximiser (the LP's point) in direction ``d``."""
-    val = Z._support(d)
+    val = support_unwarned(Z, d)
     return val, Z.support_point(d)
 
 
@@ -79,7 +74,7 @@ class _VerifiedHull:
 
     def __init__(self, Z: ConstrainedZonotope, rtol: float = VERTEX_RTOL,
                  max_lps: int = 20_000) -> None:
-        box, _ = Z._interval_hull()
+        box, _ = hull_with_status(Z)
         if not box.is_bounded:
             raise UnboundedSetError("vertex enumeration needs a bounded set; this one is "
                                     "unbounded (or not certifiably bounded)")
@@ -214,7 +209,7 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
         If the construction cannot be verified.
     """
     if Z.dim == 1:
-        box, _ = Z._interval_hull()
+        box, _ = hull_with_status(Z)
         if not box.is_bounded:
             raise UnboundedSetError("vertex enumeration needs a bounded set; this one is "
                                     "unbounded")
@@ -260,9 +255,9 @@ def _scott_cz(H, k, lo, hi) -> ConstrainedZonotope:
     G = np.hstack([np.diag(dx), np.zeros((n, m))])
     A = np.hstack([H * dx, np.diag(dsig / 2.0)])
     b = k - H @ c - dsig / 2.0
-    g = _gamma(n + 3) * (1.0 + _gamma(n + 4))
+    g = gamma(n + 3) * (1.0 + gamma(n + 4))
     berr = g * (np.abs(k) + np.abs(H) @ np.abs(c) + dsig / 2.0)
-    return ConstrainedZonotope._trusted(G, c, A, b, np.ones(n + m), berr=berr)
+    return trusted_cz(G, c, A, b, np.ones(n + m), berr=berr)
 
 
 def cz_from_hpolytope(H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
@@ -319,3 +314,28 @@ def cz_from_hpolytope(H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
         pad = pad * 10.0
     raise SolverError("could not certify a bounding box of the H-polytope")
 
+
+def polygon_2d(Z: ConstrainedZonotope) -> NDArray[np.float64]:
+    """Vertices (counter-clockwise) of a bounded 2-D constrained zonotope.
+
+    The verified vertices of :func:`setobs.geometry.polytope.vertices` (support
+    LPs, every edge confirmed by a certified support value), in angular order.
+
+    Raises
+    ------
+    DimensionError
+        If ``Z`` is not 2-D.
+    UnboundedSetError
+        If ``Z`` is unbounded.
+    """
+    if Z.dim != 2:
+        raise DimensionError(f"polygon_2d needs a 2-D set, got dimension {Z.dim}")
+    try:
+        P = vertices(Z)
+    except UnboundedSetError:
+        raise UnboundedSetError("cannot draw an unbounded set; intersect it with a box "
+                                "first") from None
+    if len(P) <= 2:
+        return P
+    ctr = P.mean(axis=0)
+    return P[np.argsort(np.arctan2(P[:, 1] - ctr[1], P[:, 0] - ctr[0]))]

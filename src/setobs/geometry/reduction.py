@@ -26,10 +26,15 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import qr
 
+from .._rounding import gamma
 from ..exceptions import DimensionError, EmptySetError
-from ..tolerances import ZERO_TOL
-from .lp import _gamma
-from .zonotope import ConstrainedZonotope
+from ..tolerances import (
+    ELIMINATION_ERR_RTOL,
+    ELIMINATION_PIVOT_TOL,
+    REDUNDANT_BOUND_MARGIN,
+    ZERO_TOL,
+)
+from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
 
 __all__ = ["reduce_exact", "reduce_order", "remove_redundancy", "rescale"]
 
@@ -67,7 +72,7 @@ def remove_redundancy(Z: ConstrainedZonotope, tol: float = ZERO_TOL) -> Constrai
         rank = int((d > tol * d[0]).sum()) if d.size else 0
         rows = np.sort(piv[:rank])
         A, b, berr = A[rows], b[rows], berr[rows]
-    return ConstrainedZonotope._trusted(G, c, A, b, h, Z.radius, Z.c_err, berr)
+    return trusted_cz(G, c, A, b, h, Z.radius, Z.c_err, berr)
 
 
 def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
@@ -87,7 +92,7 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     n_g = Z.n_gen
     if n_g == 0:
         return Z
-    fp = Z._lp()
+    fp = factor_polytope(Z)
     lo = np.empty(n_g)
     hi = np.empty(n_g)
     for j in range(n_g):
@@ -107,11 +112,11 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     c = Z.c + Z.G @ m
     b = Z.b - Z.A @ m
     # rounding of the recentring (Higham's bounds), on top of what Z carried
-    g = _gamma(n_g + 2) * (1.0 + _gamma(n_g + 3))
+    g = gamma(n_g + 2) * (1.0 + gamma(n_g + 3))
     cerr = Z.c_err + g * (np.abs(Z.c) + np.abs(Z.G) @ np.abs(m))
     berr = Z.b_err + g * (np.abs(Z.b) + np.abs(Z.A) @ np.abs(m))
     keep = r > 0
-    return ConstrainedZonotope._trusted(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.radius,
+    return trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.radius,
                                         cerr, berr)
 
 
@@ -171,24 +176,13 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     G = np.hstack([Z.G[:, cols], box[:n]])
     A = np.hstack([Z.A[:, cols], box[n:]])
     h = np.concatenate([Z.h[cols], np.ones(rows.size)])
-    return ConstrainedZonotope._trusted(G, Z.c, A, Z.b, h, Z.radius, Z.c_err, Z.b_err)
-
-
-#: Relative margin by which a factor's certified interval must lie inside its
-#: bound for :func:`reduce_exact` to call the bound redundant.
-REDUNDANT_BOUND_MARGIN = 1e-9
-#: Budget of the certified rounding of ``c`` and ``b`` that :func:`reduce_exact`
-#: may add, relative to the size of the set's data (it stops eliminating there).
-ELIMINATION_ERR_RTOL = 1e-12
-#: Smallest pivot, relative to the largest entry of its row, that
-#: :func:`reduce_exact` eliminates with (partial pivoting).
-ELIMINATION_PIVOT_TOL = 1e-3
+    return trusted_cz(G, Z.c, A, Z.b, h, Z.radius, Z.c_err, Z.b_err)
 
 
 def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_]
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Certified ``[lo_j, hi_j]`` of the factors ``cols`` over the factor polytope."""
-    fp = Z._lp()
+    fp = factor_polytope(Z)
     lo = np.full(cols.size, -np.inf)
     hi = np.full(cols.size, np.inf)
     e = np.zeros(Z.n_gen)
@@ -295,7 +289,7 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
         1.0 + float(np.abs(c).max(initial=0.0)) + float((np.abs(G) @ fin).max(initial=0.0))))
     b_budget = max(float(berr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
         1.0 + float(np.abs(b).max(initial=0.0)) + float((np.abs(A) @ fin).max(initial=0.0))))
-    g2 = 2.0 * _gamma(4)
+    g2 = 2.0 * gamma(4)
     while A.shape[0]:
         unb = np.flatnonzero(free)
         if not unb.size:
@@ -335,5 +329,5 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
             raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
         A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    return ConstrainedZonotope._trusted(G[:, keep], c, A[:, keep], b, h[keep], Z.radius,
+    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.radius,
                                         cerr, berr)

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._rounding import UNIT_ROUNDOFF, gamma, round_down, round_up
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
     DimensionError,
@@ -19,7 +20,7 @@ from ..exceptions import (
 )
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
 from .box import Box
-from .lp import _U, EmptinessReport, FactorPolytope, _down, _gamma
+from .lp import EmptinessReport, FactorPolytope
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -28,10 +29,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .polytope import HRep
 
 __all__ = ["ConstrainedZonotope"]
-
-
-def _up(x: float) -> float:
-    return float(np.nextafter(x, np.inf))
 
 
 def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -54,7 +51,7 @@ def _add(e1: NDArray[np.float64] | None, e2: NDArray[np.float64] | None
         return e2
     if e2 is None:
         return e1
-    return (e1 + e2) * (1.0 + 2.0 * _U)
+    return (e1 + e2) * (1.0 + 2.0 * UNIT_ROUNDOFF)
 
 
 def _cat(e1, n1: int, e2, n2: int) -> NDArray[np.float64] | None:
@@ -67,30 +64,30 @@ def _cat(e1, n1: int, e2, n2: int) -> NDArray[np.float64] | None:
 
 def _sum_err(a, v, err) -> NDArray[np.float64] | None:
     """Bound for ``fl(a + v)`` given the bound ``err`` carried by ``a``."""
-    new = _gamma(2) * (np.abs(a) + np.abs(v))
+    new = gamma(2) * (np.abs(a) + np.abs(v))
     return _add(err, new) if new.any() else err
 
 
 def _map_err(M, c, err) -> NDArray[np.float64] | None:
     """Bound for ``fl(M c)`` given the bound ``err`` carried by ``c``."""
     k = M.shape[1]
-    base = _gamma(k + 1) * np.abs(c)
+    base = gamma(k + 1) * np.abs(c)
     if err is not None:
         base = base + err
     if not base.any():
         return None
-    return (np.abs(M) @ base) * (1.0 + _gamma(k + 2))
+    return (np.abs(M) @ base) * (1.0 + gamma(k + 2))
 
 
 def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
     """Bound for ``fl(y - C c)`` given the bounds carried by ``c`` and ``y``."""
     k = C.shape[1]
-    base = _gamma(k + 1) * (np.abs(y) + np.abs(C) @ np.abs(c))
+    base = gamma(k + 1) * (np.abs(y) + np.abs(C) @ np.abs(c))
     if cerr is not None:
         base = base + np.abs(C) @ cerr
     if yerr is not None:
         base = base + yerr
-    return base * (1.0 + _gamma(k + 3)) if base.any() else None
+    return base * (1.0 + gamma(k + 3)) if base.any() else None
 
 
 def _rebuild(G, c, A, b, h, radius, cerr, berr) -> ConstrainedZonotope:
@@ -596,8 +593,8 @@ class ConstrainedZonotope:
             g = self._G[i]
             ce = float(cerr[i])
             if zero_rows[i]:
-                lo[i] = _down(self._c[i] - ce) if ce else self._c[i]
-                hi[i] = _up(self._c[i] + ce) if ce else self._c[i]
+                lo[i] = round_down(self._c[i] - ce) if ce else self._c[i]
+                hi[i] = round_up(self._c[i] + ce) if ce else self._c[i]
                 continue
             low = fp.minimize(g).bound
             upp = -fp.minimize(-g).bound
@@ -608,8 +605,8 @@ class ConstrainedZonotope:
                     raise EmptySetError("the set is empty (certified by the phase-1 LP)")
                 low = fp.minimize_relaxed(g).bound
                 upp = -fp.minimize_relaxed(-g).bound
-            lo[i] = _down(_down(self._c[i] - ce) + low) if np.isfinite(low) else -np.inf
-            hi[i] = _up(_up(self._c[i] + ce) + upp) if np.isfinite(upp) else np.inf
+            lo[i] = round_down(round_down(self._c[i] - ce) + low) if np.isfinite(low) else -np.inf
+            hi[i] = round_up(round_up(self._c[i] + ce) + upp) if np.isfinite(upp) else np.inf
         out = (Box(lo, hi), fp.fallbacks > before)
         self._cache["hull"] = out
         return out
@@ -641,16 +638,16 @@ class ConstrainedZonotope:
 
     def _support_value(self, d: NDArray[np.float64]) -> tuple[float, bool]:
         w = self._G.T @ d
-        w_err = 2.0 * _gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
+        w_err = 2.0 * gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
         out = self._lp().minimize(-w, w_err=w_err, w_pair=(self._G, -d))
         if not np.isfinite(out.bound):
             return np.inf, out.status == "fallback"
         dc = float(d @ self._c)
-        err = 2.0 * _gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
+        err = 2.0 * gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
         if self._cerr is not None:
-            err += float(np.abs(d) @ self._cerr) * (1.0 + _gamma(self.dim + 1))
+            err += float(np.abs(d) @ self._cerr) * (1.0 + gamma(self.dim + 1))
         s = -out.bound + dc
-        return _up(s + err + _U * abs(s)), out.status == "fallback"
+        return round_up(s + err + UNIT_ROUNDOFF * abs(s)), out.status == "fallback"
 
     def support_point(self, direction: ArrayLike) -> NDArray[np.float64]:
         """A maximiser of ``d^T z`` over the set (the solver's point; not certified).
@@ -739,3 +736,37 @@ class ConstrainedZonotope:
         from .plotting import plot_cz
 
         return plot_cz(self, ax=ax, dims=dims, **kwargs)
+
+
+# ---------------------------------------------------------------- package-internal access
+# The functions below are the package's internal interface to a constrained
+# zonotope's unchecked construction and unwarned certified queries (used by the
+# reductions, the polytope conversions and the SMFDO). They are not in
+# ``__all__`` and carry no stability promise.
+
+
+def trusted_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.float64],
+               b: NDArray[np.float64], h: NDArray[np.float64],
+               radius: float = UNBOUNDED_RADIUS, cerr: NDArray[np.float64] | None = None,
+               berr: NDArray[np.float64] | None = None) -> ConstrainedZonotope:
+    """Build from arrays the caller has already validated (no checks, no copies of shape).
+
+    ``cerr``, ``berr``: elementwise bounds on the rounding errors already in
+    ``c`` and ``b`` (``None``: exact); certified queries widen by them.
+    """
+    return ConstrainedZonotope._trusted(G, c, A, b, h, radius, cerr, berr)
+
+
+def factor_polytope(Z: ConstrainedZonotope) -> FactorPolytope:
+    """The cached LP engine over ``Z``'s factor polytope ``{xi : A xi = b, |xi| <= h}``."""
+    return Z._lp()
+
+
+def hull_with_status(Z: ConstrainedZonotope) -> tuple[Box, bool]:
+    """:meth:`ConstrainedZonotope.interval_hull` without the warning: ``(box, any_fallback)``."""
+    return Z._interval_hull()
+
+
+def support_unwarned(Z: ConstrainedZonotope, d: NDArray[np.float64]) -> float:
+    """:meth:`ConstrainedZonotope.support` for a validated direction, without the warning."""
+    return Z._support(d)

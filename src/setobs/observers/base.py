@@ -10,27 +10,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
-from ..exceptions import DimensionError, SetobsError
+from ..exceptions import DesignError, DimensionError
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 
 __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
-
-
-class DesignError(SetobsError, ValueError):
-    """The observer design's existence condition fails for this system.
-
-    Attributes
-    ----------
-    condition : str
-        The condition that failed.
-    """
-
-    def __init__(self, message: str, condition: str = "") -> None:
-        super().__init__(message)
-        self.condition = condition
-
-    def __reduce__(self):
-        return (type(self), (str(self), self.condition))
 
 
 @dataclass(frozen=True)

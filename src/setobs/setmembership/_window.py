@@ -35,15 +35,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .._rounding import UNIT_ROUNDOFF, gamma
 from ..geometry import ConstrainedZonotope
 from ..geometry.fastlp import FixedStructureLP, LPState, hull_from_bounds, hull_objectives
-from ..geometry.lp import _U, _gamma
+from ..geometry.zonotope import trusted_cz
 
 
 def model_rtol(s: int, N: int, p: int, nD: int) -> float:
     """Relative rounding bound of ``s`` steps of the recursion's products (Higham's
     ``gamma`` of their depth, doubled): the *model allowance* per measurement."""
-    return 2.0 * _gamma((s + 2) * (N + p + nD + 3) + 8)
+    return 2.0 * gamma((s + 2) * (N + p + nD + 3) + 8)
 
 
 class WindowModel:
@@ -276,7 +277,7 @@ class WindowModel:
             au = np.abs(u)
             eb = eb + self._b_u_a @ au
             ec = ec + self._c_u_a @ au
-        g = self._gK + 3.0 * _U
+        g = self._gK + 3.0 * UNIT_ROUNDOFF
         eb = g * eb
         ec = g * ec
         # On every measurement row: the data's representation error, the rounding
@@ -285,7 +286,7 @@ class WindowModel:
         # (relative gK) acting on the factors, whose image C_o G_j xi has the
         # size of y when the prediction does not cancel.
         eb[self.y_pos] += (data_rtol + self._gK) * ya + np.where(
-            rest != 0.0, _U * (np.abs(rest) + ya), 0.0)
+            rest != 0.0, UNIT_ROUNDOFF * (np.abs(rest) + ya), 0.0)
         if Y_err is not None:
             eb[self.y_pos] += np.asarray(Y_err).reshape(-1)[self.y_sel]
         eb = eb + self._b_abs_err
@@ -310,7 +311,7 @@ class WindowModel:
         Returns ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded
         outward exactly as :meth:`ConstrainedZonotope.interval_hull` does.
         """
-        bounds, ok = self.lp._minimize_all(b, h, state, y_scale, b_err)
+        bounds, ok = self.lp.minimize_all_unchecked(b, h, state, y_scale, b_err)
         if not ok.all():
             return None
         if self.P is None:
@@ -318,10 +319,10 @@ class WindowModel:
         else:
             Pc = self.P @ c
             k = self.P.shape[1]
-            pe = (self._absP @ (c_err + _gamma(k + 1) * np.abs(c))) * (1.0 + _gamma(k + 2))
+            pe = (self._absP @ (c_err + gamma(k + 1) * np.abs(c))) * (1.0 + gamma(k + 2))
             cc, cc_err = np.concatenate([c, Pc]), np.concatenate([c_err, pe])
         return hull_from_bounds(bounds, cc, cc_err)
 
     def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""
-        return ConstrainedZonotope._trusted(self.G, c, self.A, b, h, self.radius, c_err, b_err)
+        return trusted_cz(self.G, c, self.A, b, h, self.radius, c_err, b_err)

@@ -28,14 +28,9 @@ from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, SolverError
 from ..geometry import Box
 from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..tolerances import CALIBRATION_ATOL, CALIBRATION_RTOL
 
 __all__ = ["NoiseCalibration", "NoiseTradeoff", "calibrate_noise", "noise_tradeoff"]
-
-#: Relative margin added to the LP optimum in the recommended bound (outward).
-CALIBRATION_RTOL = 1e-6
-#: Absolute margin (data units) added to the recommended bound: HiGHS's primal
-#: feasibility tolerance, by which its optimum may undercut the true minimum.
-CALIBRATION_ATOL = 1e-7
 
 
 @dataclass(frozen=True)

@@ -16,15 +16,20 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import progress_bar
+from .._rounding import UNIT_ROUNDOFF, gamma, pow2_inverse
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
-from ..analysis.existence import BoundedDOReport
-from ..exceptions import DimensionError, EmptySetError, SetobsError, SolverWarning
+from ..exceptions import (
+    DimensionError,
+    EmptySetError,
+    ExistenceError,
+    ModelInvalidatedError,
+    ModelInvalidatedWarning,
+    SolverWarning,
+)
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.box import box_center
-from ..geometry.fastlp import _pow2_inverse
-from ..geometry.lp import _U, _gamma
-from ..geometry.zonotope import box_center_radius
+from ..geometry.box import box_center, trusted_box
+from ..geometry.zonotope import box_center_radius, hull_with_status, trusted_cz
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
 from ._window import WindowModel, model_rtol
@@ -48,45 +53,6 @@ ON_INCONSISTENT = ("raise", "skip", "reset")
 #: Distinct missing-sample patterns an SMFDO sets up fast-path structures for;
 #: steps with further patterns go to the reference path.
 MAX_MASK_STRUCTURES = 64
-
-
-class ExistenceError(SetobsError, ValueError):
-    """No bounded disturbance observer exists for the system (Theorem 1 fails).
-
-    Attributes
-    ----------
-    report : BoundedDOReport
-        The analysis report (ranks, margins, unrecoverable directions).
-    """
-
-    def __init__(self, message: str, report: BoundedDOReport) -> None:
-        super().__init__(message)
-        self.report = report
-
-    def __reduce__(self):
-        return (type(self), (str(self), self.report))
-
-
-class ModelInvalidatedError(SetobsError, RuntimeError):
-    """The data are inconsistent with the model: the posterior set is (certified) empty.
-
-    Attributes
-    ----------
-    step : int
-        The time step ``k`` at which the measurement could not be explained.
-    """
-
-    def __init__(self, message: str, step: int) -> None:
-        super().__init__(message)
-        self.step = step
-
-    def __reduce__(self):
-        return (type(self), (str(self), self.step))
-
-
-class ModelInvalidatedWarning(RuntimeWarning):
-    """Measurements were inconsistent with the model and were skipped, or the
-    filter was reset (``on_inconsistent="skip"`` or ``"reset"``)."""
 
 
 @dataclass(frozen=True)
@@ -255,10 +221,10 @@ class _ModelCache:
         return len(self._items)
 
 
-_MODELS = _ModelCache()
+MODEL_CACHE = _ModelCache()
 
 
-def _check_window(window: object) -> int | None:
+def check_window(window: object) -> int | None:
     if window is None:
         return None
     if isinstance(window, bool | np.bool_) or not isinstance(window, numbers.Real):
@@ -343,8 +309,8 @@ def _normalize_free_columns(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     if not free.any():
         return Z
     norms = np.linalg.norm(np.vstack([Z.G, Z.A]), axis=0)
-    s = np.where(free, _pow2_inverse(norms), 1.0)
-    return ConstrainedZonotope._trusted(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.radius, Z.c_err,
+    s = np.where(free, pow2_inverse(norms), 1.0)
+    return trusted_cz(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.radius, Z.c_err,
                                         Z.b_err)
 
 
@@ -507,7 +473,7 @@ class SMFDO:
         disturbance_inputs: DisturbanceInputs = None,
     ) -> None:
         sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
-        window = _check_window(window)
+        window = check_window(window)
         if reset is not None:
             if reset not in ("raise", "box"):
                 raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
@@ -723,6 +689,40 @@ class SMFDO:
         return src  # type: ignore[return-value]
 
     @property
+    def posterior_set(self) -> ConstrainedZonotope | None:
+        """The current posterior set ``Z_k^+`` (eq. (21)) of the internal state, or ``None``.
+
+        In the observer's internal coordinates ``z_o`` (see :attr:`restart_box`);
+        ``None`` before the first measurement. A fast-path step's set is
+        built from its closed form on first access.
+        """
+        return self._Z
+
+    @property
+    def fast_path_instance(self) -> tuple[WindowModel, NDArray[np.float64], NDArray[np.float64],
+                                          NDArray[np.float64]] | None:
+        """``(model, c, b, h)`` of the last step if the compiled fast path solved it, else ``None``.
+
+        For diagnostics and benchmarks: the window model (fixed structure), the
+        centre of the posterior, and the data-dependent right-hand side and
+        factor bounds of its LPs.
+        """
+        src = self._Z_src
+        if not isinstance(src, tuple):
+            return None
+        model, c, b, h, _, _ = src
+        return model, c, b, h
+
+    @property
+    def hull_from_state(self) -> bool:
+        """Whether the disturbance is a coordinate subset of the internal state ``z_o``.
+
+        Then the disturbance interval hull is read off the state's hull (no
+        extra LPs); otherwise it has LPs of its own.
+        """
+        return self._P_coords is not None
+
+    @property
     def restart_box(self) -> Box | None:
         """The box the window restarts from at the next step (eq. (24)), or ``None``.
 
@@ -804,7 +804,7 @@ class SMFDO:
                 return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
                                    np.isinf(Z0.h), k, True, P_extra, radius, noise=V,
                                    masks=masks)
-        model = _MODELS.get((self._digest, *key), build)
+        model = MODEL_CACHE.get((self._digest, *key), build)
         if not model.usable:
             return None
         if key[0] == "box":
@@ -830,12 +830,12 @@ class SMFDO:
         if out is None:
             return None
         lo, hi = out
-        box_o = Box._trusted(lo[:N], hi[:N])
+        box_o = trusted_box(lo[:N], hi[:N])
         if self._P_coords is not None:
             j = self._P_coords
-            box = Box._trusted(lo[j], hi[j])
+            box = trusted_box(lo[j], hi[j])
         else:
-            box = Box._trusted(lo[N:], hi[N:])
+            box = trusted_box(lo[N:], hi[N:])
         return (model, c, b, h, c_err, b_err), box, box_o
 
     # ------------------------------------------------------------------ recursion
@@ -880,8 +880,8 @@ class SMFDO:
         # the set y - V_m (rows m of F_b V): centre y - c_V (rounded once), the
         # noise's own constraints, generators -G_V
         cY = ym - V.c[m]
-        cY_err = _U * np.abs(cY) + V.c_err[m] + y_err
-        Yset = ConstrainedZonotope._trusted(-V.G[m], cY, V.A, V.b, V.h, V.radius, cY_err,
+        cY_err = UNIT_ROUNDOFF * np.abs(cY) + V.c_err[m] + y_err
+        Yset = trusted_cz(-V.G[m], cY, V.A, V.b, V.h, V.radius, cY_err,
                                             V.b_err)
         return Zp.intersect(Yset, R=C)
 
@@ -931,8 +931,8 @@ class SMFDO:
             yraw = yraw - Du @ uk
             # rounding of D_u u (gamma_p) and of the subtraction, the input's and
             # the measurement's representation errors
-            yerr = ((_gamma(p + 1) + self.data_rtol) * absDu_u + _U * np.abs(yraw)
-                    + self.data_rtol * np.abs(yraw + Du @ uk)) * (1.0 + _gamma(p + 3))
+            yerr = ((gamma(p + 1) + self.data_rtol) * absDu_u + UNIT_ROUNDOFF * np.abs(yraw)
+                    + self.data_rtol * np.abs(yraw + Du @ uk)) * (1.0 + gamma(p + 3))
             yerr = np.where(np.isnan(yerr), 0.0, yerr) / self._dy
         yv = yraw / self._dy
         if k > 0:
@@ -1060,7 +1060,7 @@ class SMFDO:
             # reported bounds: the set recursion itself rounds (O(eps)), and a
             # box without margin can make a thin set (states pinned to rounding
             # level) empty at a later step.
-            self._hulls.append(Box._trusted(*self._outward(box_o.lo, box_o.hi)))
+            self._hulls.append(trusted_box(*self._outward(box_o.lo, box_o.hi)))
             if self._windowing and len(self._hist) > self.window:
                 del self._hist[:len(self._hist) - self.window]
         lo, hi = self._outward(box.lo, box.hi)
@@ -1076,12 +1076,12 @@ class SMFDO:
         fb_o = False
         box_o = None
         if self.window is not None:
-            box_o, fb_o = Z._interval_hull()
+            box_o, fb_o = hull_with_status(Z)
         Zd = self.P @ Z
         if box_o is not None and self._P_coords is not None:
             j = self._P_coords
             return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o
-        box_d, fb_d = Zd._interval_hull()
+        box_d, fb_d = hull_with_status(Zd)
         return Zd, box_d, box_o, fb_o or fb_d
 
     def _outward(self, lo, hi):
@@ -1095,7 +1095,7 @@ class SMFDO:
     def _handle_empty(self, k: int, Zp: ConstrainedZonotope, e: _Entry, msg: str):
         """``on_inconsistent="reset"``: the posterior of an inflated box of ``Zp``."""
         try:
-            hull, _ = Zp._interval_hull()
+            hull, _ = hull_with_status(Zp)
         except EmptySetError:
             raise ModelInvalidatedError(msg + " (the prior itself is empty)", k) from None
         w = np.where(np.isfinite(hull.width), hull.width, 0.0)

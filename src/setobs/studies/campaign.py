@@ -81,10 +81,10 @@ class ObserverSpec:
                 f"observer {self.name!r} ({self.kind}): unknown parameter(s) {unknown}; "
                 f"accepted: {list(accepted) or 'none'}")
         if self.kind == "smfdo" and "window" in self.params:
-            from ..setmembership.smfdo import _check_window
+            from ..setmembership.smfdo import check_window
 
             try:
-                _check_window(self.params["window"])
+                check_window(self.params["window"])
             except (TypeError, ValueError) as exc:
                 raise DimensionError(f"observer {self.name!r}: {exc}") from None
 

@@ -1,0 +1,150 @@
+"""The public surface: private names stay in their modules; exceptions and tolerances are listed.
+
+Rule checked on the package, the tests, the benchmarks and the notebooks: a name
+that starts with one underscore (a function, class, method, attribute or
+constant) is used only in the file that defines it. Private *modules*
+(``setobs._blas``, ``setobs.geometry._simplex``, ...) are package-internal; the
+names they export carry no underscore.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+import setobs as so
+from setobs import exceptions, tolerances
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "setobs"
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _sources() -> list[tuple[Path, str]]:
+    out = [(p, p.read_text()) for d in ("src", "tests", "benchmarks")
+           for p in sorted((ROOT / d).rglob("*.py"))]
+    for p in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        cells = json.loads(p.read_text())["cells"]
+        code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+        out.append((p, "\n".join(line for line in code.splitlines()
+                                  if not line.lstrip().startswith(("%", "!")))))
+    return out
+
+
+def _defined(tree: ast.AST) -> set[str]:
+    """Names a file defines (or mentions as a string, e.g. in ``__slots__``/setattr)."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            names.add(node.attr)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+        elif isinstance(node, ast.Import | ast.ImportFrom):
+            names.update((a.asname or a.name).split(".")[0] for a in node.names)
+    return names
+
+
+def _string_attrs(tree: ast.AST) -> set[str]:
+    return {node.value for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and node.value.isidentifier()}
+
+
+def private_name_uses() -> list[str]:
+    private_modules = {p.stem for p in SRC.rglob("_*.py")} | {p.name for p in SRC.rglob("_*")}
+    bad = []
+    for path, text in _sources():
+        tree = ast.parse(text)
+        own = _defined(tree)
+        strings = _string_attrs(tree)
+        rel = path.relative_to(ROOT)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                bad += [f"{rel}:{node.lineno}: imports {a.name}" for a in node.names
+                        if _is_private(a.name) and a.name not in private_modules]
+            elif isinstance(node, ast.Attribute) and _is_private(node.attr):
+                base = node.value
+                if isinstance(base, ast.Name) and base.id in ("self", "cls"):
+                    continue
+                if node.attr in private_modules or node.attr in own or node.attr in strings:
+                    continue
+                bad.append(f"{rel}:{node.lineno}: uses .{node.attr}")
+            elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                  and node.func.attr in ("setattr", "getattr") and len(node.args) >= 2
+                  and isinstance(node.args[1], ast.Constant)
+                  and isinstance(node.args[1].value, str) and _is_private(node.args[1].value)):
+                bad.append(f"{rel}:{node.lineno}: patches {node.args[1].value}")
+    return bad
+
+
+def test_no_private_name_leaves_its_module():
+    assert private_name_uses() == []
+
+
+def test_checker_catches_a_private_use(tmp_path, monkeypatch):
+    # the rule would be worthless if the checker could not see a violation
+    bad = tmp_path / "tests" / "x.py"
+    bad.parent.mkdir()
+    bad.write_text("import setobs\nsetobs.geometry.zonotope.ConstrainedZonotope._trusted\n"
+                   "mp.setattr(obj, '_solve', f)\n")
+    me = sys.modules[__name__]
+    monkeypatch.setattr(me, "ROOT", tmp_path)
+    monkeypatch.setattr(me, "SRC", tmp_path / "src")
+    found = private_name_uses()
+    assert any("._trusted" in f for f in found) and any("patches _solve" in f for f in found)
+
+
+def test_every_exception_lives_in_exceptions_and_is_exported():
+    defined = []
+    for path in SRC.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef) and node.name.endswith(("Error", "Warning")):
+                defined.append((path.relative_to(SRC).as_posix(), node.name))
+    # CLIError is the command line's own exit-code signal, never seen by library users
+    outside = [d for d in defined if d[0] != "exceptions.py" and d[1] != "CLIError"]
+    assert outside == []
+    names = {n for _, n in defined if n != "CLIError"}
+    assert names == set(exceptions.__all__)
+    assert names <= set(so.__all__)
+    for n in names:
+        assert issubclass(getattr(so, n), Exception)
+
+
+def test_every_tolerance_is_in_tolerances_all():
+    consts = {n for n, v in vars(tolerances).items()
+              if n.isupper() and isinstance(v, float)}
+    assert consts == set(tolerances.__all__)
+    # and no module outside tolerances.py defines a module-level *_TOL / *_RTOL constant
+    for path in SRC.rglob("*.py"):
+        if path.name == "tolerances.py":
+            continue
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.Assign | ast.AnnAssign):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                for t in targets:
+                    if isinstance(t, ast.Name):
+                        assert not t.id.lstrip("_").endswith(("_TOL", "RTOL", "ATOL")), (
+                            f"{path.name}: {t.id} belongs in setobs.tolerances")
+
+
+@pytest.mark.parametrize("module", ["setobs", "setobs.geometry", "setobs.analysis",
+                                    "setobs.setmembership", "setobs.observers", "setobs.studies"])
+def test_all_names_exist(module):
+    mod = __import__(module, fromlist=["_"])
+    for name in mod.__all__:
+        assert hasattr(mod, name), f"{module}.__all__ lists {name}, which does not exist"
+        obj = getattr(mod, name)
+        if inspect.isfunction(obj) or inspect.isclass(obj):
+            assert not _is_private(obj.__name__)
