@@ -415,10 +415,17 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb, b_err):
 
 
 @njit(cache=True)
-def solve_batch(A, b, h, b_err, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred, yU, Q2, R,
-                dirstat, bases, upper, binv, npiv, maxit, radius, tol_unb, gap_rtol,
-                bounds, objs, codes, ys):
+def solve_batch(structure, data, state, params, out):
     """All LPs ``min Wfull[i]^T xi`` of one set: reduced simplex, then certification.
+
+    The arguments are grouped by lifetime (all tuples, in this order):
+
+    * ``structure = (A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``:
+      fixed for a set structure (:class:`~setobs.geometry.fastlp.FixedStructureLP`);
+    * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
+    * ``state = (bases, upper, binv, npiv)``: the warm-start state, updated in place;
+    * ``params = (maxit, radius, tol_unb, gap_rtol)``: iteration limit and tolerances;
+    * ``out = (bounds, objs, codes, ys)``: results, written in place.
 
     ``dirstat[i]``: 0 solve, 1 unbounded below (decided at set-up), 2 ambiguous.
     The reduced LP (of the equilibrated copy ``R A S``: free factors
@@ -428,6 +435,11 @@ def solve_batch(A, b, h, b_err, fidx, pinvU, Ared, AredT, bred, hB, Wfull, Wred,
     certified bound is finite and within ``gap_rtol (1 + |obj|)`` of the
     simplex objective. ``ys[i]`` receives the certified multiplier.
     """
+    A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
+    b, h, b_err, bred, hB = data
+    bases, upper, binv, npiv = state
+    maxit, radius, tol_unb, gap_rtol = params
+    bounds, objs, codes, ys = out
     n_lp = Wfull.shape[0]
     mr, nb = Ared.shape
     x = np.zeros(nb)

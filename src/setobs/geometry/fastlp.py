@@ -328,8 +328,10 @@ class FixedStructureLP:
                 return bounds, np.zeros(self.n_lp, dtype=bool)
         bred = self.Q2.T @ bs
         _simplex.solve_batch(
-            self.A, b, h, berr, self.fidx, self.pinvU_orig, self.Ared, self.AredT, bred, hB,
-            self.W, self.Wred, self.yU, self.Q2, self.R, self.dirstat, st.bases, st.upper,
-            st.binv, st.npiv, self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL,
-            bounds, st.objs, codes, st.ys)
+            (self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
+             self.yU, self.Q2, self.R, self.dirstat),
+            (b, h, berr, bred, hB),
+            (st.bases, st.upper, st.binv, st.npiv),
+            (self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
+            (bounds, st.objs, codes, st.ys))
         return bounds, codes == _simplex.OPTIMAL

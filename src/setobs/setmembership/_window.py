@@ -89,7 +89,7 @@ class WindowModel:
         with nothing measured is a pure prediction.
     """
 
-    def __init__(self, A_o, B_o, C_o, Gamma_o, increment: ConstrainedZonotope,
+    def __init__(self, A_o, B_o, C_o, Gamma_o, *, increment: ConstrainedZonotope,
                  G_S, A_S, free_S, s: int, first_posterior: bool,
                  P: NDArray[np.float64] | None, radius: float,
                  noise: ConstrainedZonotope | None = None, masks=None) -> None:

@@ -790,8 +790,9 @@ class SMFDO:
             radius = min(UNBOUNDED_RADIUS, inc.radius)
 
             def build() -> WindowModel:
-                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, inc, np.eye(N),
-                                   np.zeros((0, N)), free, win, False, P_extra, radius,
+                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
+                                   G_S=np.eye(N), A_S=np.zeros((0, N)), free_S=free, s=win,
+                                   first_posterior=False, P=P_extra, radius=radius,
                                    noise=V, masks=masks)
         else:  # "init": the whole history from Z_0^-
             Z0 = self._Z0_prior
@@ -801,8 +802,9 @@ class SMFDO:
             radius = min(Z0.radius, inc.radius)
 
             def build() -> WindowModel:
-                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, inc, Z0.G, Z0.A,
-                                   np.isinf(Z0.h), k, True, P_extra, radius, noise=V,
+                return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
+                                   G_S=Z0.G, A_S=Z0.A, free_S=np.isinf(Z0.h), s=k,
+                                   first_posterior=True, P=P_extra, radius=radius, noise=V,
                                    masks=masks)
         model = MODEL_CACHE.get((self._digest, *key), build)
         if not model.usable:
