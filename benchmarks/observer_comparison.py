@@ -24,9 +24,9 @@ def main() -> None:
         x, d = sys.Phi @ x + sys.G @ d, d + rng.uniform(-1, 1, 2)
     Y = np.array(Y)
     ref = so.SMFDO(sys, window=None).run(Y)
-    est = {"PIO": so.observers.PIO(sys).run(Y).d_hat,
-           "PIO (printed gains)": so.observers.PIO.chang2006_baseline(sys).run(Y).d_hat,
-           "higher-order": so.observers.HigherOrderObserver(sys).run(Y).d_hat}
+    est = {"PIO": so.observers.PIO(sys).run(Y).estimate,
+           "PIO (printed gains)": so.observers.PIO.chang2006_baseline(sys).run(Y).estimate,
+           "higher-order": so.observers.HigherOrderObserver(sys).run(Y).estimate}
     md = so.compare.compare(est, ref).to_markdown(start=10)
     print(md)
     out = Path(__file__).parent / "results" / "observer_comparison.md"

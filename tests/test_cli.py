@@ -299,4 +299,4 @@ def test_study_on_the_users_own_model_file(tmp_path, capsys):
     import pandas as pd
 
     table = pd.read_csv(tmp_path / "out" / "results.csv")
-    assert len(table) == 2 * 15 and (table["contained"] == 1).all()
+    assert len(table) == 2 * 15 and (table["truth_inside"] == 1).all()

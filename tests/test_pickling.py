@@ -86,16 +86,16 @@ def test_an_smfdo_pickled_mid_run_continues_identically(window):
 def test_point_observers_round_trip_and_run_identically():
     sys_, tr = _records()
     for o in (obs.PIO(sys_), obs.HigherOrderObserver(sys_), obs.ModularObserver(sys_)):
-        ref = o.run(tr.Y).d_hat
+        ref = o.run(tr.Y).estimate
         for c in _roundtrips(o):
-            assert np.array_equal(c.run(tr.Y).d_hat, ref, equal_nan=True)
+            assert np.array_equal(c.run(tr.Y).estimate, ref, equal_nan=True)
     ex1 = so.examples.chen_gao_lin_example1()
     Y = np.random.default_rng(0).normal(size=(20, ex1.l))
     U = np.zeros((20, ex1.p))
     for o in (obs.VariantMBESO(ex1), obs.DelayedUIO(ex1)):
-        ref = o.run(Y, U).d_hat
+        ref = o.run(Y, U).estimate
         for c in _roundtrips(o):
-            assert np.array_equal(c.run(Y, U).d_hat, ref, equal_nan=True)
+            assert np.array_equal(c.run(Y, U).estimate, ref, equal_nan=True)
 
 
 def test_exceptions_round_trip_with_their_attributes():

@@ -108,8 +108,8 @@ def test_statespace_accepted_wherever_a_system_is_taken():
                   disturbance_inputs=[1]).run(Y, U)
     r2 = so.SMFDO(sys, increment_set=[0.1], measurement_noise=1e-3).run(Y, U)
     np.testing.assert_allclose(r1.lo, r2.lo, rtol=1e-9, atol=1e-12)
-    p1 = so.observers.PIO(dss, disturbance_inputs="tau_L").run(Y, U).d_hat
-    np.testing.assert_allclose(p1, so.observers.PIO(sys).run(Y, U).d_hat, rtol=1e-9)
+    p1 = so.observers.PIO(dss, disturbance_inputs="tau_L").run(Y, U).estimate
+    np.testing.assert_allclose(p1, so.observers.PIO(sys).run(Y, U).estimate, rtol=1e-9)
     with pytest.raises(TypeError, match=r"say which of its inputs are disturbances"):
         so.analysis.diagnose(ss)
     with pytest.raises(DimensionError, match=r"continuous-time: give the sampling time.*dt=Ts"):

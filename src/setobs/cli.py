@@ -59,14 +59,13 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
     exact = res[None]
     est = {f"SMFDO delta={w}": r.estimate for w, r in res.items() if w is not None}
     est["SMFDO exact"] = exact.estimate
-    est["PIO (designed, Fu-Wang poles)"] = PIO(sys_).run(traj.Y).d_hat
-    est["PIO (printed gains, baseline)"] = PIO.chang2006_baseline(sys_).run(traj.Y).d_hat
-    est["higher-order observer"] = HigherOrderObserver(sys_).run(traj.Y).d_hat
+    est["PIO (designed, Fu-Wang poles)"] = PIO(sys_).run(traj.Y).estimate
+    est["PIO (printed gains, baseline)"] = PIO.chang2006_baseline(sys_).run(traj.Y).estimate
+    est["higher-order observer"] = HigherOrderObserver(sys_).run(traj.Y).estimate
     table = compare(est, exact)
     print("\nworst-case error over the consistent set (mean over k >= 10) and actual error:\n")
     print(f"{'estimator':<32} {'worst-case':>12} {'/ optimal':>10} {'actual':>12}  violations")
-    for s in table.summary(start=10):
-        name = s["observer"]
+    for name, s in table.summary(start=10).iterrows():
         e = est[name]
         actual = np.nanmean(np.abs(e[10:] - traj.D[10:]).max(axis=1))
         viol = ""
@@ -74,7 +73,7 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
             label = "SMFDO exact" if w is None else f"SMFDO delta={w}"
             if name == label:
                 viol = str(r.violations(traj.D))
-        print(f"{name:<32} {s['mean_error']:>12.4g} {s['mean_ratio']:>10.3g} {actual:>12.4g}"
+        print(f"{name:<32} {s['worst_case_error']:>12.4g} {s['ratio']:>10.3g} {actual:>12.4g}"
               f"  {viol}")
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     for i, ax in enumerate(axes):
@@ -310,8 +309,8 @@ def study(config: str, dask: str | None = None, out: str | None = None,
     from .plotting import plot_comparison_bars, plot_error_curves
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
-    plot_error_curves(res.table, "err_inf", ax=axes[0])
-    plot_comparison_bars(res.table, "worst_inf", ax=axes[1])
+    plot_error_curves(res.table, "error_inf", ax=axes[0])
+    plot_comparison_bars(res.table, "worst_case_error", ax=axes[1])
     fig.tight_layout()
     fig.savefig(out_dir / "summary.png", dpi=110)
     plt.close(fig)

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from .results import time_axis
 
 __all__ = ["ComparisonTable", "compare", "worst_case_error"]
 
@@ -35,59 +39,153 @@ def worst_case_error(estimates: ArrayLike, lo: ArrayLike, hi: ArrayLike) -> NDAr
 
 @dataclass(frozen=True)
 class ComparisonTable:
-    """Rows ``(observer, k, error, optimal, ratio, outside)`` and per-observer summaries.
+    """Point estimates scored against the consistent set (the protocol of :mod:`setobs.results`).
 
-    ``error``: worst-case infinity-norm error of the observer's estimate over
-    the consistent set; ``optimal``: that of the worst-case-optimal estimate (the
-    interval-hull centre, the SMFDO radius); ``ratio = error / optimal`` (>= 1);
-    ``outside``: the estimate lies outside the consistent set's interval hull.
+    Per observer and step: ``worst_case_error`` (worst-case infinity-norm error
+    of the estimate over the consistent set), ``optimal`` (that of the
+    worst-case-optimal estimate: the interval-hull centre, the SMFDO radius),
+    ``ratio = worst_case_error / optimal`` (>= 1) and ``outside`` (the estimate
+    lies outside the consistent set's interval hull).
+
+    Attributes
+    ----------
+    observers : list of str
+        Observer names, in the order given.
+    worst_case_error : dict of str to ndarray, shape (N,)
+        Per observer.
+    optimal : ndarray, shape (N,)
+        The optimal worst-case error (the reference's radius).
+    outside : dict of str to ndarray of bool, shape (N,)
+        Per observer.
+    worst_case_error_2, optimal_2 : dict / ndarray, optional
+        The same in the Euclidean norm (``compare(..., euclidean=True)``).
+    dt : float or None
+        Sampling time (for the time index).
     """
 
     observers: list[str]
-    error: dict[str, NDArray[np.float64]]
+    worst_case_error: dict[str, NDArray[np.float64]]
     optimal: NDArray[np.float64]
     outside: dict[str, NDArray[np.bool_]]
-    error_2: dict[str, NDArray[np.float64]] | None = None
+    worst_case_error_2: dict[str, NDArray[np.float64]] | None = None
     optimal_2: NDArray[np.float64] | None = None
+    dt: float | None = None
+
+    @property
+    def error(self) -> dict[str, NDArray[np.float64]]:
+        """Deprecated name of :attr:`worst_case_error`."""
+        warnings.warn("ComparisonTable.error is deprecated; use .worst_case_error",
+                      DeprecationWarning, stacklevel=2)
+        return self.worst_case_error
 
     @property
     def rows(self) -> list[dict]:
         """One row per observer and step (a tidy table)."""
         out = []
         for name in self.observers:
-            for k, (e, o, f) in enumerate(zip(self.error[name], self.optimal, self.outside[name],
-                                              strict=True)):
+            for k, (e, o, f) in enumerate(zip(self.worst_case_error[name], self.optimal,
+                                              self.outside[name], strict=True)):
                 ratio = float(e / o) if (o > 0 and np.isfinite(o) and np.isfinite(e)) else np.nan
-                out.append({"observer": name, "k": k, "error": float(e), "optimal": float(o),
-                            "ratio": ratio, "outside": bool(f)})
+                out.append({"observer": name, "k": k, "worst_case_error": float(e),
+                            "optimal": float(o), "ratio": ratio, "outside": bool(f)})
         return out
 
-    def summary(self, start: int = 0) -> list[dict]:
-        """Per observer, over steps ``k >= start`` where everything is finite."""
+    def to_pandas(self) -> Any:
+        """The tidy table (:attr:`rows`) as a ``pandas.DataFrame``, with a ``time``
+        column when the sampling time is known.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``observer, k, [time,] worst_case_error, optimal, ratio, outside``.
+        """
+        import pandas as pd
+
+        df = pd.DataFrame(self.rows)
+        if self.dt and len(df):
+            df.insert(2, "time", df["k"] * self.dt)
+        return df
+
+    def summary(self, start: int = 0) -> Any:
+        """Per observer (index ``observer``), over steps ``k >= start`` where everything is
+        finite: ``steps``, mean ``worst_case_error``, ``max_worst_case_error``, mean
+        ``optimal``, mean ``ratio`` and the fraction of steps ``outside``.
+
+        Parameters
+        ----------
+        start : int
+            First step counted (skip the transient).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per observer.
+        """
+        import pandas as pd
+
         ok = np.isfinite(self.optimal) & (np.arange(self.optimal.size) >= start)
         out = []
         for name in self.observers:
-            e = self.error[name]
+            e = self.worst_case_error[name]
             m = ok & np.isfinite(e)
             ratio = e[m] / np.where(self.optimal[m] > 0, self.optimal[m], np.nan)
             out.append({
-                "observer": name, "steps": int(m.sum()),
-                "mean_error": float(np.mean(e[m])) if m.any() else np.nan,
-                "max_error": float(np.max(e[m])) if m.any() else np.nan,
-                "mean_optimal": float(np.mean(self.optimal[m])) if m.any() else np.nan,
-                "mean_ratio": float(np.nanmean(ratio)) if m.any() else np.nan,
-                "fraction_outside": float(self.outside[name][m].mean()) if m.any() else np.nan,
+                "steps": int(m.sum()),
+                "worst_case_error": float(np.mean(e[m])) if m.any() else np.nan,
+                "max_worst_case_error": float(np.max(e[m])) if m.any() else np.nan,
+                "optimal": float(np.mean(self.optimal[m])) if m.any() else np.nan,
+                "ratio": float(np.nanmean(ratio)) if m.any() else np.nan,
+                "outside": float(self.outside[name][m].mean()) if m.any() else np.nan,
             })
-        return out
+        return pd.DataFrame(out, index=pd.Index(self.observers, name="observer"))
+
+    def plot(self, ax: Any = None, logy: bool = True) -> Any:
+        """Worst-case error of each observer and the optimal bound, per step or time.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: the current axes).
+        logy : bool
+            Logarithmic error axis.
+
+        Returns
+        -------
+        matplotlib Axes
+            The axes drawn on.
+        """
+        import matplotlib.pyplot as plt
+
+        ax = plt.gca() if ax is None else ax
+        t = time_axis(self.optimal.size, self.dt)
+        for name in self.observers:
+            ax.plot(t, self.worst_case_error[name], lw=1.0, label=name)
+        ax.plot(t, self.optimal, "k", lw=1.5, label="optimal (SMFDO radius)")
+        ax.set_xlabel("time [s]" if self.dt else "k")
+        ax.set_ylabel("worst-case error")
+        if logy:
+            ax.set_yscale("log")
+        ax.legend(loc="best", fontsize=7)
+        return ax
 
     def to_markdown(self, start: int = 0) -> str:
-        """The summary as a Markdown table."""
+        """The summary as a Markdown table.
+
+        Parameters
+        ----------
+        start : int
+            First step counted.
+
+        Returns
+        -------
+        str
+            The table.
+        """
         lines = ["| observer | steps | mean worst-case error | optimal | mean ratio | outside |",
                  "|---|---|---|---|---|---|"]
-        for s in self.summary(start):
-            lines.append(f"| {s['observer']} | {s['steps']} | {s['mean_error']:.4g} | "
-                         f"{s['mean_optimal']:.4g} | {s['mean_ratio']:.3g} | "
-                         f"{s['fraction_outside']:.2%} |")
+        for name, s in self.summary(start).iterrows():
+            lines.append(f"| {name} | {s['steps']} | {s['worst_case_error']:.4g} | "
+                         f"{s['optimal']:.4g} | {s['ratio']:.3g} | {s['outside']:.2%} |")
         return "\n".join(lines)
 
 
@@ -98,7 +196,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
     Parameters
     ----------
     estimates : mapping name -> array (N, q)
-        Point estimates (e.g. ``observer.run(Y).d_hat``).
+        Point estimates (e.g. ``observer.run(Y).estimate``).
     reference : SMFDOResult
         SMFDO result on the same data (exact mode gives the true consistent
         set; windowed mode an outer approximation, so scores are upper bounds).
@@ -131,6 +229,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
             "error. Fix the model or the uncertainty sets, or pass "
             "allow_inconsistent=True to compare anyway")
     lo, hi = np.asarray(reference.lo), np.asarray(reference.hi)
+    dt = getattr(reference, "dt", None)
     optimal = np.asarray(reference.radius, float)
     err, out = {}, {}
     for name, est in estimates.items():
@@ -139,7 +238,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
         with np.errstate(invalid="ignore"):
             out[name] = np.any((E < lo) | (E > hi), axis=1)
     if not euclidean:
-        return ComparisonTable(list(estimates), err, optimal, out)
+        return ComparisonTable(list(estimates), err, optimal, out, dt=dt)
     from .setmembership.estimates import chebyshev_center
 
     steps = reference.steps
@@ -157,4 +256,4 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
             e = np.asarray(est, float)[k]
             err2[name][k] = (np.linalg.norm(V - e, axis=1).max() if np.all(np.isfinite(e))
                              else np.nan)
-    return ComparisonTable(list(estimates), err, optimal, out, err2, opt2)
+    return ComparisonTable(list(estimates), err, optimal, out, err2, opt2, dt=dt)

@@ -60,7 +60,7 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
     return ax
 
 
-def plot_error_curves(table: Any, metric: str = "err_inf", ax: Any = None, *,
+def plot_error_curves(table: Any, metric: str = "error_inf", ax: Any = None, *,
                       logy: bool = True) -> Any:
     """Mean of ``metric`` over runs, per step and observer (like Li-Cong-Dong Fig. 1(b))."""
     ax = _ax(ax)
@@ -75,7 +75,7 @@ def plot_error_curves(table: Any, metric: str = "err_inf", ax: Any = None, *,
     return ax
 
 
-def plot_comparison_bars(table: Any, metric: str = "err_inf", start: int = 10,
+def plot_comparison_bars(table: Any, metric: str = "error_inf", start: int = 10,
                          ax: Any = None) -> Any:
     """Mean ``metric`` per observer over steps ``k >= start``, as bars."""
     ax = _ax(ax)

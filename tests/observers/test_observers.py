@@ -62,7 +62,7 @@ def test_theorem2_example4_deadbeat_mbeso():
     res = MBESO(sys, omega=0.0).run(simulate(sys, F))
     for i, r in enumerate((2, 4, 3)):
         k = np.arange(r + 2, 60)
-        np.testing.assert_allclose(res.d_hat[k, i], F[k - r - 1, i], atol=1e-8)
+        np.testing.assert_allclose(res.estimate[k, i], F[k - r - 1, i], atol=1e-8)
 
 
 def test_theorem3_example1_variant_mbeso_delay_5():
@@ -73,8 +73,8 @@ def test_theorem3_example1_variant_mbeso_delay_5():
     res = obs.run(simulate(sys, F))
     assert obs.delay == 5 and res.delay == 5
     k = np.arange(8, 80)
-    np.testing.assert_allclose(res.d_hat[k], F[k - 5], atol=1e-8)
-    assert np.isnan(res.d_hat[0]).any()  # delay line not yet filled
+    np.testing.assert_allclose(res.estimate[k], F[k - 5], atol=1e-8)
+    assert np.isnan(res.estimate[0]).any()  # delay line not yet filled
 
 
 @pytest.mark.parametrize("omega", [0.2, 0.4, 0.6])
@@ -84,7 +84,7 @@ def test_theorem4_error_is_the_convolution_of_eq54(omega):
     F = np.cumsum(rng.normal(size=(50, 3)), axis=0)
     res = MBESO(sys, omega=omega).run(simulate(sys, F))
     pred = predicted_error(F, np.zeros(3), (2, 4, 3), [omega] * 3)
-    np.testing.assert_allclose(F - res.d_hat, pred, atol=1e-9)
+    np.testing.assert_allclose(F - res.estimate, pred, atol=1e-9)
 
 
 def test_theorem4_monotonicity_from_the_observer_itself():
@@ -125,7 +125,7 @@ def test_theorem5_variant_error_eq70():
         delayed[s:, i] = fnew_hat[: 50 - s, i] if s else fnew_hat[:, i]
     pred = delayed @ np.linalg.inv(V0).T
     k = np.arange(4, 50)
-    np.testing.assert_allclose(res.d_hat[k], pred[k], atol=1e-8)
+    np.testing.assert_allclose(res.estimate[k], pred[k], atol=1e-8)
 
 
 def test_mbeso_design_errors_name_the_condition():
@@ -147,7 +147,7 @@ def test_mbeso_on_the_sea_models():
         F[10:, 0], F[15:, 1] = 1.5, 2.0
         U = np.ones((80, 1))
         res = MBESO(sys, omega=0.0).run(simulate(sys, F, U=U), U)
-        np.testing.assert_allclose(res.d_hat[40:], F[40:], atol=1e-6)
+        np.testing.assert_allclose(res.estimate[40:], F[40:], atol=1e-6)
 
 
 # ------------------------------------------------------------------ Fu-Wang / Chang
@@ -169,9 +169,9 @@ def test_printed_baseline_is_unstable_and_diverges():
     assert not base.error_poles.stable
     F = np.tile([0.5, 2.0], (60, 1))
     res = base.run(simulate(sys, F, x0=[0, 1, 0]))
-    assert np.abs(res.d_hat[-1] - F[-1]).max() > 1e3  # the pole at -1.37 blows up
+    assert np.abs(res.estimate[-1] - F[-1]).max() > 1e3  # the pole at -1.37 blows up
     good = PIO(sys).run(simulate(sys, F, x0=[0, 1, 0]))
-    np.testing.assert_allclose(good.d_hat[-1], F[-1], atol=1e-6)
+    np.testing.assert_allclose(good.estimate[-1], F[-1], atol=1e-6)
 
 
 def test_higher_order_tracks_ramps_pio_does_not():
@@ -182,8 +182,8 @@ def test_higher_order_tracks_ramps_pio_does_not():
     Y = simulate(sys, F)
     ho = HigherOrderObserver(sys).run(Y)
     pio = PIO(sys).run(Y)
-    assert np.abs(ho.d_hat[-1] - F[-1]).max() < 1e-6
-    assert np.abs(pio.d_hat[-1] - F[-1]).max() > 1e-3
+    assert np.abs(ho.estimate[-1] - F[-1]).max() < 1e-6
+    assert np.abs(pio.estimate[-1] - F[-1]).max() > 1e-3
 
 
 # ------------------------------------------------------------------ modular observer
@@ -199,7 +199,7 @@ def test_modular_equals_simultaneous_design_with_same_eigenvalues():
     F = np.cumsum(rng.normal(size=(60, 1)), axis=0) * 0.1
     Y = simulate(sys, F)
     simultaneous = PIO(sys, K[:4], K[4:]).run(Y)
-    np.testing.assert_allclose(mod.run(Y).d_hat, simultaneous.d_hat, atol=1e-8)
+    np.testing.assert_allclose(mod.run(Y).estimate, simultaneous.estimate, atol=1e-8)
 
 
 def test_modular_error_is_block_triangular():
@@ -210,7 +210,7 @@ def test_modular_error_is_block_triangular():
     np.testing.assert_allclose(V - (sys.Phi - mod.L0 @ sys.Xi) @ V, sys.G, atol=1e-12)
     F = np.tile([1.0, -1.0], (400, 1))
     res = mod.run(simulate(sys, F, x0=[0.5, 0.0, -0.5]))
-    np.testing.assert_allclose(res.d_hat[-1], F[-1], atol=1e-6)
+    np.testing.assert_allclose(res.estimate[-1], F[-1], atol=1e-6)
     assert res.x_hat.shape == (400, 3)
 
 
@@ -235,7 +235,7 @@ def test_every_observer_runs_through_one_interface():
         obs = cls(sys)
         Y = np.zeros((10, sys.l))
         res = obs.run(Y)
-        assert res.d_hat.shape == (10, sys.q)
+        assert res.estimate.shape == (10, sys.q)
         assert isinstance(res.gains, dict) and res.gains
         obs.reset()
         d = obs.step(Y[0])
@@ -252,12 +252,12 @@ def test_compare_every_observer_is_at_least_the_optimal_radius():
     Y = simulate(sys, F, x0=[0.2, -0.1, 0.3])
     X0 = so.ConstrainedZonotope.from_box(-np.ones(3), np.ones(3))
     ref = so.SMFDO(sys, window=None, initial_state_set=X0).run(Y)
-    est = {"PIO": PIO(sys).run(Y).d_hat, "HO": HigherOrderObserver(sys).run(Y).d_hat,
-           "modular": ModularObserver(sys).run(Y).d_hat, "SMFDO": ref.estimate}
+    est = {"PIO": PIO(sys).run(Y).estimate, "HO": HigherOrderObserver(sys).run(Y).estimate,
+           "modular": ModularObserver(sys).run(Y).estimate, "SMFDO": ref.estimate}
     table = so.compare.compare(est, ref)
     fin = np.isfinite(ref.radius)
     for name in ("PIO", "HO", "modular"):
-        assert np.all(table.error[name][fin] >= ref.radius[fin] - 1e-9)
+        assert np.all(table.worst_case_error[name][fin] >= ref.radius[fin] - 1e-9)
     # Independent scores: the consistent box from a whole-history LP (scipy, no setobs);
     # worst-case infinity-norm error of an estimate e over [lo, hi] is
     # max_i max(e_i - lo_i, hi_i - e_i), and the optimum is the largest half-width.
@@ -269,11 +269,12 @@ def test_compare_every_observer_is_at_least_the_optimal_radius():
         assert table.optimal[k] == pytest.approx(optimum, abs=1e-6)
         for name, e in est.items():
             worst = np.maximum(e[k] - lo, hi - e[k]).max()
-            assert table.error[name][k] == pytest.approx(worst, abs=1e-6)
-        assert table.error["SMFDO"][k] == pytest.approx(optimum, abs=1e-6)  # centre optimal
-        assert table.error["PIO"][k] > optimum
-    summ = {s["observer"]: s for s in table.summary(start=5)}
-    assert summ["PIO"]["mean_ratio"] > 1.0
+            assert table.worst_case_error[name][k] == pytest.approx(worst, abs=1e-6)
+        # the centre is optimal
+        assert table.worst_case_error["SMFDO"][k] == pytest.approx(optimum, abs=1e-6)
+        assert table.worst_case_error["PIO"][k] > optimum
+    summ = table.summary(start=5)
+    assert summ.loc["PIO", "ratio"] > 1.0
     assert "| PIO |" in table.to_markdown(start=5)
     assert len(table.rows) == 4 * N
 
@@ -290,14 +291,14 @@ def test_delayed_uio_equals_variant_mbeso_on_example1():
     uio = DelayedUIO(sys)
     assert uio.tau == 5 and uio.delay == 5
     res = uio.run(Y)
-    assert np.isnan(res.d_hat[:5]).all()
+    assert np.isnan(res.estimate[:5]).all()
     k = np.arange(20, 80)
-    np.testing.assert_allclose(res.d_hat[k], F[k - 5], atol=1e-8)
+    np.testing.assert_allclose(res.estimate[k], F[k - 5], atol=1e-8)
     var = VariantMBESO(sys).run(Y)
-    np.testing.assert_allclose(res.d_hat[k], var.d_hat[k], atol=1e-8)
+    np.testing.assert_allclose(res.estimate[k], var.estimate[k], atol=1e-8)
     # With the paper's eigenvalues at 0.67 the error decays geometrically.
     slow = DelayedUIO(sys, poles=0.67).run(Y)
-    assert np.abs(slow.d_hat[70:] - F[65:75]).max() < 1e-6
+    assert np.abs(slow.estimate[70:] - F[65:75]).max() < 1e-6
 
 
 def test_delayed_uio_refused_for_chang():
@@ -315,14 +316,14 @@ def test_compare_euclidean_scores():
     Y = simulate(sys, F, x0=[0.2, -0.1, 0.3])
     X0 = so.ConstrainedZonotope.from_box(-np.ones(3), np.ones(3))
     ref = so.SMFDO(sys, window=None, initial_state_set=X0, keep_sets=True).run(Y)
-    est = {"PIO": PIO(sys).run(Y).d_hat, "IH centre": ref.estimate}
+    est = {"PIO": PIO(sys).run(Y).estimate, "IH centre": ref.estimate}
     t = so.compare.compare(est, ref, euclidean=True)
     fin = np.isfinite(t.optimal_2)
     assert fin.sum() > 15
     for name in est:  # nothing beats the Chebyshev radius
-        assert np.all(t.error_2[name][fin] >= t.optimal_2[fin] - 1e-6)
+        assert np.all(t.worst_case_error_2[name][fin] >= t.optimal_2[fin] - 1e-6)
     # The interval-hull centre's Euclidean error is at most sqrt(q) times the optimum.
-    assert np.all(t.error_2["IH centre"][fin] <= np.sqrt(2) * t.optimal_2[fin] + 1e-6)
+    assert np.all(t.worst_case_error_2["IH centre"][fin] <= np.sqrt(2) * t.optimal_2[fin] + 1e-6)
     with pytest.raises(ValueError, match="keep_sets=True"):
         so.compare.compare(est, so.SMFDO(sys, window=None, initial_state_set=X0).run(Y),
                            euclidean=True)
@@ -370,11 +371,11 @@ def test_descriptor_observer_is_exact_under_arbitrary_sensor_noise():
         Nn.append(noise)
         x = sys.Phi @ x + sys.G @ d
     res = obs.run(np.array(Y))
-    np.testing.assert_allclose(res.d_hat[40:], 1.5, atol=1e-9)
+    np.testing.assert_allclose(res.estimate[40:], 1.5, atol=1e-9)
     np.testing.assert_allclose(res.x_hat[40:], np.array(X)[40:], atol=1e-9)
     np.testing.assert_allclose(obs.noise_estimate(), Nn[-1], atol=1e-9)
     # A PIO on the same data, blind to the noise structure, is far off.
-    assert np.abs(PIO(sys).run(np.array(Y)).d_hat[40:] - 1.5).max() > 0.1
+    assert np.abs(PIO(sys).run(np.array(Y)).estimate[40:] - 1.5).max() > 0.1
 
 
 def test_descriptor_observer_dare_gain_eqs_18_19():

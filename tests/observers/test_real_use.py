@@ -87,7 +87,7 @@ def test_every_approved_design_constructs_and_converges_on_random_systems():
             N = int(np.ceil(np.log(1e-9) / np.log(max(rho, 1e-3)))) + 40
             d = rng.normal(size=sys.q)
             Y = _simulate_constant(sys, d, rng.normal(size=sys.n), N)
-            est = obs.run(Y).d_hat
+            est = obs.run(Y).estimate
             np.testing.assert_allclose(est[-1], d, atol=1e-5 * (1 + np.abs(d).max()),
                                        err_msg=design)
     # all of the designs were exercised
@@ -212,4 +212,4 @@ def test_U_is_required_when_the_system_has_inputs():
         obs.run(Y)
     with pytest.raises(DimensionError, match="u is required"):
         obs.step(Y[0])
-    assert np.isfinite(obs.run(Y, np.zeros((5, 1))).d_hat).all()
+    assert np.isfinite(obs.run(Y, np.zeros((5, 1))).estimate).all()

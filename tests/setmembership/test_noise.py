@@ -439,8 +439,8 @@ def test_point_observers_remove_the_feedthrough():
     Yd, _ = simulate_noisy(sys_d, 50, np.random.default_rng(3), x0=np.zeros(3),
                            d0=[0.5, -0.5], r_inc=[0.1, 0.1], U=U, Du=Du)
     assert np.abs(Yd - Y0).max() > 0.1
-    est_d = so.observers.PIO(sys_d).run(Yd, U).d_hat
-    est_0 = so.observers.PIO(sys_0).run(Y0, U).d_hat
+    est_d = so.observers.PIO(sys_d).run(Yd, U).estimate
+    est_0 = so.observers.PIO(sys_0).run(Y0, U).estimate
     np.testing.assert_allclose(est_d, est_0, rtol=1e-12, atol=1e-12)
     with pytest.raises(DimensionError, match="U is required"):
         so.observers.PIO(sys_d).run(Yd)

@@ -27,10 +27,10 @@ def test_runs_are_reproducible_alone():
 def test_smfdo_rows_are_sound_and_scores_are_consistent():
     rows = pd.DataFrame(run_one(Scenario(horizon=40), SPECS, run=0, reference_window=None))
     smf = rows[rows.observer == "SMFDO d=5"]
-    assert (smf.contained[smf.k > 0] == 1.0).all()
+    assert (smf.truth_inside[smf.k > 0] == 1.0).all()
     # Worst-case error over the exact consistent set >= the actual error.
-    fin = np.isfinite(rows.worst_inf)
-    assert (rows.worst_inf[fin] >= rows.err_inf[fin] - 1e-9).all()
+    fin = np.isfinite(rows.worst_case_error)
+    assert (rows.worst_case_error[fin] >= rows.error_inf[fin] - 1e-9).all()
 
 
 def test_local_and_dask_give_identical_tables(tmp_path):
@@ -55,7 +55,7 @@ def test_local_and_dask_give_identical_tables(tmp_path):
         assert remote.metadata["backend"] == "dask"
     assert local.metadata["backend"] == "processes"
     smf = local.table[local.table.observer.str.startswith("SMFDO") & (local.table.k > 0)]
-    assert (smf.contained == 1.0).all()
+    assert (smf.truth_inside == 1.0).all()
 
 
 def test_resumable_output_and_metadata(tmp_path):
@@ -102,7 +102,7 @@ def test_paper_claims_fig1b_small_campaign():
              ObserverSpec("d10", "smfdo", {"window": 10}),
              ObserverSpec("d20", "smfdo", {"window": 20}), ObserverSpec("PIO", "pio")]
     res = run_campaign(Scenario(horizon=70), specs, runs=4, processes=2, progress=False)
-    e = res.summary(start=10)["err_inf"]
+    e = res.summary(start=10)["error_inf"]
     assert 1 - e["d10"] / e["PIO"] > 0.4
     assert 1 - e["d20"] / e["d3"] > 0.15  # delta = 3 is significantly worse
     assert abs(1 - e["d20"] / e["d10"]) < 0.08  # 10 -> 20: small
@@ -116,13 +116,13 @@ def test_paper_claims_fig1b_larger_campaign():
              ObserverSpec("d20", "smfdo", {"window": 20}), ObserverSpec("PIO", "pio")]
     res = run_campaign(Scenario(horizon=100), specs, runs=60, reference_window=20,
                        progress=False)
-    e = res.summary(start=10)["err_inf"]
+    e = res.summary(start=10)["error_inf"]
     assert 1 - e["d10"] / e["PIO"] > 0.4
     assert 1 - e["d20"] / e["d3"] > 0.15
     assert abs(1 - e["d20"] / e["d10"]) < 0.08
     t = res.table
     smfdo = t[t.observer.isin(["d3", "d10", "d20"]) & (t.k > 0)]
-    assert (smfdo.contained == 1.0).all()  # soundness over all runs
+    assert (smfdo.truth_inside == 1.0).all()  # soundness over all runs
 
 
 def test_scenario_takes_a_linear_system(tmp_path):
@@ -135,7 +135,7 @@ def test_scenario_takes_a_linear_system(tmp_path):
     sc = Scenario(system=sys_, horizon=12)
     res = run_campaign(sc, [ObserverSpec("SMFDO", "smfdo", {"window": 5})], 2, processes=1,
                        out_dir=tmp_path / "o")
-    assert (res.table["contained"] == 1).all()
+    assert (res.table["truth_inside"] == 1).all()
     meta = json.loads((tmp_path / "o" / "metadata.json").read_text())
     np.testing.assert_allclose(meta["scenario"]["system"]["Phi"], sys_.Phi)
     with pytest.raises(TypeError, match="example name, a model file or a LinearSystem"):

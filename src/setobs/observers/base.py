@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -11,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
 from ..exceptions import DesignError, DimensionError
+from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 
 __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
@@ -18,24 +20,118 @@ __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver
 
 @dataclass(frozen=True)
 class ObserverResult:
-    """Output of :meth:`PointObserver.run`.
+    """Output of :meth:`PointObserver.run` (the protocol of :mod:`setobs.results`).
+
+    Unpacks as ``t, estimate = observer.run(Y)``.
 
     Attributes
     ----------
-    d_hat : ndarray, shape (N, q)
+    estimate : ndarray, shape (N, q)
         Disturbance estimates (NaN where not yet available, e.g. during a delay).
     x_hat : ndarray, shape (N, n) or None
         State estimates, for observers that have one.
     delay : int
-        Steps by which ``d_hat[k]`` lags ``d[k]`` by design (0 for causal estimates).
+        Steps by which ``estimate[k]`` lags ``d[k]`` by design (0 for causal estimates).
     gains : dict
         The gains used.
+    dt : float or None
+        The system's sampling time (for time axes).
+    names : tuple of str
+        The disturbance names.
+    observer : str
+        The observer's name (row label of :meth:`summary`).
     """
 
-    d_hat: NDArray[np.float64]
+    estimate: NDArray[np.float64]
     x_hat: NDArray[np.float64] | None
     delay: int
     gains: dict = field(default_factory=dict)
+    dt: float | None = None
+    names: tuple[str, ...] = ()
+    observer: str = "observer"
+
+    @property
+    def d_hat(self) -> NDArray[np.float64]:
+        """Deprecated name of :attr:`estimate`."""
+        warnings.warn("ObserverResult.d_hat is deprecated; use .estimate (the same name as "
+                      "SMFDOResult's)", DeprecationWarning, stacklevel=2)
+        return self.estimate
+
+    @property
+    def time(self) -> NDArray[np.float64]:
+        """Time axis ``k dt`` (or ``k`` when the sampling time is unknown)."""
+        return time_axis(self.estimate.shape[0], self.dt)
+
+    def __iter__(self):
+        return iter((self.time, self.estimate))
+
+    def _names(self) -> list[str]:
+        q = self.estimate.shape[1]
+        return list(self.names) if len(self.names) == q else [f"d{i}" for i in range(q)]
+
+    def to_pandas(self) -> Any:
+        """A ``pandas.DataFrame``: one column per disturbance (the estimate), then the
+        state estimates ``x_hat_<i>`` if any; indexed by time or step.
+
+        Returns
+        -------
+        pandas.DataFrame
+            The table.
+        """
+        import pandas as pd
+
+        N = self.estimate.shape[0]
+        cols = dict(zip(self._names(), self.estimate.T, strict=True))
+        if self.x_hat is not None:
+            cols.update({f"x_hat_{i}": col for i, col in enumerate(self.x_hat.T)})
+        return pd.DataFrame(cols, index=time_index(N, self.dt))
+
+    def plot(self, ax: Any = None, truth: ArrayLike | None = None, component: int = 0) -> Any:
+        """Draw the estimate of one disturbance component (and the truth, if given).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: the current axes).
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        component : int
+            Disturbance component.
+
+        Returns
+        -------
+        matplotlib Axes
+            The axes drawn on.
+        """
+        import matplotlib.pyplot as plt
+
+        ax = plt.gca() if ax is None else ax
+        t = self.time
+        ax.plot(t, self.estimate[:, component], lw=1.2, label=f"{self.observer} estimate")
+        if truth is not None:
+            ax.plot(t, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
+        ax.set_xlabel("time [s]" if self.dt else "k")
+        ax.set_ylabel(self._names()[component])
+        ax.legend(loc="best", fontsize=7)
+        return ax
+
+    def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
+        """One row (index ``observer``): steps, delay and, with the truth, the mean and
+        worst actual errors ``error_inf``, ``max_error_inf``, ``error_2`` over ``k >= start``.
+
+        Parameters
+        ----------
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        start : int
+            First step counted (skip the transient).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The summary row.
+        """
+        return error_summary(self.observer, self.estimate, truth, start, {"delay": self.delay})
 
 
 class PointObserver:
@@ -114,7 +210,8 @@ class PointObserver:
                 if X is None:
                     X = np.full((N, self.sys.n), np.nan)
                 X[k] = xh
-        return ObserverResult(D, X, self.delay, self.gains)
+        return ObserverResult(D, X, self.delay, self.gains, dt=self.sys.dt,
+                              names=tuple(self.sys.disturbance_names), observer=self.name)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.sys!r})"

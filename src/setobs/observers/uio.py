@@ -44,7 +44,7 @@ class DelayedUIO(PointObserver):
 
     ``tau`` is the minimal delay of eqs. (25)-(26). The estimate of ``d(k)``
     (the ``f`` part of ``X_hat(k)``) becomes available at step ``k + tau``:
-    ``run(Y).d_hat[t]`` estimates ``d(t - tau)`` and is NaN for ``t < tau``.
+    ``run(Y).estimate[t]`` estimates ``d(t - tau)`` and is NaN for ``t < tau``.
 
     Raises
     ------

@@ -30,6 +30,7 @@ from ..exceptions import (
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center, trusted_box
 from ..geometry.zonotope import box_center_radius, hull_with_status, trusted_cz
+from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
 from ._window import WindowModel, model_rtol
@@ -99,11 +100,24 @@ class SMFDOStep:
 
 @dataclass(frozen=True)
 class SMFDOResult:
-    """Batch result of :meth:`SMFDO.run`: arrays of shape ``(N, q)`` (``radius``,
-    ``status``: ``(N,)``).
+    """Batch result of :meth:`SMFDO.run` (the protocol of :mod:`setobs.results`).
+
+    Arrays of shape ``(N, q)`` (``radius``, ``status``: ``(N,)``). Unpacks as
+    ``t, estimate, lo, hi = smfdo.run(Y)``.
 
     Attributes
     ----------
+    estimate : ndarray, shape (N, q)
+        Centre of the certified interval (worst-case optimal for the infinity
+        norm); NaN while unbounded.
+    lo, hi : ndarray, shape (N, q)
+        Certified interval hull of the consistent disturbances (``-inf``/``inf``
+        while unbounded).
+    radius : ndarray, shape (N,)
+        Worst-case infinity-norm error of :attr:`estimate` (the ``optimal``
+        metric): ``max_i (hi_i - lo_i) / 2``.
+    steps : list of SMFDOStep
+        The per-step records.
     status : ndarray of str, shape (N,)
         Per-step status (:data:`STEP_STATUSES`).
     first_inconsistent : int or None
@@ -127,12 +141,88 @@ class SMFDOResult:
     dt: float | None = None
     names: tuple[str, ...] = ()
 
+    @property
+    def time(self) -> NDArray[np.float64]:
+        """Time axis ``k dt`` (or ``k`` when the sampling time is unknown)."""
+        return time_axis(self.lo.shape[0], self.dt)
+
+    def __iter__(self):
+        return iter((self.time, self.estimate, self.lo, self.hi))
+
+    def plot(self, ax: Any = None, truth: ArrayLike | None = None, component: int = 0) -> Any:
+        """Estimate, certified interval and truth of one component
+        (:func:`setobs.plotting.plot_estimate_band`).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: the current axes).
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        component : int
+            Disturbance component.
+
+        Returns
+        -------
+        matplotlib Axes
+            The axes drawn on.
+        """
+        from ..plotting import plot_estimate_band
+
+        return plot_estimate_band(self, truth=truth, component=component, ax=ax)
+
+    def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
+        """One row (index ``"SMFDO"``) over steps ``k >= start``: ``optimal`` (mean
+        radius over the bounded steps), ``max_optimal``, ``unbounded`` steps,
+        ``inconsistent`` steps and, with the truth, ``error_inf``, ``max_error_inf``,
+        ``error_2`` and ``truth_inside`` (fraction of steps whose certified interval
+        holds the truth).
+
+        Parameters
+        ----------
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        start : int
+            First step counted.
+
+        Returns
+        -------
+        pandas.DataFrame
+            The summary row.
+        """
+        r = self.radius[start:]
+        fin = np.isfinite(r)
+        st = self.status[start:] if self.status.size else np.zeros(0, dtype="<U9")
+        extra: dict[str, Any] = {
+            "optimal": float(r[fin].mean()) if fin.any() else np.inf,
+            "max_optimal": float(r[fin].max()) if fin.any() else np.inf,
+            "unbounded": int((~fin).sum()),
+            "inconsistent": int(np.isin(st, ("skipped", "reset")).sum()),
+        }
+        if truth is not None:
+            D = as_matrix("truth", truth, cols=self.lo.shape[1])
+            inside = np.all((D >= self.lo) & (D <= self.hi), axis=1)[start:]
+            extra["truth_inside"] = float(inside.mean()) if inside.size else np.nan
+        return error_summary("SMFDO", self.estimate, truth, start, extra)
+
     def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
         """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
         (the estimate and its certified interval), then ``radius`` and ``status``.
 
         The index is the time ``k dt`` (named ``"time"``) when a sampling time is
         known (``dt`` or the system's), else the step ``k``.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sampling time (default: the system's).
+        names : sequence of str, optional
+            Disturbance names (default: the system's).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The table.
         """
         import pandas as pd
 
@@ -148,10 +238,7 @@ class SMFDOResult:
             cols[f"{name}_hi"] = self.hi[:, i]
         cols["radius"] = self.radius
         cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
-        step = dt if dt is not None else self.dt
-        index = (pd.Index(np.arange(N) * step, name="time") if step
-                 else pd.RangeIndex(N, name="k"))
-        return pd.DataFrame(cols, index=index)
+        return pd.DataFrame(cols, index=time_index(N, dt if dt is not None else self.dt))
 
     @property
     def consistent(self) -> bool:

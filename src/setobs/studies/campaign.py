@@ -119,10 +119,12 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     (``None``: exact mode, the true consistent set; a window gives an outer
     approximation, so worst-case scores are upper bounds).
 
-    Returns tidy rows ``(run, observer, k, err_inf, err_2, worst_inf, radius,
-    contained)``: actual errors, worst-case infinity-norm error over the
-    consistent set, the observer's own interval radius (SMFDO only) and whether
-    the truth lies in that interval (SMFDO only).
+    Returns tidy rows ``(run, observer, k, error_inf, error_2, worst_case_error,
+    optimal, radius, truth_inside)`` (the metric names of :mod:`setobs.results`):
+    actual errors, worst-case infinity-norm error over the consistent set, the
+    optimal worst-case error (the reference's radius), the observer's own
+    interval radius (SMFDO only) and whether the truth lies in that interval
+    (SMFDO only).
     """
     from ..compare import worst_case_error
 
@@ -140,11 +142,11 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
             res = ref if params == ref_params else _smfdo_for(params, scenario, sys,
                                                               reset).run(traj.Y, traj.U)
             est, radius = res.estimate, res.radius
-            contained = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
+            inside = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
         else:
-            est = _point_observer(spec, sys).run(traj.Y, traj.U).d_hat
+            est = _point_observer(spec, sys).run(traj.Y, traj.U).estimate
             radius = np.full(scenario.horizon, np.nan)
-            contained = np.full(scenario.horizon, np.nan)
+            inside = np.full(scenario.horizon, np.nan)
         err = est - traj.D
         worst = worst_case_error(est, ref.lo, ref.hi)
         with np.errstate(invalid="ignore"):
@@ -152,24 +154,77 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
             e_2 = np.linalg.norm(err, axis=1)
         for k in range(scenario.horizon):
             rows.append({"run": int(run), "observer": spec.name, "k": k,
-                         "err_inf": float(e_inf[k]), "err_2": float(e_2[k]),
-                         "worst_inf": float(worst[k]), "radius": float(radius[k]),
-                         "contained": float(contained[k])})
+                         "error_inf": float(e_inf[k]), "error_2": float(e_2[k]),
+                         "worst_case_error": float(worst[k]), "optimal": float(ref.radius[k]),
+                         "radius": float(radius[k]), "truth_inside": float(inside[k])})
     return rows
 
 
 @dataclass
 class CampaignResult:
-    """A campaign's tidy table (pandas) and its metadata."""
+    """A campaign's tidy table and its metadata (the protocol of :mod:`setobs.results`).
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per run, observer and step: ``run, observer, k, error_inf,
+        error_2, worst_case_error, optimal, radius, truth_inside``.
+    metadata : dict
+        The request, versions, machine and timing (also in ``metadata.json``).
+    """
 
     table: Any
     metadata: dict[str, Any]
 
-    def summary(self, start: int = 10):
-        """Mean of each metric per observer over steps ``k >= start`` (pandas)."""
+    def to_pandas(self) -> Any:
+        """The tidy table (a copy).
+
+        Returns
+        -------
+        pandas.DataFrame
+            :attr:`table`.
+        """
+        return self.table.copy()
+
+    def summary(self, start: int = 10) -> Any:
+        """Mean of each metric per observer (index ``observer``) over steps ``k >= start``.
+
+        Parameters
+        ----------
+        start : int
+            First step counted (skip the transient).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``error_inf, error_2, worst_case_error, optimal, radius,
+            truth_inside``.
+        """
         t = self.table[self.table["k"] >= start]
-        cols = ["err_inf", "err_2", "worst_inf", "radius"]
+        cols = ["error_inf", "error_2", "worst_case_error", "optimal", "radius", "truth_inside"]
         return t.groupby("observer", sort=False)[cols].mean()
+
+    def plot(self, ax: Any = None, metric: str = "error_inf", logy: bool = True) -> Any:
+        """Mean of ``metric`` over runs, per step and observer
+        (:func:`setobs.plotting.plot_error_curves`).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: the current axes).
+        metric : str
+            A metric column of :attr:`table`.
+        logy : bool
+            Logarithmic axis.
+
+        Returns
+        -------
+        matplotlib Axes
+            The axes drawn on.
+        """
+        from ..plotting import plot_error_curves
+
+        return plot_error_curves(self.table, metric, ax=ax, logy=logy)
 
 
 def _check_resume(out: Path, request: dict[str, Any]) -> None:
