@@ -2,7 +2,7 @@
 
 The smallest position-noise bound that makes the whole motor record consistent
 with ``|dd| <= 2 Mn`` (the rig's nominal torque, twice: any jump), for record
-lengths 2 000 / 5 000 / 10 000 / 20 000 samples (issue target: 20 000 in <= 10 s
+lengths 2 000 / 5 000 / 10 000 / 20 000 samples (target: 20 000 in <= 10 s
 on this 2-core machine), and the trade-off curve on a decimated record (every
 10th sample, 100 Hz model). Writes ``benchmarks/results/calibration.json``.
 

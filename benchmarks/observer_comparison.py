@@ -17,12 +17,9 @@ import setobs as so
 
 def main() -> None:
     sys = so.examples.chang2006()
-    rng = np.random.default_rng(0)
-    x, d, Y = np.array([0.0, 1.0, 0.0]), np.zeros(2), []
-    for _ in range(100):
-        Y.append(sys.Xi @ x)
-        x, d = sys.Phi @ x + sys.G @ d, d + rng.uniform(-1, 1, 2)
-    Y = np.array(Y)
+    dd = np.random.default_rng(0).uniform(-1, 1, size=(99, 2))  # the README's data
+    D = np.vstack([np.zeros(2), np.cumsum(dd, axis=0)])
+    Y, _ = sys.simulate(D, x0=[0.0, 1.0, 0.0])
     ref = so.SMFDO(sys, window=None).run(Y)
     est = {"PIO": so.observers.PIO(sys).run(Y).estimate,
            "PIO (printed gains)": so.observers.PIO.chang2006_baseline(sys).run(Y).estimate,

@@ -1,4 +1,4 @@
-"""Benchmark: the Li-Cong-Dong Fig. 1(b) campaign and the cost of its interval hulls (issue 7).
+"""Benchmark: the Li-Cong-Dong Fig. 1(b) campaign and the cost of its interval hulls.
 
 Chang 2006 system, increments uniform in [-1, 1]^2, 100 steps, SMFDO delta = 10
 and the PIO baseline. Measured in one run, side by side:
@@ -14,7 +14,7 @@ and the PIO baseline. Measured in one run, side by side:
   PIO on local processes (both cores); shorter campaigns for delta = 3 and 20
   and for the exact mode, extrapolated to 5000 runs.
 
-Writes ``benchmarks/results/smfdo_campaign.json``. Targets (issue 7): hull of
+Writes ``benchmarks/results/smfdo_campaign.json``. Targets: hull of
 ``P Z_k`` >= 20x faster than highspy reuse, <= 150 us per step (delta = 10),
 5000 runs in <= 2 minutes.
 

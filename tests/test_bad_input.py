@@ -1,4 +1,4 @@
-"""Issue 11: every bad input of the list gives a clear error naming the argument.
+"""Every bad input of the list gives a clear error naming the argument.
 
 Library: ``DimensionError`` (a ``ValueError``) or ``TypeError`` with ``match=``; CLI:
 one line on stderr and exit code 2. Each case was silently accepted, mis-blamed or

@@ -300,3 +300,18 @@ def test_study_on_the_users_own_model_file(tmp_path, capsys):
 
     table = pd.read_csv(tmp_path / "out" / "results.csv")
     assert len(table) == 2 * 15 and (table["truth_inside"] == 1).all()
+
+
+def test_check_continuous_model_needs_and_takes_dt(tmp_path, capsys):
+    from setobs.cli import main
+
+    f = tmp_path / "m.yaml"
+    f.write_text("A: [[0, 1], [0, -1]]\nB: [[0], [1]]\nC: [[1, 0]]\ncontinuous: true\n"
+                 "disturbance_inputs: [0]\n")
+    assert main(["check", str(f)]) == 2
+    assert "needs a sampling time" in capsys.readouterr().err
+    assert main(["check", str(f), "--dt", "0.01", "--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    # position measured, d enters the velocity: (x, d) is observable from y, so Theorem 1
+    # holds (rank [O, IbarOG] = rank O + q)
+    assert {d["design"]: d["exists"] for d in out["designs"]}["SMFDO"] is True

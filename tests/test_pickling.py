@@ -1,6 +1,6 @@
 """Every public object pickles and deep-copies (Dask's process scheduler, notebooks).
 
-Issue 11, item 12: LinearSystem, ConstrainedZonotope and Box failed on unpickle ("is
+LinearSystem, ConstrainedZonotope and Box failed on unpickle ("is
 immutable"); SMFDO (a lambda inside), Diagnosis and the observers followed.
 """
 

@@ -131,3 +131,22 @@ def test_signal_names_in_the_diagnosis():
 def test_positional_constructor_warns_loudly_in_its_docstring():
     assert "second** matrix" in LinearSystem.__doc__
     assert "from_matrices" in LinearSystem.__doc__
+
+
+def test_simulate_against_scipy_dlsim():
+    from scipy.signal import dlsim
+
+    sys = so.examples.servo_motor()
+    rng = np.random.default_rng(5)
+    N = 50
+    D, U = rng.normal(size=(N, sys.q)), rng.normal(size=(N, sys.p))
+    x0 = np.array([0.1, -0.2])
+    Y, X = sys.simulate(D, U, x0=x0)
+    # scipy: inputs [u, d] through B = [Gamma, G], D = [Du, 0]
+    B = np.hstack([sys.Gamma, sys.G])
+    Dm = np.hstack([sys.Du, np.zeros((sys.l, sys.q))])
+    _, y_ref, x_ref = dlsim((sys.Phi, B, sys.Xi, Dm, 1.0), np.hstack([U, D]), x0=x0)
+    np.testing.assert_allclose(Y, y_ref, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(X, x_ref, rtol=1e-12, atol=1e-14)
+    with pytest.raises(so.DimensionError, match="U is required"):
+        sys.simulate(D)

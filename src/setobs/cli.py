@@ -99,8 +99,11 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
-def check(target: str, fmt: str = "text") -> int:
-    """Print the ``diagnose`` report for a system file, an example name, or ``all`` examples."""
+def check(target: str, fmt: str = "text", dt: float | None = None) -> int:
+    """Print the ``diagnose`` report for a system file, an example name, or ``all`` examples.
+
+    ``dt`` is the sampling time for a continuous-time model file without ``Ts``.
+    """
     from .studies import EXAMPLE_SYSTEMS
 
     if target == "all" or (target in EXAMPLE_SYSTEMS and not Path(target).exists()):
@@ -113,7 +116,7 @@ def check(target: str, fmt: str = "text") -> int:
         return 0
     from .io import load_model
 
-    _print_report(diagnose(load_model(target)), fmt)
+    _print_report(diagnose(load_model(target, dt=dt)), fmt)
     return 0
 
 
@@ -333,6 +336,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma); "
                                  "or an example name (chang2006, cgl1, ...), or 'all'")
     pc.add_argument("--format", choices=["text", "markdown", "json"], default="text")
+    pc.add_argument("--dt", type=float, default=None,
+                    help="sampling time for a continuous-time model file without Ts")
     pe = sub.add_parser("estimate", help="certified disturbance bounds from a measured record")
     pe.add_argument("record", help="the record: .csv (header optional), .mat or .npz")
     pe.add_argument("--model", required=True,
@@ -373,7 +378,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "demo":
             return demo(args.out, args.steps, args.seed)
         if args.command == "check":
-            return check(args.file, args.format)
+            return check(args.file, args.format, args.dt)
         if args.command == "estimate":
             if args.window in ("exact", "none", "None"):
                 window = None

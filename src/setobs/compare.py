@@ -184,7 +184,7 @@ class ComparisonTable:
         lines = ["| observer | steps | mean worst-case error | optimal | mean ratio | outside |",
                  "|---|---|---|---|---|---|"]
         for name, s in self.summary(start).iterrows():
-            lines.append(f"| {name} | {s['steps']} | {s['worst_case_error']:.4g} | "
+            lines.append(f"| {name} | {int(s['steps'])} | {s['worst_case_error']:.4g} | "
                          f"{s['optimal']:.4g} | {s['ratio']:.3g} | {s['outside']:.2%} |")
         return "\n".join(lines)
 

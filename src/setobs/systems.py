@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from ._validation import as_matrix, readonly
+from ._validation import as_matrix, as_vector, readonly
 from .exceptions import DimensionError
 
 __all__ = ["AugmentedSystem", "DisturbanceInputs", "LinearSystem", "require_system"]
@@ -383,6 +383,45 @@ class LinearSystem:
                 dt = None if ss_dt in (None, True) else float(ss_dt)
         return cls.from_matrices(A=A, B=B, C=C, D=D, disturbance_inputs=disturbance_inputs,
                                  dt=dt, continuous=continuous, **names)
+
+    def simulate(self, D: ArrayLike, U: ArrayLike | None = None,
+                 x0: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Noise-free response ``x(k+1) = Phi x + Gamma u + G d``, ``y(k) = Xi x + Du u``.
+
+        Parameters
+        ----------
+        D : array_like, shape (N, q)
+            Disturbance sequence ``d(0), ..., d(N-1)``.
+        U : array_like, shape (N, p), optional
+            Input sequence (required when the system has inputs).
+        x0 : array_like, shape (n,), optional
+            Initial state (default zero).
+
+        Returns
+        -------
+        Y : ndarray, shape (N, l)
+            Measurements ``y(0), ..., y(N-1)``.
+        X : ndarray, shape (N, n)
+            States ``x(0), ..., x(N-1)``.
+
+        Raises
+        ------
+        DimensionError
+            If a sequence has the wrong shape, or ``U`` is missing for a system
+            with inputs.
+        """
+        Da = as_matrix("D", D, cols=self.q)
+        N = Da.shape[0]
+        if self.p and U is None:
+            raise DimensionError(f"U is required: the system has {self.p} input(s)")
+        Ua = as_matrix("U", U, rows=N, cols=self.p) if self.p else np.zeros((N, 0))
+        x = np.zeros(self.n) if x0 is None else as_vector("x0", x0, size=self.n).copy()
+        X = np.empty((N, self.n))
+        for k in range(N):
+            X[k] = x
+            x = self.Phi @ x + self.Gamma @ Ua[k] + self.G @ Da[k]
+        Y = X @ self.Xi.T + (Ua @ self.Du.T if self.p else 0.0)
+        return Y, X
 
     def to_statespace(self) -> Any:
         """This system as a discrete-time ``control.StateSpace`` (python-control).

@@ -96,7 +96,7 @@ PRODUCT_RTOL: float = 1e-12
 #: A decision whose margin is below this many decades is flagged as fragile.
 FRAGILE_MARGIN_DECADES: float = 2.0
 
-#: Invariant zeros with |z| within this of the unit circle are reported as marginal.
+#: Invariant zeros with ``|z|`` within this of the unit circle are reported as marginal.
 UNIT_CIRCLE_TOL: float = 1e-8
 
 # ---- the compiled fast path (setobs.geometry.fastlp)

@@ -316,7 +316,7 @@ def test_diagnose_examples_and_zero_on_the_unit_circle():
         d5["Kalman"]
 
 
-# ------------------------------------------------------------------ issue 11, item 6
+# ---------------------------------------------------- hardening: ill-conditioned coordinates
 def _dense_similarity(rng, n, cond):
     U, _ = np.linalg.qr(rng.normal(size=(n, n)))
     V, _ = np.linalg.qr(rng.normal(size=(n, n)))

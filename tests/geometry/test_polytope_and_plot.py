@@ -150,7 +150,7 @@ def test_vertex_that_float_cdd_redundancy_removal_dropped():
     assert Z.support(nrm) - nrm @ a > 2e-4  # the set reaches past the chord
 
 
-# ------------------------------------------------------------------ issue 11, item 9
+# ------------------------------------------------------------------ hardening: vertex enumeration
 def _intersection_of_random_hulls(seed, points):
     rng = np.random.default_rng(seed)
     E1 = ConvexHull(rng.random((points, 3))).equations

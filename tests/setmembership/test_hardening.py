@@ -1,4 +1,4 @@
-"""Issue 11: the SMFDO under threads, bad scaling, large data, solver trouble.
+"""The SMFDO under threads, bad scaling, large data, solver trouble.
 
 Every test here failed on the code before the hardening. Oracles are independent
 of the code under test: the simulator of ``test_smfdo``, the exact rational LP of

@@ -1,4 +1,4 @@
-"""Bounded measurement and process noise, missing samples and inconsistent data (issue 12).
+"""Bounded measurement and process noise, missing samples and inconsistent data.
 
 The data come from an own simulator in the original coordinates whose noise
 hits the *vertices* of ``V`` and ``W`` (``v = F (r_v * signs)``, the extreme

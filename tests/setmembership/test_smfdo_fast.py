@@ -1,4 +1,4 @@
-"""The SMFDO's fast path (issue 7) against the reference path, LP by LP and step by step."""
+"""The SMFDO's fast path against the reference path, LP by LP and step by step."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A randomized soundness campaign (issue 11, "Done when"): run with ``pytest -m slow``.
+"""A randomized soundness campaign: run with ``pytest -m slow``.
 
 Random systems (badly scaled ones included), random magnitudes, increments drawn
 inside and on the boundary of their box, inputs; windows 3, 10, 20 and the exact

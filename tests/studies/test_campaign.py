@@ -36,7 +36,7 @@ def test_smfdo_rows_are_sound_and_scores_are_consistent():
 def test_local_and_dask_give_identical_tables(tmp_path):
     """Bit for bit: local processes, Dask's default threaded workers, Dask processes.
 
-    Issue 11: on LocalCluster(processes=False, threads_per_worker=2) the SMFDOs of
+    On LocalCluster(processes=False, threads_per_worker=2) the SMFDOs of
     concurrent runs shared warm-start state and the campaign aborted.
     """
     distributed = pytest.importorskip("distributed")

@@ -17,7 +17,7 @@ __all__ = ["DescriptorObserver"]
 class DescriptorObserver(PointObserver):
     """Descriptor observer for ``x+ = Phi x + Gamma u + G d``, ``y = Xi x + F n`` (Chang fragment).
 
-    **Reconstructed** from the fragment in ``../shared/papers`` (its eqs. (8)-(16)
+    **Reconstructed** from the surviving fragment of Chang's report (its eqs. (8)-(16)
     are missing; eqs. (2), (6)-(7), (17)-(19) and Lemmas 1-4 survive):
 
     * descriptor augmentation (6)-(7): ``z = [x; n]``,

@@ -1,0 +1,52 @@
+"""Sphinx configuration of the setobs documentation.
+
+Build (from the repository root): ``python -m sphinx -W -b html docs docs/_build/html``.
+The notebooks of ``notebooks/`` are copied into ``docs/notebooks/`` and executed
+during the build (myst-nb), so their figures are rendered.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import setobs
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+
+# The notebooks live in notebooks/ (where the tests run them); the docs render copies.
+_nb_dst = HERE / "notebooks"
+_nb_dst.mkdir(exist_ok=True)
+for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):
+    shutil.copy2(nb, _nb_dst / nb.name)
+
+project = "setobs"
+author = "the setobs developers"
+copyright = "2026, the setobs developers"
+release = setobs.__version__
+version = release
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "numpydoc",
+    "myst_nb",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "**.ipynb_checkpoints"]
+autosummary_generate = True
+autosummary_imported_members = True
+autodoc_typehints = "none"  # numpydoc sections carry the types
+numpydoc_show_class_members = False
+numpydoc_xref_param_type = False
+myst_enable_extensions = ["dollarmath"]
+myst_heading_anchors = 3
+nb_execution_mode = "force"
+nb_execution_timeout = 600
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+html_theme = "alabaster"
+html_static_path: list[str] = []
+suppress_warnings = ["myst.header"]
