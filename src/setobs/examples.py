@@ -185,6 +185,17 @@ def servo_motor(J: float = 1.2e-4, B: float = 7.03e-5, dt: float = 1e-3, *,
     1 kHz), whose measured identification record the noise tests and
     benchmarks use (``shared/data/hsm150``, not shipped).
 
+    Parameters
+    ----------
+    J : float
+        Inertia (kg m^2).
+    B : float
+        Viscous friction (N m s/rad).
+    dt : float
+        Sampling time (s).
+    measure_velocity : bool
+        Also measure the velocity (a second output).
+
     Examples
     --------
     >>> servo_motor()

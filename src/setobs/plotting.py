@@ -62,7 +62,19 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
 
 def plot_error_curves(table: Any, metric: str = "error_inf", ax: Any = None, *,
                       logy: bool = True) -> Any:
-    """Mean of ``metric`` over runs, per step and observer (like Li-Cong-Dong Fig. 1(b))."""
+    """Mean of ``metric`` over runs, per step and observer (like Li-Cong-Dong Fig. 1(b)).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A campaign table (:attr:`CampaignResult.table`).
+    metric : str
+        A metric column (see :mod:`setobs.results`).
+    ax : matplotlib Axes, optional
+        Where to draw (default the current axes).
+    logy : bool
+        Logarithmic axis.
+    """
     ax = _ax(ax)
     mean = table.groupby(["observer", "k"], sort=False)[metric].mean().unstack(0)
     for name in mean.columns:
@@ -77,7 +89,19 @@ def plot_error_curves(table: Any, metric: str = "error_inf", ax: Any = None, *,
 
 def plot_comparison_bars(table: Any, metric: str = "error_inf", start: int = 10,
                          ax: Any = None) -> Any:
-    """Mean ``metric`` per observer over steps ``k >= start``, as bars."""
+    """Mean ``metric`` per observer over steps ``k >= start``, as bars.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A campaign table.
+    metric : str
+        A metric column.
+    start : int
+        First step counted.
+    ax : matplotlib Axes, optional
+        Where to draw (default the current axes).
+    """
     ax = _ax(ax)
     t = table[table["k"] >= start]
     mean = t.groupby("observer", sort=False)[metric].mean()

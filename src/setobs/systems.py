@@ -212,6 +212,24 @@ class LinearSystem:
         (Fu-Wang, eq. (3); Chang 2006). Computed exactly with one matrix
         exponential of the block matrix ``[[H, [D F]], [0, 0]] T`` (Van Loan).
 
+        Parameters
+        ----------
+        H : array_like, shape (n, n)
+            Continuous state matrix.
+        D : array_like, shape (n, p) or None
+            Continuous input matrix (``None``: no control inputs).
+        F : array_like, shape (n, q)
+            Continuous disturbance matrix.
+        C : array_like, shape (l, n)
+            Output matrix.
+        T : float
+            Sampling period (positive).
+        Du : array_like, shape (l, p), optional
+            Feedthrough of the control inputs.
+        **names
+            Signal names passed to :class:`LinearSystem` (``state_names=``,
+            ``disturbance_names=``, ``output_names=``, ``input_names=``).
+
         Raises
         ------
         DimensionError
@@ -459,6 +477,15 @@ class LinearSystem:
         ``Phi' = T Phi T^-1``, ``G' = T G diag(s_d)^-1``, ``Xi' = diag(s_y) Xi T^-1``:
         every structural property (ranks, zeros, relative degrees, existence
         verdicts) is invariant under this map.
+
+        Parameters
+        ----------
+        T : array_like, shape (n, n)
+            Nonsingular state transformation ``x' = T x``.
+        output_scale : array_like, shape (l,), optional
+            Scale ``s_y`` of each output (default ones).
+        disturbance_scale : array_like, shape (q,), optional
+            Scale ``s_d`` of each disturbance (default ones).
         """
         T_a = as_matrix("T", T, rows=self.n, cols=self.n)
         Ti = np.linalg.inv(T_a)
@@ -515,6 +542,16 @@ def require_system(sys: Any, name: str = "sys", *,
     which of its inputs are disturbances (:meth:`LinearSystem.from_statespace`;
     a continuous-time model must be converted there, with its sampling time);
     without that statement it is refused: guessing would misread the model.
+
+    Parameters
+    ----------
+    sys : object
+        A :class:`LinearSystem` or a ``control.StateSpace``.
+    name : str
+        Argument name for the error message.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
     if isinstance(sys, LinearSystem):
         if disturbance_inputs is not None:

@@ -156,6 +156,16 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
       disturbance model detectable.
     * **modular observer** (Sec. VIII): ``(Phi, Xi)`` detectable, ``rank(Xi V) = q``.
 
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+
     Examples
     --------
     >>> from setobs.examples import chang2006

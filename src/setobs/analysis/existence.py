@@ -31,7 +31,15 @@ __all__ = [
 
 
 def ibar(blocks: int, l: int) -> NDArray[np.float64]:
-    """``Ibar`` of Li-Cong-Dong eq. (16): strictly lower-triangular ones ``(x) I_l``."""
+    """``Ibar`` of Li-Cong-Dong eq. (16): strictly lower-triangular ones ``(x) I_l``.
+
+    Parameters
+    ----------
+    blocks : int
+        Number of block rows and columns.
+    l : int
+        Size of each identity block (the number of outputs).
+    """
     return np.kron(np.tril(np.ones((blocks, blocks)), -1), np.eye(l))
 
 
@@ -135,6 +143,16 @@ def bounded_do_exists(sys: LinearSystem, *, disturbance_inputs: DisturbanceInput
     observability staircases of the balanced pairs, no explicit powers); it is
     ``"undecidable"`` when a rank it depends on is in the grey zone between
     ``RANK_FLOOR`` and ``RANK_RTOL`` (see :attr:`BoundedDOReport.decided`).
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
 
     Notes
     -----
@@ -344,7 +362,18 @@ def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
 
 def pio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rtol: float = RANK_RTOL) -> ObserverCondition:
-    """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable."""
+    """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+    """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     rep: ObservabilityReport = observability(sys.augmented().A, sys.augmented().C, rtol=rtol)
     bad = rep.unstable_unobservable_modes
@@ -364,7 +393,18 @@ def higher_order_conditions(sys: LinearSystem, *, disturbance_inputs: Disturbanc
     rtol: float = RANK_RTOL) -> ObserverCondition:
     """Higher-order observer (Fu-Wang) with ``d = G d*``: the pair with state
     ``(x, d*, Delta d*)``, ``[[Phi, G, 0], [0, I, I], [0, 0, I]]``, ``[Xi, 0, 0]``
-    must be detectable (stable roots of eq. (10) for some gains)."""
+    must be detectable (stable roots of eq. (10) for some gains).
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+    """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     n, q = sys.n, sys.q
     A = np.block([[sys.Phi, sys.G, np.zeros((n, q))],
@@ -392,6 +432,16 @@ def modular_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInpu
     ``V = (I - Phi + L0 Xi)^-1 G``; the disturbance module ``w^+ = S w^ + L_w(...)``
     needs ``(S, H V + Q) = (I, Xi V)`` detectable, i.e. ``rank(Xi V) = q``.
     ``L0`` is taken from a DARE (any stabilising gain gives the same rank).
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
     """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     rep = observability(sys.Phi, sys.Xi, rtol=rtol)

@@ -24,7 +24,17 @@ __all__ = [
 
 def observability_matrix(A: ArrayLike, C: ArrayLike, blocks: int | None = None
                          ) -> NDArray[np.float64]:
-    """``O = [C; C A; ...; C A^(blocks-1)]`` (Li-Cong-Dong, eq. (16); default ``blocks = n``)."""
+    """``O = [C; C A; ...; C A^(blocks-1)]`` (Li-Cong-Dong, eq. (16); default ``blocks = n``).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    C : array_like, shape (l, n)
+        Output matrix.
+    blocks : int, optional
+        Number of block rows (default ``n``).
+    """
     A_a = np.atleast_2d(np.asarray(A, dtype=float))
     C_a = np.atleast_2d(np.asarray(C, dtype=float))
     N = A_a.shape[0] if blocks is None else int(blocks)
@@ -127,6 +137,15 @@ def observability(A: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RTOL) -> Obs
     balanced realisation; the bases are mapped back to the original
     coordinates and re-orthonormalised, so the result does not depend on the
     scaling of states or outputs.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    C : array_like, shape (l, n)
+        Output matrix.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
     """
     A_a = np.atleast_2d(np.asarray(A, dtype=float))
     C_a = np.atleast_2d(np.asarray(C, dtype=float))
@@ -191,7 +210,18 @@ class ObservabilityDecomposition:
 
 def augmented_observability(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rtol: float = RANK_RTOL) -> ObservabilityReport:
-    """Observability report of the augmented pair ``(A, C)`` of eqs. (9)-(11)."""
+    """Observability report of the augmented pair ``(A, C)`` of eqs. (9)-(11).
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+    """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     aug = sys.augmented()
     return observability(aug.A, aug.C, rtol=rtol)
@@ -215,6 +245,13 @@ def observability_decomposition(sys: LinearSystem, *, disturbance_inputs: Distur
         well-conditioned observable coordinates this way.
     disturbance_scale : array_like, shape (q,), optional
         Magnitudes ``S`` of the disturbance increments, used by the balancing.
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
     """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     aug = sys.augmented()

@@ -78,6 +78,16 @@ def relative_degrees(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs
     decides the rank and diagonality of ``V0``. ``V0`` itself is returned in the
     original coordinates.
 
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+
     Examples
     --------
     >>> from setobs.examples import chen_gao_lin_example1
@@ -154,6 +164,19 @@ def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RT
     ``M_mu`` of ``H_0 = 0`` and ``H_i = C A^(i-1) E`` (``q = rank E``). Returns
     ``(None, decisions)`` if no ``mu <= max_delay`` (default ``n + 2``) works:
     the unknown input is not reconstructable with any delay.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    E : array_like, shape (n, q)
+        Unknown-input matrix.
+    C : array_like, shape (l, n)
+        Output matrix.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+    max_delay : int, optional
+        Largest delay tried (default ``n``).
     """
     A_a = np.atleast_2d(np.asarray(A, dtype=float))
     E_a = np.asarray(E, dtype=float).reshape(A_a.shape[0], -1)
@@ -234,7 +257,21 @@ class UIOResult:
 def uio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rtol: float = RANK_RTOL,
                    unit_tol: float = UNIT_CIRCLE_TOL) -> UIOResult:
-    """UIO conditions (a), (b) for ``(Phi, G, Xi)`` and the delay for the augmented system."""
+    """UIO conditions (a), (b) for ``(Phi, G, Xi)`` and the delay for the augmented system.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
+    unit_tol : float
+        Zeros with ``|z|`` within this of 1 count as on the unit circle
+        (:data:`setobs.tolerances.UNIT_CIRCLE_TOL`).
+    """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     _, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
     dG = rank_decision(Gb, rtol)

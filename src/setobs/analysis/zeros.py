@@ -120,6 +120,19 @@ def system_zeros(
 
     Rank decisions use ``rtol`` relative to the norm of the balanced system
     matrix; each is recorded with its margin.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    B : array_like, shape (n, m)
+        Input matrix.
+    C : array_like, shape (l, n)
+        Output matrix.
+    D : array_like, shape (l, m), optional
+        Feedthrough (default zero).
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
     """
     A_a = np.atleast_2d(np.asarray(A, dtype=float))
     B_a = np.asarray(B, dtype=float).reshape(A_a.shape[0], -1)
@@ -176,6 +189,16 @@ def invariant_zeros(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs 
     Robust to infinite zeros (no huge spurious values): see :func:`system_zeros`.
     When python-control with slycot is installed, ``compare_with_slycot`` in the
     tests cross-checks the result.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    rtol : float
+        Relative threshold of the rank decisions (:data:`setobs.tolerances.RANK_RTOL`).
 
     Examples
     --------

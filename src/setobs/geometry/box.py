@@ -12,7 +12,13 @@ __all__ = ["Box", "box_center"]
 
 
 def box_center(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded."""
+    """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded.
+
+    Parameters
+    ----------
+    lo, hi : ndarray, shape (n,)
+        Bounds.
+    """
     with np.errstate(invalid="ignore"):
         mid = 0.5 * lo + 0.5 * hi
     return np.where(np.isfinite(mid), mid, np.nan)
@@ -106,7 +112,15 @@ class Box:
         return self._hi - self._lo
 
     def contains(self, x: ArrayLike, tol: float = 0.0) -> bool:
-        """Whether ``lo - tol <= x <= hi + tol`` componentwise."""
+        """Whether ``lo - tol <= x <= hi + tol`` componentwise.
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            The point.
+        tol : float
+            Allowed excess beyond the bounds.
+        """
         xv = as_vector("x", x, size=self.dim)
         return bool(((xv >= self._lo - tol) & (xv <= self._hi + tol)).all())
 

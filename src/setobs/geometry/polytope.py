@@ -43,7 +43,15 @@ class HRep:
     f: NDArray[np.float64]
 
     def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool:
-        """Whether ``x`` satisfies all inequalities and equalities within ``tol``."""
+        """Whether ``x`` satisfies all inequalities and equalities within ``tol``.
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            The point.
+        tol : float
+            Allowed violation of each inequality and equality.
+        """
         xv = np.asarray(x, dtype=float)
         return bool((self.H @ xv <= self.k + tol).all() and
                     (np.abs(self.E @ xv - self.f) <= tol).all())
@@ -199,6 +207,11 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     :class:`~setobs.SolverError` is raised. In dimension 1 the vertices are
     the certified interval-hull ends.
 
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        A bounded set.
+
     Raises
     ------
     UnboundedSetError
@@ -226,6 +239,11 @@ def to_hrep(Z: ConstrainedZonotope) -> HRep:
     (outer by at most ``VERTEX_RTOL`` times its size). ``E x = f`` is the affine
     hull: the directions in which the set's certified width is below that
     tolerance (``f`` from a point of the set).
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        A bounded set.
     """
     n = Z.dim
     if n == 1:
@@ -272,6 +290,13 @@ def cz_from_hpolytope(H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
     interval hull computed. If that hull lies strictly inside ``B`` then, by
     convexity, ``P ⊆ B`` and the representation is exact; otherwise ``B`` is
     enlarged and the check repeated.
+
+    Parameters
+    ----------
+    H : array_like, shape (m, n)
+        Half-space normals.
+    k : array_like, shape (m,)
+        Offsets.
 
     Raises
     ------
@@ -320,6 +345,11 @@ def polygon_2d(Z: ConstrainedZonotope) -> NDArray[np.float64]:
 
     The verified vertices of :func:`setobs.geometry.polytope.vertices` (support
     LPs, every edge confirmed by a certified support value), in angular order.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        A bounded 2-D set.
 
     Raises
     ------

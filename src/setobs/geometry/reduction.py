@@ -84,6 +84,11 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     ``{G eta + (c + G m) : A eta = b - A m, |eta| <= r}``. Factors with
     ``r_j = 0`` are removed. Unbounded factors with an infinite bound are kept.
 
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+
     Raises
     ------
     EmptySetError

@@ -130,6 +130,9 @@ class ConstrainedZonotope:
         Factor bounds in ``[0, +inf]`` (default: all ones). ``h_j = inf`` makes
         factor ``j`` unbounded, so sets such as ``R^n`` and affine sets are
         representable (Li-Cong-Dong, Definition 2, eq. (19)).
+    radius : float
+        Bound up to which unbounded factors (``h_j = inf``) are certified, in the set's
+        normalised units (default :data:`setobs.tolerances.UNBOUNDED_RADIUS`).
 
     Raises
     ------
@@ -254,6 +257,12 @@ class ConstrainedZonotope:
     def from_box(cls, lo: ArrayLike, hi: ArrayLike) -> ConstrainedZonotope:
         """The box ``prod [lo_i, hi_i]``; a coordinate with ``lo=-inf, hi=+inf`` is free.
 
+        Parameters
+        ----------
+        lo, hi : array_like, shape (n,)
+            Lower and upper bounds; a coordinate with ``lo = -inf`` and ``hi = +inf`` is
+            free.
+
         Raises
         ------
         DimensionError
@@ -276,19 +285,39 @@ class ConstrainedZonotope:
 
     @classmethod
     def from_zonotope(cls, G: ArrayLike, c: ArrayLike) -> ConstrainedZonotope:
-        """The zonotope ``{G xi + c : ||xi||_inf <= 1}``."""
+        """The zonotope ``{G xi + c : ||xi||_inf <= 1}``.
+
+        Parameters
+        ----------
+        G : array_like, shape (n, n_g)
+            Generator matrix.
+        c : array_like, shape (n,)
+            Centre.
+        """
         return cls(G, c)
 
     @classmethod
     def point(cls, x: ArrayLike) -> ConstrainedZonotope:
-        """The singleton ``{x}``."""
+        """The singleton ``{x}``.
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            The point.
+        """
         xv = as_vector("x", x)
         return cls._trusted(np.zeros((xv.size, 0)), xv, np.zeros((0, 0)), np.zeros(0),
                             np.zeros(0))
 
     @classmethod
     def full_space(cls, n: int) -> ConstrainedZonotope:
-        """The whole space ``R^n`` (``n`` unbounded factors)."""
+        """The whole space ``R^n`` (``n`` unbounded factors).
+
+        Parameters
+        ----------
+        n : int
+            Dimension.
+        """
         if int(n) != n or n < 1:
             raise DimensionError(f"n must be a positive integer, got {n!r}")
         n = int(n)
@@ -297,7 +326,15 @@ class ConstrainedZonotope:
 
     @classmethod
     def affine_set(cls, C: ArrayLike, y: ArrayLike) -> ConstrainedZonotope:
-        """The affine set ``{z : C z = y}`` (``R^n`` intersected with ``C z = y``)."""
+        """The affine set ``{z : C z = y}`` (``R^n`` intersected with ``C z = y``).
+
+        Parameters
+        ----------
+        C : array_like, shape (m, n)
+            Constraint matrix.
+        y : array_like, shape (m,)
+            Right-hand side: the set is ``{z : C z = y}``.
+        """
         C_a = as_matrix("C", C)
         return cls.full_space(C_a.shape[1]).intersect_affine(C_a, y)
 
@@ -306,6 +343,13 @@ class ConstrainedZonotope:
         """The bounded polytope ``{x : H x <= k}`` (Scott et al. 2016, Theorem 1).
 
         See :func:`setobs.geometry.polytope.cz_from_hpolytope`.
+
+        Parameters
+        ----------
+        H : array_like, shape (m, n)
+            Half-space normals.
+        k : array_like, shape (m,)
+            Offsets: the polytope is ``{x : H x <= k}`` (bounded).
         """
         from .polytope import cz_from_hpolytope
 
@@ -402,6 +446,14 @@ class ConstrainedZonotope:
         ``err`` (vectors only): elementwise bound on the uncertainty of the
         vector (e.g. the representation error of a measured input); it is
         carried in :attr:`c_err`, so every certified query covers it.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope or array_like, shape (n,)
+            The set or vector to add.
+        err : array_like, shape (n,), optional
+            Elementwise bound on the uncertainty of a vector summand (carried in
+            :attr:`c_err`).
         """
         if not isinstance(other, ConstrainedZonotope):
             v = as_vector("vector", other, size=self.dim)
@@ -442,7 +494,13 @@ class ConstrainedZonotope:
         return NotImplemented
 
     def linear_map(self, M: ArrayLike) -> ConstrainedZonotope:
-        """Image under ``x -> M x`` for any ``m x n`` matrix ``M`` (Scott et al. 2016, eq. (11))."""
+        """Image under ``x -> M x`` for any ``m x n`` matrix ``M`` (Scott et al. 2016, eq. (11)).
+
+        Parameters
+        ----------
+        M : array_like, shape (m, n)
+            The matrix (any ``m``; the map is exact).
+        """
         M_a = as_matrix("M", M, cols=self.dim)
         return self._same_factors(M_a @ self._G, M_a @ self._c,
                                   _map_err(M_a, self._c, self._cerr))
@@ -463,7 +521,13 @@ class ConstrainedZonotope:
         return NotImplemented
 
     def cartesian(self, other: ConstrainedZonotope) -> ConstrainedZonotope:
-        """Cartesian product ``self x other``."""
+        """Cartesian product ``self x other``.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope
+            The second factor.
+        """
         if not isinstance(other, ConstrainedZonotope):
             raise TypeError(f"cartesian expects a ConstrainedZonotope, got {type(other).__name__}")
         return ConstrainedZonotope._trusted(
@@ -485,6 +549,16 @@ class ConstrainedZonotope:
         level (e.g. the representation error of a measurement); it is carried
         in :attr:`b_err`, so every certified query holds for all ``y`` within
         it. (Measurement *noise* is a set: use :meth:`intersect`.)
+
+        Parameters
+        ----------
+        C : array_like, shape (m, n)
+            Constraint matrix.
+        y : array_like, shape (m,)
+            Right-hand side.
+        y_err : array_like, shape (m,), optional
+            Elementwise bound on the uncertainty of ``y`` at rounding level (carried in
+            :attr:`b_err`).
         """
         C_a = as_matrix("C", C, cols=self.dim)
         y_a = as_vector("y", y, size=C_a.shape[0])
@@ -507,6 +581,14 @@ class ConstrainedZonotope:
         """Generalised intersection ``{z in self : R z in other}`` (Scott et al. 2016, eq. (13)).
 
         ``R`` defaults to the identity (plain intersection).
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope
+            The set ``W``.
+        R : array_like, shape (m, n), optional
+            The map of the generalised intersection ``{z in Z : R z in W}`` (default the
+            identity).
         """
         if not isinstance(other, ConstrainedZonotope):
             raise TypeError(f"intersect expects a ConstrainedZonotope, got {type(other).__name__}")
@@ -531,7 +613,13 @@ class ConstrainedZonotope:
         )
 
     def project(self, dims: Sequence[int]) -> ConstrainedZonotope:
-        """Projection onto the coordinates ``dims`` (in that order)."""
+        """Projection onto the coordinates ``dims`` (in that order).
+
+        Parameters
+        ----------
+        dims : sequence of int
+            Coordinates kept, in this order.
+        """
         idx = np.asarray(dims, dtype=int).reshape(-1)
         if idx.size == 0 or (idx < 0).any() or (idx >= self.dim).any():
             raise DimensionError(
@@ -614,6 +702,11 @@ class ConstrainedZonotope:
     def support(self, direction: ArrayLike) -> float:
         """Certified support function ``max_{z in Z} d^T z`` (``+inf`` if unbounded).
 
+        Parameters
+        ----------
+        direction : array_like, shape (n,)
+            The direction ``d``.
+
         Raises
         ------
         EmptySetError
@@ -652,6 +745,11 @@ class ConstrainedZonotope:
     def support_point(self, direction: ArrayLike) -> NDArray[np.float64]:
         """A maximiser of ``d^T z`` over the set (the solver's point; not certified).
 
+        Parameters
+        ----------
+        direction : array_like, shape (n,)
+            The direction ``d``.
+
         Raises
         ------
         UnboundedSetError
@@ -668,7 +766,13 @@ class ConstrainedZonotope:
         return self._G @ out.point + self._c
 
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
-        """Certified emptiness report (see :meth:`FactorPolytope.emptiness`)."""
+        """Certified emptiness report (see :meth:`FactorPolytope.emptiness`).
+
+        Parameters
+        ----------
+        tol : float
+            Feasibility tolerance of the phase-1 LP (normalised constraint violation).
+        """
         return self._lp().emptiness(tol)
 
     def is_empty(self, tol: float = FEASIBILITY_TOL) -> bool:
@@ -677,6 +781,11 @@ class ConstrainedZonotope:
         ``True`` is certified: every point violates some constraint, normalised
         to a unit infinity-norm row, by more than ``tol``. Sets that are empty
         only by a margin below ``tol`` are reported non-empty.
+
+        Parameters
+        ----------
+        tol : float
+            Feasibility tolerance of the phase-1 LP (normalised constraint violation).
         """
         return self.emptiness(tol).empty
 
@@ -686,6 +795,13 @@ class ConstrainedZonotope:
         ``False`` is certified: no representation ``x = G xi + c`` with
         ``|xi| <= h`` satisfies the normalised equalities (including
         ``G xi = x - c``) within ``tol``.
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            The point.
+        tol : float
+            Feasibility tolerance (normalised constraint violation).
         """
         xv = as_vector("x", x, size=self.dim)
         return not self.intersect_affine(np.eye(self.dim), xv).is_empty(tol)
@@ -693,7 +809,14 @@ class ConstrainedZonotope:
     # ------------------------------------------------------------------ reduction
     def remove_redundancy(self, tol: float | None = None) -> ConstrainedZonotope:
         """Remove zero/duplicate/dependent constraints and unused factors; see
-        :func:`setobs.geometry.reduction.remove_redundancy`."""
+        :func:`setobs.geometry.reduction.remove_redundancy`.
+
+        Parameters
+        ----------
+        tol : float, optional
+            Rank tolerance (default that of
+            :func:`setobs.geometry.reduction.remove_redundancy`).
+        """
         from .reduction import remove_redundancy
 
         return remove_redundancy(self) if tol is None else remove_redundancy(self, tol=tol)
@@ -713,7 +836,13 @@ class ConstrainedZonotope:
         return reduce_exact(self)
 
     def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
-        """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`."""
+        """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`.
+
+        Parameters
+        ----------
+        max_generators : int
+            Largest number of generators of the result.
+        """
         from .reduction import reduce_order
 
         return reduce_order(self, max_generators)
@@ -732,7 +861,17 @@ class ConstrainedZonotope:
         return to_hrep(self)
 
     def plot(self, ax: Axes | None = None, dims: Sequence[int] = (0, 1), **kwargs: Any) -> Patch:
-        """Plot the projection onto ``dims``; see :func:`setobs.geometry.plotting.plot_cz`."""
+        """Plot the projection onto ``dims``; see :func:`setobs.geometry.plotting.plot_cz`.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default the current axes).
+        dims : sequence of two int
+            The coordinates of the projection.
+        **kwargs
+            Passed to :class:`matplotlib.patches.Polygon`.
+        """
         from .plotting import plot_cz
 
         return plot_cz(self, ax=ax, dims=dims, **kwargs)

@@ -45,6 +45,9 @@ class DescriptorObserver(PointObserver):
         Sensor-noise matrix of full column rank.
     Q_w, R_w : array_like, optional
         DARE weights (default identities).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
 
     name = "descriptor observer"

@@ -68,6 +68,13 @@ def design_pio(sys: LinearSystem, poles: Sequence[complex]) -> dict[str, NDArray
 
     The PIO error matrix ``[[Phi - P Xi, G], [-L Xi, I]] = A_aug - [P; L] C_aug``,
     so the gains come from pole placement on the augmented pair (9)-(11).
+
+    Parameters
+    ----------
+    sys : LinearSystem
+        The system.
+    poles : sequence of complex
+        The ``n + q`` error poles (conjugate pairs complete).
     """
     cond = pio_conditions(sys)
     if not cond.exists:
@@ -103,6 +110,12 @@ class PIO(StateSpaceObserver):
         Raise :class:`DesignError` for given gains whose error system is not
         stable (default ``False``: the printed Fu-Wang gains are unstable and are
         still available as a baseline).
+    process_cov, increment_cov, measurement_cov : float, array_like, optional
+        Covariances for ``design="lqe"``: scalars (times ``I``), vectors (diagonal) or
+        matrices.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
 
     name = "PIO"
@@ -149,7 +162,13 @@ class PIO(StateSpaceObserver):
     @classmethod
     def chang2006_baseline(cls, sys: LinearSystem) -> PIO:
         """The SFODO baseline of Li-Cong-Dong Fig. 1(b): the PIO with the gains printed
-        in Fu-Wang (``P0'``, ``L0'``). Its error system is unstable (pole near -1.37)."""
+        in Fu-Wang (``P0'``, ``L0'``). Its error system is unstable (pole near -1.37).
+
+        Parameters
+        ----------
+        sys : LinearSystem
+            The Chang 2006 example (:func:`setobs.examples.chang2006`).
+        """
         return cls(sys, CHANG2006_PIO_GAINS["P"], CHANG2006_PIO_GAINS["L"])
 
 
@@ -182,6 +201,13 @@ def design_higher_order(sys: LinearSystem, poles: Sequence[complex]
     injection gains ``[P0; Lq; Lv]`` give ``L0 = Lv``, ``L1 = Lq - Lv``
     (since ``d*^+ = d*^ + Delta^ + L1 dy_err + L0 y_err`` in Fu-Wang's form).
     The result is checked against :func:`setobs.analysis.higher_order_error_poles`.
+
+    Parameters
+    ----------
+    sys : LinearSystem
+        The system.
+    poles : sequence of complex
+        The ``n + 2q`` error poles (conjugate pairs complete).
     """
     cond = higher_order_conditions(sys)
     if not cond.exists:
@@ -209,6 +235,24 @@ class HigherOrderObserver(StateSpaceObserver):
     ``[0.1, 0.5]``. ``design="lqe"``: the steady-state Kalman predictor gain of
     the model ``(x, d*, Delta d*)`` with ``process_cov`` on ``x`` (default 0),
     ``increment_cov`` on the second difference of ``d*`` and ``measurement_cov``.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system.
+    P0, L0, L1 : array_like, optional
+        Gains of Fu-Wang eqs. (7)-(9) (``n x l``, ``q x l``, ``q x l``). Default: designed
+        with :func:`design_higher_order` at ``poles``.
+    poles : sequence of complex, optional
+        The ``n + 2q`` error poles (default above).
+    design : {"poles", "lqe"}
+        Pole placement, or the steady-state Kalman predictor gain.
+    process_cov, increment_cov, measurement_cov : float, array_like, optional
+        Covariances for ``design="lqe"``: scalars (times ``I``), vectors (diagonal) or
+        matrices.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
 
     Notes
     -----
@@ -280,6 +324,9 @@ class ModularObserver(StateSpaceObserver):
         at ``w_poles``).
     w_poles : sequence, optional
         Eigenvalues of the disturbance observer (default 0.5 each, spread slightly).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
 
     Notes
     -----

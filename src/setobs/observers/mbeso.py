@@ -124,6 +124,11 @@ class MBESO(StateSpaceObserver):
     sys : LinearSystem
     omega : float or sequence of float
         Observer eigenvalues per subsystem, in ``[0, 1)`` (0: deadbeat).
+    x0, d0 : array_like, optional
+        Initial state and disturbance estimates (default zero).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
 
     Raises
     ------
@@ -182,6 +187,18 @@ class VariantMBESO(MBESO):
     that all channels share the delay ``r_max + 1``, and ``f_hat = V0^-1 f_new_hat``
     (22). With ``omega = 0``: ``f_hat(k) = f(k - r_max - 1)`` (Theorem 3).
     ``d_hat`` is NaN until every channel's delay line is filled.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system.
+    omega : float or sequence of float
+        Observer eigenvalues per subsystem, in ``[0, 1)`` (0: deadbeat).
+    x0, d0 : array_like, optional
+        Initial state and disturbance estimates (default zero).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
 
     name = "variant MB-ESO"

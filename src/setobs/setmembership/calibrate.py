@@ -79,7 +79,21 @@ class NoiseCalibration:
 class NoiseTradeoff:
     """Result of :func:`noise_tradeoff`: for each increment scale ``beta`` (radii
     ``beta * increment``), the smallest consistent noise scale ``alpha`` (radii
-    ``alpha * shape``)."""
+    ``alpha * shape``).
+
+    Parameters
+    ----------
+    beta : ndarray, shape (m,)
+        Increment scales.
+    alpha : ndarray, shape (m,)
+        Smallest consistent noise scale for each ``beta``.
+    increment : ndarray, shape (q,)
+        The increment shape.
+    shape : ndarray, shape (l,)
+        The noise shape.
+    output_names : tuple of str
+        Output names (for labels).
+    """
 
     beta: NDArray[np.float64]
     alpha: NDArray[np.float64]
@@ -88,7 +102,13 @@ class NoiseTradeoff:
     output_names: tuple[str, ...] = ()
 
     def plot(self, ax: Any = None) -> Any:
-        """The trade-off curve: noise scale against increment scale (matplotlib)."""
+        """The trade-off curve: noise scale against increment scale (matplotlib).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default the current axes).
+        """
         import matplotlib.pyplot as plt
 
         if ax is None:
@@ -295,6 +315,9 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         off against each other through the shared trajectory).
     process_noise : float, array_like or Box, optional
         Process-noise radii ``|w_k| <= r_w`` (state space, identity matrix).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances; the others are control inputs.
 
     Returns
     -------
@@ -353,6 +376,26 @@ def noise_tradeoff(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, 
     is consistent when ``|dd| <= beta * increment`` (one LP each, see
     :func:`calibrate_noise`). Pairs above the curve are consistent, pairs
     below are not; ``alpha`` never increases with ``beta``.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The model.
+    Y : array_like, shape (N, l)
+        Measurements (NaN: missing).
+    U : array_like, shape (N, p), optional
+        Inputs (required when the system has inputs).
+    increment : array_like or Box or ConstrainedZonotope
+        Shape of the increment bound ``|dd| <= beta * increment``.
+    betas : array_like, optional
+        Increment scales (default 13 points log-spaced over ``[1e-3, 1e3]``).
+    shape : array_like, optional
+        Shape of the noise bound (per-channel radii; default ones).
+    process_noise : array_like or Box or ConstrainedZonotope, optional
+        Bound of the process noise ``w`` (as in :class:`SMFDO`).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances; the others are control inputs.
     """
     sys, lp, inc, r_v = _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs)
     b = np.logspace(-3, 3, 13) if betas is None else np.asarray(betas, dtype=float).reshape(-1)

@@ -41,6 +41,11 @@ def interval_center(Z: ConstrainedZonotope) -> PointEstimate:
     ``max_i (hi_i - lo_i)/2``. (It is *not* optimal for the Euclidean norm in
     general: see :func:`chebyshev_center`.) Unbounded coordinates give NaN and
     ``radius = inf``.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
     """
     box = Z.interval_hull()
     r = box.radius
@@ -62,6 +67,11 @@ def chebyshev_center(Z: ConstrainedZonotope) -> PointEstimate:
     triangle ``(0,0), (2,0), (1,2)`` has interval-hull centre ``(1, 1)`` with
     Euclidean radius ``sqrt(2) ~ 1.414``, but Chebyshev centre ``(1, 0.75)``
     with radius ``1.25``.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        A bounded set.
 
     Raises
     ------

@@ -93,7 +93,13 @@ class SMFDOStep:
     status: str = "ok"
 
     def contains(self, d: ArrayLike) -> bool:
-        """Whether ``d`` lies in ``[lo, hi]``."""
+        """Whether ``d`` lies in ``[lo, hi]``.
+
+        Parameters
+        ----------
+        d : array_like, shape (q,)
+            A disturbance value.
+        """
         dv = as_vector("d", d, size=self.lo.size)
         return bool(np.all((dv >= self.lo) & (dv <= self.hi)))
 
@@ -247,6 +253,11 @@ class SMFDOResult:
 
     def violations(self, D: ArrayLike) -> int:
         """Number of steps at which the true disturbance ``D[k]`` is outside ``[lo, hi]``.
+
+        Parameters
+        ----------
+        D : array_like, shape (N, q)
+            The true disturbance.
 
         Raises
         ------
@@ -485,6 +496,9 @@ class SMFDO:
         forms would each be used once) go to the reference path (the set
         operations plus HiGHS, with retries). ``False`` forces the reference
         path. ``stats`` counts the steps of each path.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances; the others are control inputs.
 
     Attributes
     ----------
@@ -1216,14 +1230,14 @@ class SMFDO:
             ``N`` rows). When a record is split into consecutive calls, pass
             ``U`` with ``N`` rows: its last row is the input before the first
             step of the next call.
+        progress : bool
+            Show a progress bar (tqdm, on stderr) over the record.
 
         Returns
         -------
         SMFDOResult
             ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``radius`` and
             ``status`` ``(N,)``, ``first_inconsistent``.
-        progress : bool
-            Show a progress bar (tqdm, on stderr) over the record.
 
         Warns
         -----

@@ -125,6 +125,19 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     optimal worst-case error (the reference's radius), the observer's own
     interval radius (SMFDO only) and whether the truth lies in that interval
     (SMFDO only).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The simulated plant, disturbance and noise.
+    specs : sequence of ObserverSpec
+        The observers to run.
+    run : int
+        Run index (selects the random stream, :func:`rng_for_run`).
+    base_seed : int
+        The campaign's seed.
+    reference_window : int or None
+        Window of the reference SMFDO that gives the consistent set (``None``: exact).
     """
     from ..compare import worst_case_error
 

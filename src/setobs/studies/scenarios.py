@@ -37,6 +37,13 @@ def rng_for_run(base_seed: int, run: int) -> np.random.Generator:
 
     Every run is reproducible on its own, independently of how many runs are
     made or in which order (or on which worker) they execute.
+
+    Parameters
+    ----------
+    base_seed : int
+        The campaign's seed.
+    run : int
+        The run index.
     """
     return np.random.default_rng(np.random.SeedSequence(base_seed, spawn_key=(int(run),)))
 
