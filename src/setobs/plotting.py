@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .geometry.plotting import plot_cz as plot_set
+from .results import time_axis
 
 __all__ = ["plot_comparison_bars", "plot_error_curves", "plot_estimate_band", "plot_set"]
 
@@ -26,9 +27,11 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
                        ax: Any = None, label: str = "SMFDO", t: ArrayLike | None = None) -> Any:
     """Estimate, its certified interval ``[lo, hi]`` and the truth (like Li-Cong-Dong Fig. 1(a)).
 
+    A result without an interval (a point observer's) draws the estimate and the truth.
+
     Parameters
     ----------
-    result : SMFDOResult
+    result : SMFDOResult or ObserverResult
     truth : array_like, shape (N, q), optional
     component : int
         Disturbance component to draw.
@@ -38,23 +41,21 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
         name (``result.names``).
     """
     ax = _ax(ax)
-    N = result.lo.shape[0]
+    N = result.estimate.shape[0]
     dt = getattr(result, "dt", None)
     if t is not None:
         k = np.asarray(t, dtype=float)[:N]
-        xlabel = "time [s]"
-    elif dt:
-        k, xlabel = np.arange(N) * dt, "time [s]"
     else:
-        k, xlabel = np.arange(N), "k"
+        k = time_axis(N, dt)
     names = getattr(result, "names", ()) or ()
-    lo, hi = result.lo[:, component], result.hi[:, component]
-    ok = np.isfinite(lo) & np.isfinite(hi)
-    ax.fill_between(k[ok], lo[ok], hi[ok], alpha=0.3, label=f"{label} interval")
+    if hasattr(result, "lo"):
+        lo, hi = result.lo[:, component], result.hi[:, component]
+        ok = np.isfinite(lo) & np.isfinite(hi)
+        ax.fill_between(k[ok], lo[ok], hi[ok], alpha=0.3, label=f"{label} interval")
     ax.plot(k, result.estimate[:, component], lw=1.2, label=f"{label} estimate")
     if truth is not None:
         ax.plot(k, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
-    ax.set_xlabel(xlabel)
+    ax.set_xlabel("time [s]" if t is not None or dt else "k")
     ax.set_ylabel(names[component] if len(names) > component else f"d[{component}]")
     ax.legend(loc="best", fontsize=7)
     return ax

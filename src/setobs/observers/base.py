@@ -65,10 +65,6 @@ class ObserverResult:
     def __iter__(self):
         return iter((self.time, self.estimate))
 
-    def _names(self) -> list[str]:
-        q = self.estimate.shape[1]
-        return list(self.names) if len(self.names) == q else [f"d{i}" for i in range(q)]
-
     def to_pandas(self) -> Any:
         """A ``pandas.DataFrame``: one column per disturbance (the estimate), then the
         state estimates ``x_hat_<i>`` if any; indexed by time or step.
@@ -81,7 +77,9 @@ class ObserverResult:
         import pandas as pd
 
         N = self.estimate.shape[0]
-        cols = dict(zip(self._names(), self.estimate.T, strict=True))
+        q = self.estimate.shape[1]
+        names = list(self.names) if len(self.names) == q else [f"d{i}" for i in range(q)]
+        cols = dict(zip(names, self.estimate.T, strict=True))
         if self.x_hat is not None:
             cols.update({f"x_hat_{i}": col for i, col in enumerate(self.x_hat.T)})
         return pd.DataFrame(cols, index=time_index(N, self.dt))
@@ -103,17 +101,10 @@ class ObserverResult:
         matplotlib Axes
             The axes drawn on.
         """
-        import matplotlib.pyplot as plt
+        from ..plotting import plot_estimate_band
 
-        ax = plt.gca() if ax is None else ax
-        t = self.time
-        ax.plot(t, self.estimate[:, component], lw=1.2, label=f"{self.observer} estimate")
-        if truth is not None:
-            ax.plot(t, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
-        ax.set_xlabel("time [s]" if self.dt else "k")
-        ax.set_ylabel(self._names()[component])
-        ax.legend(loc="best", fontsize=7)
-        return ax
+        return plot_estimate_band(self, truth=truth, component=component, ax=ax,
+                                  label=self.observer)
 
     def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
         """One row (index ``observer``): steps, delay and, with the truth, the mean and
