@@ -186,6 +186,12 @@ class Record:
         Sampling time (from the time column or given).
     output_names, input_names : tuple of str
         Column names (or ``col<i>``).
+    Y : ndarray, shape (N, l)
+        Measured outputs (NaN: missing).
+    U : ndarray, shape (N, p) or None
+        Applied inputs.
+    t : ndarray, shape (N,)
+        Time stamps (``k dt``, or the step ``k`` without a sampling time).
     """
 
     Y: NDArray[np.float64]

@@ -39,6 +39,10 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
         Time axis; default ``k dt`` when the result knows the sampling time
         (``result.dt``), else the step ``k``. The y label is the disturbance's
         name (``result.names``).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on (default: a new figure).
+    label : str
+        Legend prefix of the estimate and its interval.
     """
     ax = _ax(ax)
     N = result.estimate.shape[0]

@@ -26,6 +26,17 @@ class AugmentedSystem:
     ``z[k+1] = A z[k] + Gamma_bar u[k] + E dd[k]``, ``y[k] = C z[k]``, with
     ``A = [[Phi, G], [0, I_q]]``, ``Gamma_bar = [Gamma; 0]``, ``E = [0; I_q]``,
     ``C = [Xi, 0]``.
+
+    Attributes
+    ----------
+    A : ndarray, shape (n + q, n + q)
+        ``[[Phi, G], [0, I_q]]``.
+    Gamma : ndarray, shape (n + q, p)
+        ``[Gamma; 0]``.
+    E : ndarray, shape (n + q, q)
+        ``[0; I_q]``.
+    C : ndarray, shape (l, n + q)
+        ``[Xi, 0]``.
     """
 
     A: NDArray[np.float64]

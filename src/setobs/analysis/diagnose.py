@@ -28,6 +28,23 @@ class DesignVerdict:
 
     ``decided`` is ``False`` when the verdict is undecidable at this precision
     (``exists`` is then ``False`` and ``reason`` says why).
+
+    Attributes
+    ----------
+    design : str
+        The design (a key of the :class:`Diagnosis`).
+    exists : bool
+        Whether the design exists.
+    condition : str
+        The deciding condition, in words.
+    numbers : dict
+        The quantities it was decided on.
+    reason : str
+        One line: why not (empty when it exists).
+    source : str
+        Paper and result the condition comes from.
+    decided : bool
+        ``False`` when undecidable at double precision.
     """
 
     design: str
@@ -57,6 +74,10 @@ class Diagnosis:
     zeros : ZerosResult
     relative_degrees : RelativeDegreeResult
     uio : UIOResult
+    system : LinearSystem
+        The diagnosed system.
+    notes : list of str
+        Remarks that apply to several designs (e.g. undecidable rank decisions).
     """
 
     system: LinearSystem

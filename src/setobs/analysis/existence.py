@@ -90,6 +90,8 @@ class BoundedDOReport:
     recoverable_functionals : ndarray, shape (k, q)
         Rows ``w`` such that ``w^T d`` is recoverable with bounded error.
     decisions : list of RankDecision
+    q : int
+        Number of disturbance channels.
     """
 
     satisfied: bool
@@ -272,6 +274,8 @@ def pio_error_poles(sys: LinearSystem, P: ArrayLike, L: ArrayLike) -> ErrorPoles
     ----------
     P : array_like, shape (n, l)
     L : array_like, shape (q, l)
+    sys : LinearSystem or control.StateSpace
+        The plant.
     """
     sys = require_system(sys)
     P_a = as_matrix("P", P, rows=sys.n, cols=sys.l)
@@ -324,7 +328,18 @@ def higher_order_error_poles(
 
 
 def fu_wang_eq10_matrix(z: complex, A, C, P0, L0, L1) -> NDArray[np.complex128]:
-    """``M(z) = (z - 1)^2 (zI - (A - P0 C)) + (z L0 + (z - 1) L1) C`` (eq. (10) times ``z^3``)."""
+    """``M(z) = (z - 1)^2 (zI - (A - P0 C)) + (z L0 + (z - 1) L1) C`` (eq. (10) times ``z^3``).
+
+    Parameters
+    ----------
+    z : complex
+        Where to evaluate.
+    A, C : array_like
+        The plant's ``A`` (n, n) and ``C`` (l, n).
+    P0, L0, L1 : array_like
+        The higher-order observer's gains: ``P0`` (n, l) of the state update, ``L0`` and
+        ``L1`` (n, l) of the two disturbance-estimate terms (Fu-Wang eq. (10)).
+    """
     A_a, C_a = np.asarray(A, float), np.asarray(C, float)
     Ab = A_a - np.asarray(P0, float) @ C_a
     n = A_a.shape[0]

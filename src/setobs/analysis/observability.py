@@ -181,6 +181,23 @@ class ObservabilityDecomposition:
     ``B_tilde = T D^-1 [0; I_q]``, ``Gamma_tilde = T D^-1 [Gamma; 0]``,
     ``C_tilde = C_b T^T = [C_o, 0]``; measurements enter as
     ``y_b = diag(output_scale)^-1 y``.
+
+    Attributes
+    ----------
+    T_o, T_obar : ndarray
+        Rows of ``T`` spanning the observable and the unobservable part.
+    A_o, A_21, A_obar : ndarray
+        Blocks of ``A_tilde``.
+    B_o, B_obar : ndarray
+        Blocks of ``B_tilde`` (where ``dd`` enters).
+    Gamma_o, Gamma_obar : ndarray
+        Blocks of ``Gamma_tilde`` (where ``u`` enters).
+    C_o : ndarray
+        Nonzero block of ``C_tilde``.
+    report : ObservabilityReport
+        The rank decisions behind the split.
+    state_scale, output_scale : ndarray or None
+        The balancing ``D`` and output scaling (``None``: identity).
     """
 
     T_o: NDArray[np.float64]

@@ -40,6 +40,11 @@ class RelativeDegreeResult:
     sum_equals_n : bool
         Whether ``r_1 + ... + r_p = n`` (with ``V0`` nonsingular this is
         condition 2 of Lemma 2, equivalent to "no invariant zeros").
+    n : int
+        State dimension of the extended system.
+    decision : RankDecision or None
+        The rank decision behind ``nonsingular`` (``None`` when ``V0`` is not square or
+        undefined).
     """
 
     degrees: tuple[int | None, ...]
@@ -227,6 +232,12 @@ class UIOResult:
         Minimal delay ``tau`` of eqs. (25)-(26) for the augmented system (14),
         ``None`` if not reconstructable.
     zeros : ZerosResult
+    rank_XiG, rank_G : int
+        The two ranks of condition (a).
+    unstable_zeros : ndarray of complex
+        Invariant zeros with ``|z| >= 1`` (those that break condition (b)).
+    decisions : list of RankDecision
+        Every rank decision taken.
     """
 
     condition_a: bool

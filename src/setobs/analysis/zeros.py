@@ -33,6 +33,10 @@ class ZerosResult:
     method : str
         ``"reduction"`` (staircase reduction to a regular pencil without
         infinite eigenvalues).
+    n : int
+        State dimension.
+    q : int
+        Number of disturbance channels.
     """
 
     zeros: NDArray[np.complex128]
@@ -49,7 +53,14 @@ class ZerosResult:
         return min_margin(self.decisions)
 
     def outside_or_on_unit_circle(self, tol: float = UNIT_CIRCLE_TOL) -> NDArray[np.complex128]:
-        """Zeros with ``|z| >= 1 - tol``."""
+        """Zeros with ``|z| >= 1 - tol``.
+
+        Parameters
+        ----------
+        tol : float
+            Zeros with ``|z| >= 1 - tol`` count as on the circle (default
+            ``UNIT_CIRCLE_TOL``).
+        """
         return self.zeros[np.abs(self.zeros) >= 1.0 - tol]
 
     def __repr__(self) -> str:

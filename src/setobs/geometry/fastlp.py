@@ -69,7 +69,13 @@ def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Objectives ``[W_0, -W_0, W_1, -W_1, ...]`` of the interval hull of ``{W z}``."""
+    """Objectives ``[W_0, -W_0, W_1, -W_1, ...]`` of the interval hull of ``{W z}``.
+
+    Parameters
+    ----------
+    W : ndarray, shape (d, n)
+        Map from the factors to the coordinates of the hull.
+    """
     W2 = np.empty((2 * W.shape[0], W.shape[1]))
     W2[0::2] = W
     W2[1::2] = -W
@@ -83,7 +89,17 @@ def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64],
     :func:`hull_objectives`, rounded outward as
     :meth:`ConstrainedZonotope.interval_hull` does (and widened by ``c_err``,
     a bound on the error of ``c``); ``None`` if the certified bounds cross
-    (emptiness must then be decided by the reference path)."""
+    (emptiness must then be decided by the reference path).
+
+    Parameters
+    ----------
+    bounds : ndarray, shape (2 d,)
+        Certified lower bounds of the objectives of :func:`hull_objectives`.
+    c : ndarray, shape (d,)
+        Centre of the set in the mapped coordinates.
+    c_err : ndarray, shape (d,), optional
+        Bound on the rounding error of ``c``.
+    """
     low, upp = bounds[0::2], -bounds[1::2]
     if (low > upp).any():
         return None
@@ -104,6 +120,11 @@ class LPState:
     explicit basis inverse and the pivot counter, plus the output buffers.
     Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
     structure it uses, so its results depend only on its own data.
+
+    Parameters
+    ----------
+    lp : FixedStructureLP
+        The structure the state belongs to (fixes the sizes and the initial basis).
     """
 
     __slots__ = ("bases", "binv", "bounds", "codes", "npiv", "objs", "upper", "ys")
@@ -301,14 +322,29 @@ class FixedStructureLP:
             return bounds.copy(), ok, st.ys.copy(), st.objs.copy()
         return bounds.copy(), ok
 
-    def minimize_all_unchecked(self, b: NDArray[np.float64], h: NDArray[np.float64], st: LPState,
-                      b_scale: float = 0.0, b_err: NDArray[np.float64] | None = None
-                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def minimize_all_unchecked(self, b: NDArray[np.float64], h: NDArray[np.float64],
+                               st: LPState, b_scale: float = 0.0,
+                               b_err: NDArray[np.float64] | None = None
+                               ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """:meth:`minimize_all` for contiguous float arrays with the right free factors.
 
         ``b_scale`` is the magnitude of the terms ``b`` was computed from (its
         rounding errors are relative to it, not to ``b`` after cancellation).
         The returned bounds are the state's buffer, reused by the next call.
+
+        Parameters
+        ----------
+        b : ndarray, shape (m,)
+            Right-hand side (contiguous float64).
+        h : ndarray, shape (n,)
+            Factor bounds: ``inf`` exactly on the structure's free factors.
+        st : LPState
+            Warm-start state, updated in place.
+        b_scale : float
+            Magnitude of the terms ``b`` was computed from.
+        b_err : ndarray, shape (m,), optional
+            Bound on the uncertainty of ``b``; the bounds hold for every right-hand side
+            within it.
         """
         bounds, codes = st.bounds, st.codes
         if not self.usable:

@@ -479,7 +479,19 @@ class FactorPolytope:
         w_err: NDArray[np.float64] | None = None,
         w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> float:
-        """Certified lower bound of ``min w^T xi`` from multiplier ``y``."""
+        """Certified lower bound of ``min w^T xi`` from multiplier ``y``.
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        y : ndarray, shape (n_c,)
+            Multiplier of the equality constraints (any vector gives a valid bound).
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+        """
         return self._certify(w, y, w_err, w_pair)[0]
 
     def _certify(self, w, y, w_err=None, w_pair=None) -> tuple[float, NDArray[np.float64]]:
@@ -491,13 +503,30 @@ class FactorPolytope:
 
     @staticmethod
     def objective_scale(w: NDArray[np.float64]) -> float:
-        """A power of two close to ``max |w|`` (dividing by it is exact)."""
+        """A power of two close to ``max |w|`` (dividing by it is exact).
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        """
         m = float(np.abs(w).max(initial=0.0))
         if m == 0.0 or not np.isfinite(m):
             return 1.0
         return float(np.ldexp(1.0, np.frexp(m)[1]))
 
     def solve_objective(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
+        """Run HiGHS on objective ``w / scale``; return its model status.
+
+        Parameters
+        ----------
+        hs : highspy.Highs
+            A model of this polytope (:meth:`highs_model`).
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        scale : float
+            Power of two the objective is divided by (:meth:`objective_scale`).
+        """
         hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w / scale)
         hs.run()
         return hs.getModelStatus()
@@ -536,7 +565,20 @@ class FactorPolytope:
         with self._lock:
             return self.minimize_under_lock(w, w_err, w_pair)
 
-    def minimize_under_lock(self, w, w_err, w_pair) -> LPOutcome:
+    def minimize_under_lock(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
+                            w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+                            ) -> LPOutcome:
+        """:meth:`minimize` for a caller that holds the polytope's lock.
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+        """
         if self.n_c == 0:
             # No constraints: the minimum over the box is analytic and exact.
             bound = self.certify(w, np.zeros(0), w_err, w_pair)
@@ -591,8 +633,20 @@ class FactorPolytope:
         self.fallbacks += 1
         return LPOutcome(best, np.nan, None, "fallback")
 
-    def try_compiled(self, w, w_err, w_pair) -> LPOutcome | None:
-        """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here."""
+    def try_compiled(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
+                     w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+                     ) -> LPOutcome | None:
+        """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here.
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+        """
         from .fastlp import FixedStructureLP
 
         lp = FixedStructureLP(self.A, w[None, :], self._unb, self.radius)
@@ -670,6 +724,15 @@ class FactorPolytope:
         :meth:`emptiness` (and a valid bound for the exact set). If the relaxed
         LP does not solve either, the ``"fallback"`` answer of :meth:`minimize`
         is returned.
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
         """
         with self._lock:
             rep = self.emptiness()

@@ -131,6 +131,14 @@ class PointObserver:
     ``step(y_k, u_k)`` consumes the measurement at step ``k`` and the input
     applied at step ``k`` (which affects ``x_(k+1)``), and returns the current
     disturbance estimate (NaN while unavailable).
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The plant.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
 
     name = "observer"
@@ -161,7 +169,15 @@ class PointObserver:
         return yv, uv
 
     def step(self, y: ArrayLike, u: ArrayLike | None = None) -> NDArray[np.float64]:
-        """Process ``y_k`` (and ``u_k``); return the disturbance estimate ``d_hat_k``."""
+        """Process ``y_k`` (and ``u_k``); return the disturbance estimate ``d_hat_k``.
+
+        Parameters
+        ----------
+        y : array_like, shape (l,)
+            Measurement ``y_k`` (feedthrough-free: ``y_k - Du u_k``).
+        u : array_like, shape (p,), optional
+            Input ``u_k`` applied at step ``k`` (required when the system has inputs).
+        """
         raise NotImplementedError  # pragma: no cover
 
     def state_estimate(self) -> NDArray[np.float64] | None:
@@ -174,6 +190,14 @@ class PointObserver:
         With a feedthrough (``sys.Du != 0``), ``Du u_k`` is subtracted from
         ``y_k`` first (``U`` is then required); :meth:`step` takes the
         feedthrough-free measurement ``y_k - Du u_k``.
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+            Measured outputs (NaN rows are missing samples where the observer supports
+            them).
+        U : array_like, shape (N, p), optional
+            Applied inputs (required when the system has inputs).
         """
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
@@ -213,6 +237,14 @@ class StateSpaceObserver(PointObserver):
 
     Subclasses set ``F, K, M, H`` (and ``Hx`` for the state estimate), the
     initial state ``xi0`` and an optional per-channel output delay.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The plant.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
     """
 
     def _init_state_space(self, F, K, M, H, Hx=None, xi0=None, channel_delays=None,

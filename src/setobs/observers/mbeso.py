@@ -17,7 +17,17 @@ __all__ = ["MBESO", "VariantMBESO", "decoupled_gain", "mbeso_impulse_response"]
 
 
 def mbeso_impulse_response(k: int, r: int, omega: float) -> float:
-    """``h_i(k)`` of Chen-Gao-Lin eq. (54): response of ``f_i - f_hat_i`` to unit ``Delta f_i``."""
+    """``h_i(k)`` of Chen-Gao-Lin eq. (54): response of ``f_i - f_hat_i`` to unit ``Delta f_i``.
+
+    Parameters
+    ----------
+    k : int
+        Step after the unit increment.
+    r : int
+        Relative degree ``r_i`` of the channel.
+    omega : float
+        Observer eigenvalue ``omega_i`` of the channel (in ``[0, 1)``).
+    """
     if k < 1:
         return 0.0
     if k <= r + 1:
@@ -50,6 +60,18 @@ def decoupled_gain(A: NDArray[np.float64], E: NDArray[np.float64], C: NDArray[np
     residual is returned; it is zero when the construction exists) and
     ``L = W^-1 K``. The tests check the resulting error responses against
     eq. (54) and the delays of Theorems 1-3.
+
+    Parameters
+    ----------
+    A, E, C : ndarray
+        The extended system (Chen-Gao-Lin eq. (6)): ``A`` (n + p, n + p), ``E`` (n + p, p),
+        ``C`` (p, n + p).
+    degrees : sequence of int
+        Relative degrees ``r_i`` (Lemma 2).
+    V0 : ndarray, shape (p, p)
+        Nonsingular ``V0`` of eq. (9).
+    omegas : sequence of float
+        Eigenvalue ``omega_i`` of block ``i``.
 
     Returns
     -------

@@ -46,6 +46,17 @@ class DelayedUIO(PointObserver):
     (the ``f`` part of ``X_hat(k)``) becomes available at step ``k + tau``:
     ``run(Y).estimate[t]`` estimates ``d(t - tau)`` and is NaN for ``t < tau``.
 
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The plant.
+    poles : sequence of complex or float
+        Eigenvalues of ``J = A - K O_tau`` (one value: all at it; default 0, a dead-beat
+        error).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+
     Raises
     ------
     DesignError

@@ -58,6 +58,8 @@ class NoiseCalibration:
         Measured samples used (rows with at least one finite entry).
     status : str
         HiGHS's model status.
+    info : dict
+        Solver details (``objective``: the LP's optimal value).
     """
 
     radii: NDArray[np.float64]

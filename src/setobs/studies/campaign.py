@@ -59,6 +59,15 @@ class ObserverSpec:
     per-channel radii, default the scenario's); point observers take their
     constructor keywords (e.g. ``omega`` for the MB-ESO). Every parameter is
     honoured or refused: an unknown name raises at construction.
+
+    Attributes
+    ----------
+    name : str
+        Display name (distinct within a campaign).
+    kind : str
+        A key of :data:`OBSERVER_KINDS`.
+    params : dict
+        Keywords of the observer (see above).
     """
 
     name: str
@@ -285,7 +294,7 @@ def run_campaign(
     out_dir: str | os.PathLike[str] | None = None,
     progress: bool = True,
 ) -> CampaignResult:
-    """Run ``runs`` seeded runs of ``scenario`` for every observer in ``specs``.
+    r"""Run ``runs`` seeded runs of ``scenario`` for every observer in ``specs``.
 
     Parameters
     ----------
@@ -302,6 +311,19 @@ def run_campaign(
         refused (runs are never mixed).
     progress : bool
         Show a tqdm progress bar.
+    scenario : Scenario
+        The simulated plant, disturbance and noise.
+    specs : sequence of ObserverSpec
+        The observers to run (distinct names).
+    runs : int
+        Number of runs.
+    base_seed : int
+        The campaign's seed; run ``r`` draws from :func:`rng_for_run`\ ``(base_seed, r)``,
+        the same on every back end.
+    reference_window : int or None
+        Window of the reference SMFDO that gives the consistent set (``None``: exact mode,
+        the true consistent set; a window gives an outer approximation, so worst-case scores
+        are upper bounds).
 
     Returns
     -------

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -50,7 +50,19 @@ def rng_for_run(base_seed: int, run: int) -> np.random.Generator:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """One simulated record: ``Y (N, l)``, true ``D (N, q)``, ``X (N, n)``, inputs ``U``."""
+    """One simulated record: ``Y (N, l)``, true ``D (N, q)``, ``X (N, n)``, inputs ``U``.
+
+    Attributes
+    ----------
+    Y : ndarray, shape (N, l)
+        Measured outputs.
+    D : ndarray, shape (N, q)
+        True disturbance.
+    X : ndarray, shape (N, n)
+        True state.
+    U : ndarray, shape (N, p) or None
+        Applied inputs.
+    """
 
     Y: NDArray[np.float64]
     D: NDArray[np.float64]
@@ -95,7 +107,6 @@ class Scenario:
     generator: str = "random_walk"
     noise_std: float = 0.0
     d0: tuple[float, ...] | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if isinstance(self.system, PathLike):
@@ -140,19 +151,39 @@ class Scenario:
         return load_model(self.system)
 
     def increment_set(self, q: int) -> ConstrainedZonotope:
-        """``{dd : |dd_i| <= increment}``."""
+        """``{dd : |dd_i| <= increment}``.
+
+        Parameters
+        ----------
+        q : int
+            Number of disturbance channels.
+        """
         r = np.full(q, float(self.increment))
         return ConstrainedZonotope.from_box(-r, r)
 
     def initial_state_set(self, n: int) -> ConstrainedZonotope | None:
-        """``{x0 : |x0_i| <= x0_box}`` (``None`` for ``R^n``)."""
+        """``{x0 : |x0_i| <= x0_box}`` (``None`` for ``R^n``).
+
+        Parameters
+        ----------
+        n : int
+            State dimension.
+        """
         if self.x0_box is None:
             return None
         r = np.full(n, float(self.x0_box))
         return ConstrainedZonotope.from_box(-r, r)
 
     def disturbance(self, q: int, rng: np.random.Generator) -> NDArray[np.float64]:
-        """The disturbance sequence ``D (N, q)``."""
+        """The disturbance sequence ``D (N, q)``.
+
+        Parameters
+        ----------
+        q : int
+            Number of disturbance channels.
+        rng : numpy.random.Generator
+            Random stream.
+        """
         N, r = int(self.horizon), float(self.increment)
         if self.generator == "random_walk":
             d0 = np.zeros(q) if self.d0 is None else np.asarray(self.d0, float)
@@ -177,7 +208,13 @@ class Scenario:
         return rng.normal(mean, np.sqrt(var), size=(N, q))
 
     def simulate(self, rng: np.random.Generator) -> Trajectory:
-        """Simulate ``x+ = Phi x + G d``, ``y = Xi x (+ noise)`` from a random ``x0`` in the set."""
+        """Simulate ``x+ = Phi x + G d``, ``y = Xi x (+ noise)`` from a random ``x0`` in the set.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random stream (initial state, disturbance, noise).
+        """
         sys = self.build_system()
         D = self.disturbance(sys.q, rng)
         x = (rng.uniform(-self.x0_box, self.x0_box, sys.n) if self.x0_box is not None
