@@ -26,14 +26,12 @@ import setobs as so
 def data(N: int, seed: int = 0):
     sys = so.examples.chang2006()
     rng = np.random.default_rng(seed)
-    x, d = np.array([0.0, 1.0, 0.0]), np.zeros(2)
-    Y, D = [], []
+    d, D = np.zeros(2), []
     for _ in range(N):
-        Y.append(sys.Xi @ x)
         D.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
         d = d + rng.uniform(-1, 1, 2)  # eq. (27): |dd_i| <= 1
-    return sys, np.array(Y), np.array(D)
+    D = np.array(D)
+    return sys, sys.simulate(D, x0=[0.0, 1.0, 0.0])[0], D
 
 
 def time_updates(obs, Y, first: int):
@@ -44,7 +42,7 @@ def time_updates(obs, Y, first: int):
         dt = time.perf_counter() - t0
         if k >= first:
             times.append(dt)
-            radii.append(st.radius)
+            radii.append(st.error_bound)
     return times, radii
 
 

@@ -66,7 +66,8 @@ def hull_PZ_times(sys, sc, trs):
             if k >= 15 and obs.fast_path_instance is not None:
                 inst.append(obs.fast_path_instance)
     model = inst[0][0]
-    lp = FixedStructureLP(model.A, hull_objectives(obs.P @ model.G), model.free, model.radius)
+    lp = FixedStructureLP(model.A, hull_objectives(obs.P @ model.G), model.free,
+                          model.unbounded_radius)
     state = lp.new_state()  # warm-started from step to step, as in the SMFDO
     fast_t, ref_t, sets, maxdiff = [], [], [], 0.0
     for m, c, b, h in inst:

@@ -164,8 +164,8 @@ def test_every_smfdo_parameter_of_a_spec_is_honoured_or_refused():
 
     t = pd.DataFrame(rows).set_index(["observer", "k"])
     late = t.xs(11, level="k")
-    assert late.loc["b", "radius"] > late.loc["a", "radius"]  # the wider increment set
-    assert abs(late.loc["c", "radius"] - late.loc["a", "radius"]) < 1e-7
+    assert late.loc["b", "error_bound"] > late.loc["a", "error_bound"]  # the wider increment set
+    assert abs(late.loc["c", "error_bound"] - late.loc["a", "error_bound"]) < 1e-7
 
 
 def test_observer_names_must_be_distinct():

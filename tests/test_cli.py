@@ -180,11 +180,7 @@ def _motor_record(tmp_path, N=400, seed=0, noise=1e-4, gap=None):
     sys_ = so.examples.servo_motor()
     tau = 0.05 + 0.01 * np.sin(np.arange(N) * 0.02)
     d = 0.03 + np.cumsum(rng.uniform(-1e-3, 1e-3, N))
-    x = np.zeros(2)
-    Y = np.empty(N)
-    for k in range(N):
-        Y[k] = x[0] + noise * rng.uniform(-1, 1)
-        x = sys_.Phi @ x + sys_.Gamma[:, 0] * tau[k] + sys_.G[:, 0] * d[k]
+    Y = sys_.simulate(d[:, None], tau[:, None])[0][:, 0] + noise * rng.uniform(-1, 1, N)
     if gap is not None:
         Y[gap] = np.nan
     f = tmp_path / "rec.csv"
@@ -208,7 +204,7 @@ def test_estimate_end_to_end_contains_the_truth(tmp_path, capsys):
     import pandas as pd
 
     df = pd.read_csv(out / "estimate.csv")
-    assert list(df.columns) == ["time", "tau_L", "tau_L_lo", "tau_L_hi", "radius", "status"]
+    assert list(df.columns) == ["time", "tau_L", "tau_L_lo", "tau_L_hi", "error_bound", "status"]
     np.testing.assert_allclose(df["time"], np.arange(400) * 1e-3, atol=1e-9)
     ok = np.isfinite(df["tau_L_lo"])
     assert ok.sum() > 350

@@ -15,7 +15,7 @@ import re
 PUBLIC_MODULES = [
     "setobs", "setobs.geometry", "setobs.geometry.zonotope", "setobs.geometry.box",
     "setobs.geometry.lp", "setobs.geometry.polytope", "setobs.geometry.reduction",
-    "setobs.geometry.plotting", "setobs.geometry.fastlp", "setobs.analysis",
+    "setobs.geometry.fastlp", "setobs.analysis",
     "setobs.setmembership", "setobs.setmembership.estimates", "setobs.observers",
     "setobs.studies", "setobs.compare", "setobs.plotting", "setobs.io", "setobs.systems",
     "setobs.examples", "setobs.results", "setobs.exceptions",

@@ -56,10 +56,7 @@ def test_discrete_statespace_keeps_feedthrough_and_round_trips():
     U = rng.normal(size=(N, 2))
     Dd = np.cumsum(rng.normal(size=(N, 1)), axis=0)
     resp = control.forced_response(back, T=np.arange(N) * 0.1, U=np.hstack([U, Dd]).T)
-    x, Y = np.zeros(3), np.empty((N, 2))
-    for k in range(N):
-        Y[k] = sys.Xi @ x + sys.Du @ U[k]
-        x = sys.Phi @ x + sys.Gamma @ U[k] + sys.G @ Dd[k]
+    Y, _ = sys.simulate(Dd, U)
     np.testing.assert_allclose(resp.outputs.T, Y, rtol=1e-10, atol=1e-10)
 
 
@@ -150,3 +147,19 @@ def test_simulate_against_scipy_dlsim():
     np.testing.assert_allclose(X, x_ref, rtol=1e-12, atol=1e-14)
     with pytest.raises(so.DimensionError, match="U is required"):
         sys.simulate(D)
+
+
+def test_augmented_order_two_propagates_x_d_and_the_increment():
+    """``z = [x; d; Delta d]``: one step of ``A z + Gamma u + E w`` against the plant
+    ``x+ = Phi x + G d + Gamma u``, ``d+ = d + Delta d``, ``Delta d+ = Delta d + w``."""
+    rng = np.random.default_rng(3)
+    sys = so.LinearSystem(rng.normal(size=(3, 3)), rng.normal(size=(3, 2)),
+                          rng.normal(size=(2, 3)), Gamma=rng.normal(size=(3, 1)))
+    aug = sys.augmented(order=2)
+    x, d, dd, u, w = (rng.normal(size=k) for k in (3, 2, 2, 1, 2))
+    z1 = aug.A @ np.concatenate([x, d, dd]) + aug.Gamma @ u + aug.E @ w
+    np.testing.assert_allclose(z1, np.concatenate([sys.Phi @ x + sys.G @ d + sys.Gamma @ u,
+                                                   d + dd, dd + w]), atol=1e-12)
+    np.testing.assert_allclose(aug.C @ np.concatenate([x, d, dd]), sys.Xi @ x, atol=1e-12)
+    with pytest.raises(so.DimensionError, match="order"):
+        sys.augmented(order=3)

@@ -57,7 +57,7 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
     print(repr(diagnose(sys_)).split("\n")[1])
     res = {w: SMFDO(sys_, window=w, **kw).run(traj.Y) for w in (3, 10, None)}
     exact = res[None]
-    est = {f"SMFDO delta={w}": r.estimate for w, r in res.items() if w is not None}
+    est = {f"SMFDO window={w}": r.estimate for w, r in res.items() if w is not None}
     est["SMFDO exact"] = exact.estimate
     est["PIO (designed, Fu-Wang poles)"] = PIO(sys_).run(traj.Y).estimate
     est["PIO (printed gains, baseline)"] = PIO.chang2006_baseline(sys_).run(traj.Y).estimate
@@ -70,14 +70,14 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
         actual = np.nanmean(np.abs(e[10:] - traj.D[10:]).max(axis=1))
         viol = ""
         for w, r in res.items():
-            label = "SMFDO exact" if w is None else f"SMFDO delta={w}"
+            label = "SMFDO exact" if w is None else f"SMFDO window={w}"
             if name == label:
                 viol = str(r.violations(traj.D))
         print(f"{name:<32} {s['worst_case_error']:>12.4g} {s['ratio']:>10.3g} {actual:>12.4g}"
               f"  {viol}")
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     for i, ax in enumerate(axes):
-        plot_estimate_band(res[10], traj.D, component=i, ax=ax, label="SMFDO (delta=10)")
+        plot_estimate_band(res[10], traj.D, component=i, ax=ax, label="SMFDO (window=10)")
     axes[0].set_title("SMFDO on the Li-Cong-Dong example: truth, estimate, certified interval")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
@@ -357,7 +357,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                                     "--calibrate: the shape to scale")
     pe.add_argument("--calibrate", action="store_true",
                     help="use the smallest noise bound that makes the record consistent")
-    pe.add_argument("--window", default="10", help="SMFDO window delta, or 'exact'")
+    pe.add_argument("--window", default="10", help="SMFDO window (the paper's delta), or 'exact'")
     pe.add_argument("--on-inconsistent", choices=["skip", "reset", "raise"], default="skip")
     pe.add_argument("--out", help="output directory")
     pe.add_argument("--no-plot", action="store_true")

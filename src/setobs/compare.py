@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -10,6 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._deprecation import renamed
 from .results import time_axis
 
 __all__ = ["ComparisonTable", "compare", "worst_case_error"]
@@ -43,7 +43,8 @@ class ComparisonTable:
 
     Per observer and step: ``worst_case_error`` (worst-case infinity-norm error
     of the estimate over the consistent set), ``optimal`` (that of the
-    worst-case-optimal estimate: the interval-hull centre, the SMFDO radius),
+    worst-case-optimal estimate: the interval-hull centre, the reference SMFDO's
+    ``error_bound``),
     ``ratio = worst_case_error / optimal`` (>= 1) and ``outside`` (the estimate
     lies outside the consistent set's interval hull).
 
@@ -54,7 +55,7 @@ class ComparisonTable:
     worst_case_error : dict of str to ndarray, shape (N,)
         Per observer.
     optimal : ndarray, shape (N,)
-        The optimal worst-case error (the reference's radius).
+        The optimal worst-case error (the reference's ``error_bound``).
     outside : dict of str to ndarray of bool, shape (N,)
         Per observer.
     worst_case_error_2, optimal_2 : dict / ndarray, optional
@@ -71,12 +72,7 @@ class ComparisonTable:
     optimal_2: NDArray[np.float64] | None = None
     dt: float | None = None
 
-    @property
-    def error(self) -> dict[str, NDArray[np.float64]]:
-        """Deprecated name of :attr:`worst_case_error`."""
-        warnings.warn("ComparisonTable.error is deprecated; use .worst_case_error",
-                      DeprecationWarning, stacklevel=2)
-        return self.worst_case_error
+    error = renamed("error", "worst_case_error")
 
     @property
     def rows(self) -> list[dict]:
@@ -160,7 +156,7 @@ class ComparisonTable:
         t = time_axis(self.optimal.size, self.dt)
         for name in self.observers:
             ax.plot(t, self.worst_case_error[name], lw=1.0, label=name)
-        ax.plot(t, self.optimal, "k", lw=1.5, label="optimal (SMFDO radius)")
+        ax.plot(t, self.optimal, "k", lw=1.5, label="optimal (exact SMFDO)")
         ax.set_xlabel("time [s]" if self.dt else "k")
         ax.set_ylabel("worst-case error")
         if logy:
@@ -203,7 +199,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
     euclidean : bool
         Also compute Euclidean worst-case errors ``max_v ||d_hat - v||_2`` over
         the vertices ``v`` of the consistent set, and the optimal (Chebyshev)
-        radius. Needs the SMFDO run with ``keep_sets=True``; steps where the set
+        worst-case error. Needs the SMFDO run with ``keep_sets=True``; steps where the set
         is unbounded give ``inf``.
     allow_inconsistent : bool
         Score against a reference whose run skipped or reset measurements
@@ -225,12 +221,12 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
         raise ValueError(
             f"the reference SMFDO run has {bad.size} step(s) with status {kinds} (first at "
             f"record step {bad[0]}): its measurements there were inconsistent with the model, "
-            "so its bands are not the consistent set and its radius is not the optimal "
+            "so its bands are not the consistent set and its error bound is not the optimal "
             "error. Fix the model or the uncertainty sets, or pass "
             "allow_inconsistent=True to compare anyway")
     lo, hi = np.asarray(reference.lo), np.asarray(reference.hi)
     dt = getattr(reference, "dt", None)
-    optimal = np.asarray(reference.radius, float)
+    optimal = np.asarray(reference.error_bound, float)
     err, out = {}, {}
     for name, est in estimates.items():
         E = np.asarray(est, float)
@@ -251,7 +247,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
         if not np.all(np.isfinite(st.lo)) or not np.all(np.isfinite(st.hi)):
             continue
         V = st.disturbance_set.vertices()
-        opt2[k] = chebyshev_center(st.disturbance_set).radius
+        opt2[k] = chebyshev_center(st.disturbance_set).worst_case_error
         for name, est in estimates.items():
             e = np.asarray(est, float)[k]
             err2[name][k] = (np.linalg.norm(V - e, axis=1).max() if np.all(np.isfinite(e))

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .geometry.plotting import plot_cz as plot_set
+from .geometry._draw import plot_set
 from .results import time_axis
 
 __all__ = ["plot_comparison_bars", "plot_error_curves", "plot_estimate_band", "plot_set"]

@@ -25,7 +25,10 @@ Metric names mean one thing everywhere (tables, summaries, campaign rows):
     :func:`setobs.compare.worst_case_error`).
 ``optimal``
     The smallest possible ``worst_case_error``: that of the interval-hull
-    centre, i.e. the SMFDO's ``radius``.
+    centre, i.e. the exact SMFDO's ``error_bound``.
+``error_bound``
+    An SMFDO's certified bound on its own error, ``max_i (hi_i - lo_i) / 2``
+    (``>= optimal``; equal in exact mode).
 ``ratio``
     ``worst_case_error / optimal`` (``>= 1``).
 ``outside``
@@ -45,8 +48,8 @@ from numpy.typing import NDArray
 __all__ = ["METRICS", "time_axis", "time_index"]
 
 #: The metric vocabulary (see the module docstring).
-METRICS = ("error_inf", "error_2", "worst_case_error", "optimal", "ratio", "outside",
-           "truth_inside")
+METRICS = ("error_inf", "error_2", "worst_case_error", "optimal", "error_bound", "ratio",
+           "outside", "truth_inside")
 
 
 def time_axis(N: int, dt: float | None) -> NDArray[np.float64]:

@@ -21,11 +21,12 @@ DisturbanceInputs = Sequence[int | str] | int | str | None
 
 @dataclass(frozen=True)
 class AugmentedSystem:
-    """The augmented system ``z = [x; d]`` of Li-Cong-Dong, eqs. (9)-(11).
+    """The augmented system ``z = [x; d]`` of Li-Cong-Dong, eqs. (9)-(11)
+    (:meth:`LinearSystem.augmented`; with ``order=2``, ``z = [x; d; Delta d]``).
 
     ``z[k+1] = A z[k] + Gamma_bar u[k] + E dd[k]``, ``y[k] = C z[k]``, with
     ``A = [[Phi, G], [0, I_q]]``, ``Gamma_bar = [Gamma; 0]``, ``E = [0; I_q]``,
-    ``C = [Xi, 0]``.
+    ``C = [Xi, 0]`` (shapes below for ``order=1``).
 
     Attributes
     ----------
@@ -472,13 +473,34 @@ class LinearSystem:
                           outputs=list(self.output_names), states=list(self.state_names))
 
     # ------------------------------------------------------------------ augmented form
-    def augmented(self) -> AugmentedSystem:
-        """The augmented system ``z = [x; d]`` of Li-Cong-Dong, eqs. (9)-(11)."""
+    def augmented(self, order: int = 1) -> AugmentedSystem:
+        """The system with the disturbance (and its differences) as states.
+
+        ``order=1``: ``z = [x; d]`` of Li-Cong-Dong, eqs. (9)-(11) (a constant
+        disturbance driven by its increment ``dd``). ``order=2``:
+        ``z = [x; d; Delta d]`` of Fu-Wang's higher-order observer (eqs. (7)-(9)
+        with ``d = G d*``), ``A = [[Phi, G, 0], [0, I, I], [0, 0, I]]``, driven by
+        the second difference.
+
+        Parameters
+        ----------
+        order : {1, 2}
+            Number of disturbance blocks.
+        """
+        if order not in (1, 2):
+            raise DimensionError(f"order must be 1 or 2, got {order!r}")
         n, q, p, l = self.n, self.q, self.p, self.l
-        A = np.block([[self.Phi, self.G], [np.zeros((q, n)), np.eye(q)]])
-        Gamma = np.vstack([self.Gamma, np.zeros((q, p))])
-        E = np.vstack([np.zeros((n, q)), np.eye(q)])
-        C = np.hstack([self.Xi, np.zeros((l, q))])
+        N = n + order * q
+        A = np.zeros((N, N))
+        A[:n, :n], A[:n, n : n + q] = self.Phi, self.G
+        for i in range(order):
+            blk = slice(n + i * q, n + (i + 1) * q)
+            A[blk, blk] = np.eye(q)
+            if i + 1 < order:
+                A[blk, n + (i + 1) * q : n + (i + 2) * q] = np.eye(q)
+        Gamma = np.vstack([self.Gamma, np.zeros((order * q, p))])
+        E = np.vstack([np.zeros((N - q, q)), np.eye(q)])
+        C = np.hstack([self.Xi, np.zeros((l, order * q))])
         return AugmentedSystem(A, Gamma, E, C)
 
     def transformed(self, T: ArrayLike, *, output_scale: ArrayLike | None = None,

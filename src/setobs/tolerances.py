@@ -37,6 +37,7 @@ __all__ = [
     "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
     "FRAGILE_MARGIN_DECADES",
+    "IMAG_DISPLAY_RTOL",
     "LP_REFINE_GAP",
     "PRODUCT_RTOL",
     "RANK_FLOOR",
@@ -98,6 +99,10 @@ FRAGILE_MARGIN_DECADES: float = 2.0
 
 #: Invariant zeros with ``|z|`` within this of the unit circle are reported as marginal.
 UNIT_CIRCLE_TOL: float = 1e-8
+
+#: Zeros and poles whose imaginary part is below this fraction of ``max(1, |z|)``
+#: are displayed as real (messages and reports only; no decision uses it).
+IMAG_DISPLAY_RTOL: float = 1e-10
 
 # ---- the compiled fast path (setobs.geometry.fastlp)
 #: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a

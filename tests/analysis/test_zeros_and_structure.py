@@ -205,3 +205,41 @@ def test_slycot_cross_check(rng):
             cost = np.abs(ours[:, None] - ref[None, :])
             r, c = linear_sum_assignment(cost)
             assert cost[r, c].max() < 1e-6
+
+
+def test_markov_toeplitz_maps_inputs_to_outputs_by_simulation():
+    """``Y[k:k+tau] = M_tau U[k:k+tau]`` from ``x(k) = 0``, checked by simulating the system."""
+    from setobs.analysis import markov_toeplitz
+
+    rng = np.random.default_rng(5)
+    n, m, l, tau = 4, 2, 3, 5
+    A, E, C = rng.normal(size=(n, n)) / 2, rng.normal(size=(n, m)), rng.normal(size=(l, n))
+    U = rng.normal(size=(tau + 1, m))
+    x, Y = np.zeros(n), []
+    for k in range(tau + 1):
+        Y.append(C @ x)
+        x = A @ x + E @ U[k]
+    M = markov_toeplitz(A, E, C, tau)
+    assert M.shape == ((tau + 1) * l, (tau + 1) * m)
+    np.testing.assert_allclose(M @ U.ravel(), np.concatenate(Y), atol=1e-12)
+
+
+def test_complex_values_are_displayed_with_their_imaginary_part():
+    """One format in every message: a complex zero keeps its imaginary part (the delayed
+    UIO's refusal used to print only the real part), a rounding-level one is dropped."""
+    from setobs._format import format_complex, format_complex_list
+
+    assert format_complex(1.26095 + 1e-15j) == "1.26095"
+    assert format_complex(0.3 - 0.5j) == "0.3-0.5j"
+    assert format_complex_list([2.0, 1.5 + 2j], digits=3) == "2, 1.5+2j"
+    # A system with a complex pair of invariant zeros outside the unit circle:
+    # x+ = A x + g d, y = c x with zeros = roots of c adj(zI - A) g.
+    import setobs as so
+    from setobs.observers import DelayedUIO
+
+    A = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.1, 0.2, 0.3]]
+    g, c = [[0.0], [0.0], [1.0]], [[2.0, -1.2, 1.0]]  # zeros: z^2 - 1.2 z + 2 = 0
+    z = np.roots([1.0, -1.2, 2.0])
+    with pytest.raises(so.DesignError) as exc:
+        DelayedUIO(so.LinearSystem(A, g, c))
+    assert format_complex(z[0]) in str(exc.value) or format_complex(z[1]) in str(exc.value)

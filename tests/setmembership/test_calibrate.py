@@ -34,13 +34,12 @@ def _bisect(pred, lo, hi, rel=1e-4):
 
 def _record(sys, N, rng, r_inc, r_v, U=None):
     x, d = rng.uniform(-1, 1, sys.n), rng.uniform(-1, 1, sys.q)
-    Y = np.empty((N, sys.l))
-    for k in range(N):
-        Y[k] = sys.Xi @ x + (sys.Du @ U[k] if U is not None else 0) + r_v * rng.uniform(-1, 1,
-                                                                                      sys.l)
-        x = sys.Phi @ x + sys.G @ d + (sys.Gamma @ U[k] if U is not None else 0)
+    V, D = np.empty((N, sys.l)), np.empty((N, sys.q))
+    for k in range(N):  # the draws in the order noise, increment
+        V[k] = r_v * rng.uniform(-1, 1, sys.l)
+        D[k] = d
         d = d + r_inc * rng.uniform(-1, 1, sys.q)
-    return Y
+    return sys.simulate(D, U, x0=x)[0] + V
 
 
 @pytest.mark.parametrize("case", range(3))

@@ -164,7 +164,7 @@ def test_rounding_level_entries_do_not_make_the_fast_path_unbounded():
         rf = obs.run(Y, U)
         if window is not None:
             assert obs.stats["fast"] >= 38  # no silent hand-over either
-        assert np.isfinite(rf.radius[2:]).all()  # was inf on every step
+        assert np.isfinite(rf.error_bound[2:]).all()  # was inf on every step
         assert rf.violations(D) == 0
     # exact mode against the exact LP
     k = 6
@@ -200,7 +200,7 @@ def test_the_documented_minimum_window_gives_bounded_sets(fast):
     obs = so.SMFDO(sys_, window=2, fast=fast)
     assert obs.mu_o == 3
     res = obs.run(Y)
-    assert np.isfinite(res.radius[2:]).all()  # was +-inf forever
+    assert np.isfinite(res.error_bound[2:]).all()  # was +-inf forever
     assert res.violations(D) == 0
     exact = so.SMFDO(sys_, window=None).run(Y)
     # windowed contains exact, up to the rounding allowances (which grow with the

@@ -207,7 +207,7 @@ def _linear_estimator_bound(sys, L, r_inc, r_v):
     return a, b
 
 
-def test_radius_grows_at_most_linearly_with_the_noise_size():
+def test_error_bound_grows_at_most_linearly_with_the_noise_size():
     """Chang's example, window 10: the worst-case radius with |v_i| <= eps stays below
     the linear estimator's bound a + b eps (independent), and grows with eps."""
     rng = np.random.default_rng(3)
@@ -222,7 +222,7 @@ def test_radius_grows_at_most_linearly_with_the_noise_size():
         res = so.SMFDO(sys, window=10, increment_set=r_inc,
                        measurement_noise=eps if eps else None).run(Y)
         assert res.violations(D) == 0
-        r = res.radius[15:]
+        r = res.error_bound[15:]
         bound = np.max(a + b * eps)
         assert r.max() <= bound * (1 + 1e-6), (eps, r.max(), bound)
         radii.append(r.max())
@@ -318,7 +318,7 @@ def test_skip_in_windowed_mode_keeps_the_window_sound(fast):
     assert list(np.flatnonzero(res.status == "skipped")) == [12, 25]
     assert res.violations(D) == 0
     # the window forgets the outlier: bands are finite and tight again afterwards
-    assert np.all(res.radius[30:] < 10 * np.median(res.radius[5:12]))
+    assert np.all(res.error_bound[30:] < 10 * np.median(res.error_bound[5:12]))
 
 
 def test_update_warns_once_per_observer_and_reset_status():
@@ -362,7 +362,7 @@ def test_noise_fixes_the_rejections_of_noisy_records():
     res = obs.run(Y)
     assert res.violations(D) == 0 and res.consistent
     assert obs.stats["fast"] == 200
-    assert np.median(res.radius[20:]) < 5.0
+    assert np.median(res.error_bound[20:]) < 5.0
 
 
 # ---------------------------------------------------------------- arguments

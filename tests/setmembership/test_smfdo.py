@@ -20,17 +20,17 @@ from setobs.setmembership import (
 def simulate(sys, N, rng, x0, d0, step=1.0, U=None, signs=False):
     """x+ = Phi x + Gamma u + G d, y = Xi x, d+ = d + dd with |dd_i| <= step_i
     (uniform; ``signs``: dd_i = +-step_i, the corners of the box)."""
-    x, d = np.array(x0, float), np.array(d0, float)
+    d = np.array(d0, float)
     step = np.broadcast_to(np.asarray(step, float), (sys.q,))
-    Y, D = [], []
-    for k in range(N):
-        Y.append(sys.Xi @ x)
+    D = []
+    for _ in range(N):
         D.append(d.copy())
-        u = U[k] if U is not None else np.zeros(sys.p)
-        x = sys.Phi @ x + sys.Gamma @ u + sys.G @ d
         d = d + (rng.choice([-1.0, 1.0], sys.q) * step if signs
                  else rng.uniform(-step, step, sys.q))
-    return np.array(Y), np.array(D)
+    D = np.array(D)
+    if U is None and sys.p:
+        U = np.zeros((N, sys.p))
+    return sys.simulate(D, U, x0=x0)[0], D
 
 
 def history_lp_bounds(sys, Y, U, x_lo, x_hi, step, k):
@@ -153,7 +153,7 @@ def test_windowed_width_stays_bounded_over_2000_steps():
     assert res.violations(D) == 0
     # The disturbance itself wanders far (random walk), the error bound does not grow.
     assert np.abs(D).max() > 20
-    r = res.radius[10:]
+    r = res.error_bound[10:]
     assert np.isfinite(r).all()
     assert r[-500:].max() <= 1.5 * r[:500].max()
 
@@ -191,20 +191,20 @@ def test_chebyshev_center_closed_form_triangle():
     np.testing.assert_allclose(ih.point, [1.0, 1.0], atol=1e-9)
     ch = chebyshev_center(T)
     np.testing.assert_allclose(ch.point, [1.0, 0.75], atol=1e-6)
-    assert ch.radius == pytest.approx(1.25, abs=1e-6)
+    assert ch.worst_case_error == pytest.approx(1.25, abs=1e-6)
     V = T.vertices()
     ih_euclid = np.linalg.norm(V - ih.point, axis=1).max()
     assert ih_euclid == pytest.approx(np.sqrt(2), abs=1e-9)
-    assert ch.radius < ih_euclid - 0.1
+    assert ch.worst_case_error < ih_euclid - 0.1
     # The interval-hull centre is optimal for the infinity norm: radius 1.
-    assert ih.radius == pytest.approx(1.0, abs=1e-9)
+    assert ih.worst_case_error == pytest.approx(1.0, abs=1e-9)
 
 
 def test_chebyshev_equals_interval_center_on_boxes():
     B = box([0.0, -1.0], [2.0, 3.0])
     ch, ih = chebyshev_center(B), interval_center(B)
     np.testing.assert_allclose(ch.point, ih.point, atol=1e-6)
-    assert ch.radius == pytest.approx(np.hypot(1.0, 2.0), abs=1e-6)
+    assert ch.worst_case_error == pytest.approx(np.hypot(1.0, 2.0), abs=1e-6)
 
 
 def test_chebyshev_beats_or_ties_interval_center_on_smfdo_sets():
@@ -219,7 +219,7 @@ def test_chebyshev_beats_or_ties_interval_center_on_smfdo_sets():
         ch = chebyshev_center(S)
         V = S.vertices()
         ih_r2 = np.linalg.norm(V - st.estimate, axis=1).max()
-        assert ch.radius <= ih_r2 + 1e-7
+        assert ch.worst_case_error <= ih_r2 + 1e-7
         assert S.contains(D[st.k], tol=1e-7)
 
 
@@ -284,13 +284,12 @@ def test_time_varying_increment_set_matches_history_lp():
     rng = np.random.default_rng(4)
     sys = so.examples.chang2006()
     steps = np.where(np.arange(20) < 10, 0.05, 1.0)
-    x, d, Y, D = np.zeros(3), np.array([0.5, -0.5]), [], []
+    d, D = np.array([0.5, -0.5]), []
     for k in range(20):
-        Y.append(sys.Xi @ x)
         D.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
         d = d + rng.uniform(-steps[k], steps[k], 2)
-    Y, D = np.array(Y), np.array(D)
+    D = np.array(D)
+    Y = sys.simulate(D)[0]
     sets = {r: ConstrainedZonotope.from_box([-r, -r], [r, r]) for r in (0.05, 1.0)}
     X0 = box(-np.ones(3), np.ones(3))
     res = so.SMFDO(sys, window=None, increment_set=lambda k: sets[float(steps[k])],
@@ -298,8 +297,8 @@ def test_time_varying_increment_set_matches_history_lp():
     assert res.violations(D) == 0
     # The time-varying set is used: tighter than the constant |dd| <= 1 filter while quiet.
     const = so.SMFDO(sys, window=None, increment_set=[1.0, 1.0], initial_state_set=X0).run(Y)
-    assert np.all(res.radius[5:] <= const.radius[5:] + 1e-9)  # tighter while quiet
-    assert res.radius[9] < 0.5 * const.radius[9]
+    assert np.all(res.error_bound[5:] <= const.error_bound[5:] + 1e-9)  # tighter while quiet
+    assert res.error_bound[9] < 0.5 * const.error_bound[9]
 
 
 def test_increment_set_validation():

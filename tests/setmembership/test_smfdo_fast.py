@@ -48,14 +48,12 @@ def _diamond_record():
     diamond = ConstrainedZonotope.from_hpolytope(
         [[1, 1], [1, -1], [-1, 1], [-1, -1]], [1, 1, 1, 1])
     rng = np.random.default_rng(4)
-    x, d, Ys, Ds = np.zeros(3), np.array([0.5, -1.0]), [], []
+    d, Ds = np.array([0.5, -1.0]), []
     for _ in range(80):
-        Ys.append(sys.Xi @ x)
         Ds.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d
         v = rng.uniform(-1, 1, 2)
         d = d + v / max(1.0, np.abs(v).sum())
-    return sys, diamond, Ys, Ds
+    return sys, diamond, list(sys.simulate(np.array(Ds))[0]), Ds
 
 
 def _lp_instances(obs, Y, U=None):
@@ -87,7 +85,7 @@ def test_fast_lps_equal_highs_on_10000_real_smfdo_instances():
         for model, b, h in _lp_instances(obs, Y, U):
             bounds, ok = model.lp.minimize_all(b, h)
             assert ok.all()
-            fp = FactorPolytope(model.A, b, h, radius=model.radius)
+            fp = FactorPolytope(model.A, b, h, unbounded_radius=model.unbounded_radius)
             for i, w in enumerate(model.lp.W):
                 ref = fp.minimize(w).bound
                 if np.isinf(ref):

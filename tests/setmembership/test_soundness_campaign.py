@@ -46,14 +46,13 @@ def _simulate(sys, N, rng):
     d = rng.normal(size=sys.q) * r * 10.0
     on_vertices = rng.random() < 0.3  # increments at the box's corners (degenerate LPs)
     U = rng.normal(size=(N, sys.p)) if sys.p else None
-    Y, D = [], []
-    for k in range(N):
-        Y.append(sys.Xi @ x)
+    D = []
+    for _ in range(N):
         D.append(d.copy())
-        x = sys.Phi @ x + sys.G @ d + (sys.Gamma @ U[k] if sys.p else 0.0)
         dd = rng.choice([-1.0, 1.0], sys.q) if on_vertices else rng.uniform(-1, 1, sys.q)
         d = d + dd * r
-    return np.array(Y), np.array(D), U, r
+    D = np.array(D)
+    return sys.simulate(D, U, x0=x)[0], D, U, r
 
 
 def _one(seed: int) -> tuple[int, int, list[str]]:

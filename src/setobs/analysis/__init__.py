@@ -5,11 +5,11 @@ The tolerance policy for every rank and zero decision is stated in
 """
 
 from ._linalg import RankDecision
-from .diagnose import DesignVerdict, Diagnosis, diagnose
+from .diagnose import Diagnosis, diagnose
 from .existence import (
     BoundedDOReport,
     ErrorPoles,
-    ObserverCondition,
+    ExistenceReport,
     bounded_do_exists,
     fu_wang_eq10_matrix,
     higher_order_conditions,
@@ -27,20 +27,26 @@ from .observability import (
     observability_decomposition,
     observability_matrix,
 )
-from .structure import RelativeDegreeResult, UIOResult, relative_degrees, uio_conditions, uio_delay
+from .structure import (
+    RelativeDegreeResult,
+    UIOReport,
+    markov_toeplitz,
+    relative_degrees,
+    uio_conditions,
+    uio_delay,
+)
 from .zeros import ZerosResult, invariant_zeros, system_zeros
 
 __all__ = [
     "BoundedDOReport",
-    "DesignVerdict",
     "Diagnosis",
     "ErrorPoles",
+    "ExistenceReport",
     "ObservabilityDecomposition",
     "ObservabilityReport",
-    "ObserverCondition",
     "RankDecision",
     "RelativeDegreeResult",
-    "UIOResult",
+    "UIOReport",
     "ZerosResult",
     "augmented_observability",
     "bounded_do_exists",
@@ -50,6 +56,7 @@ __all__ = [
     "higher_order_error_poles",
     "ibar",
     "invariant_zeros",
+    "markov_toeplitz",
     "modular_conditions",
     "observability",
     "observability_decomposition",

@@ -8,9 +8,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import matrix_balance, svd
 
-from ..tolerances import FRAGILE_MARGIN_DECADES, RANK_RTOL
+from ..tolerances import FRAGILE_MARGIN_DECADES, RANK_RTOL, UNIT_CIRCLE_TOL
 
-__all__ = ["RankDecision", "balance_system", "min_margin", "orth_rows", "rank_decision"]
+__all__ = ["RankDecision", "balance_system", "min_margin", "not_inside_unit_circle", "orth_rows",
+           "rank_decision"]
 
 
 @dataclass(frozen=True)
@@ -156,3 +157,20 @@ def _pow2_norm(v: NDArray[np.float64]) -> NDArray[np.float64]:
     pos = v > 0
     out[pos] = np.ldexp(1.0, np.frexp(v[pos])[1] - 1)
     return out
+
+
+def not_inside_unit_circle(values: NDArray, tol: float = UNIT_CIRCLE_TOL) -> NDArray:
+    """The entries with ``|z| >= 1 - tol``: on or outside the unit circle.
+
+    A value within ``tol`` of the circle counts as on it (a mode at ``z = 1``
+    computed as ``0.99999999`` is still a mode at ``z = 1``).
+
+    Parameters
+    ----------
+    values : ndarray
+        Eigenvalues, zeros or poles.
+    tol : float
+        Distance from the circle that still counts as on it.
+    """
+    v = np.asarray(values)
+    return v[np.abs(v) >= 1.0 - tol]

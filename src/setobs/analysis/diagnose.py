@@ -2,65 +2,25 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._format import format_complex, format_complex_list
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from .existence import (
     BoundedDOReport,
-    ObserverCondition,
+    ExistenceReport,
     bounded_do_exists,
     higher_order_conditions,
     modular_conditions,
     pio_conditions,
 )
-from .structure import RelativeDegreeResult, UIOResult, relative_degrees, uio_conditions
+from .structure import RelativeDegreeResult, UIOReport, relative_degrees, uio_conditions
 from .zeros import ZerosResult
 
-__all__ = ["DesignVerdict", "Diagnosis", "diagnose"]
-
-
-@dataclass(frozen=True)
-class DesignVerdict:
-    """Existence verdict of one observer design.
-
-    ``decided`` is ``False`` when the verdict is undecidable at this precision
-    (``exists`` is then ``False`` and ``reason`` says why).
-
-    Attributes
-    ----------
-    design : str
-        The design (a key of the :class:`Diagnosis`).
-    exists : bool
-        Whether the design exists.
-    condition : str
-        The deciding condition, in words.
-    numbers : dict
-        The quantities it was decided on.
-    reason : str
-        One line: why not (empty when it exists).
-    source : str
-        Paper and result the condition comes from.
-    decided : bool
-        ``False`` when undecidable at double precision.
-    """
-
-    design: str
-    exists: bool
-    condition: str
-    numbers: dict
-    reason: str = ""
-    source: str = ""
-    decided: bool = True
-
-    @property
-    def mark(self) -> str:
-        """``"yes"``, ``"NO"`` or ``"undecidable"``."""
-        if not self.decided:
-            return "undecidable"
-        return "yes" if self.exists else "NO"
+__all__ = ["Diagnosis", "diagnose"]
 
 
 @dataclass(frozen=True)
@@ -69,11 +29,11 @@ class Diagnosis:
 
     Attributes
     ----------
-    verdicts : list of DesignVerdict
+    verdicts : list of ExistenceReport
     bounded_do : BoundedDOReport
     zeros : ZerosResult
     relative_degrees : RelativeDegreeResult
-    uio : UIOResult
+    uio : UIOReport
     system : LinearSystem
         The diagnosed system.
     notes : list of str
@@ -81,14 +41,14 @@ class Diagnosis:
     """
 
     system: LinearSystem
-    verdicts: list[DesignVerdict]
+    verdicts: list[ExistenceReport]
     bounded_do: BoundedDOReport
     zeros: ZerosResult
     relative_degrees: RelativeDegreeResult
-    uio: UIOResult
+    uio: UIOReport
     notes: list[str] = field(default_factory=list)
 
-    def __getitem__(self, design: str) -> DesignVerdict:
+    def __getitem__(self, design: str) -> ExistenceReport:
         for v in self.verdicts:
             if v.design == design:
                 return v
@@ -101,7 +61,7 @@ class Diagnosis:
 
     def _header(self) -> str:
         s = self.system
-        zs = ", ".join(_fmt_z(z) for z in self.zeros.zeros) or "none"
+        zs = format_complex_list(self.zeros.zeros) or "none"
         head = (f"system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs; "
                 f"finite invariant zeros: {zs}")
         return head + ("\n  " + self._signals() if self._signals() else "")
@@ -146,10 +106,6 @@ class Diagnosis:
         if self.notes:
             out += ["", *[f"- {n}" for n in self.notes]]
         return "\n".join(out)
-
-
-def _fmt_z(z: complex) -> str:
-    return f"{z.real:.6g}" if abs(z.imag) < 1e-12 else f"{z.real:.6g}{z.imag:+.6g}j"
 
 
 def _fmt(v) -> str:
@@ -199,7 +155,7 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rd = relative_degrees(sys, rtol=rtol)
     uio = uio_conditions(sys, rtol=rtol)
     z = uio.zeros
-    verdicts: list[DesignVerdict] = []
+    verdicts: list[ExistenceReport] = []
     notes: list[str] = []
 
     # SMFDO -----------------------------------------------------------------
@@ -219,9 +175,9 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
         dirs = np.round(bdo.unrecoverable_directions.T, 4).tolist()
         reason = (f"rank[O, IbarOG] = {bdo.rank_Oaug} < rank O + q = {bdo.rank_O + bdo.q}: "
                   f"{k} disturbance direction(s) not recoverable: {dirs}")
-    verdicts.append(DesignVerdict("SMFDO", bdo.satisfied,
-                                  "Theorem 1: rank[O, IbarOG] = rank O + q", nums, reason,
-                                  "Li-Cong-Dong Thm 1", bdo.decided))
+    verdicts.append(ExistenceReport(bdo.satisfied, "Theorem 1: rank[O, IbarOG] = rank O + q",
+                                    nums, reason, design="SMFDO", source="Li-Cong-Dong Thm 1",
+                                    decided=bdo.decided))
     if not bdo.forms_agree:
         notes.append("Theorem 1's explicit ranks disagree with its coordinate-free form "
                      "(Remark 1, which decides): an explicit rank decision is fragile "
@@ -233,7 +189,7 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     # Zero-based designs ------------------------------------------------------
     square = sys.q == sys.l
     no_zeros = z.full_normal_rank and z.zeros.size == 0
-    zs = [_fmt_z(v) for v in z.zeros]
+    zs = [format_complex(v) for v in z.zeros]
     zero_nums = {"finite zeros": zs, "normal rank": z.normal_rank, "n+q": sys.n + sys.q,
                  "degrees": rd.degrees, "V0 nonsingular": rd.nonsingular,
                  "V0 diagonal": rd.diagonal, "margin_decades": round(z.margin_decades, 1)}
@@ -245,20 +201,19 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
         why = f"invariant zero(s) at {', '.join(zs)} (Assumption 1 violated)"
     else:
         why = ""
-    verdicts.append(DesignVerdict(
-        "variant MB-ESO", square and no_zeros, "q = l and no invariant zeros (Assumption 1)",
-        zero_nums, why, "Chen-Gao-Lin Thm 3"))
+    verdicts.append(ExistenceReport(
+        square and no_zeros, "q = l and no invariant zeros (Assumption 1)", zero_nums, why,
+        design="variant MB-ESO", source="Chen-Gao-Lin Thm 3"))
     mb_ok = square and no_zeros and rd.diagonal
     mb_why = why or ("" if rd.diagonal
                      else "V0 is not diagonal (Theorem 2); use the variant MB-ESO")
-    verdicts.append(DesignVerdict("MB-ESO", mb_ok,
-                                  "q = l, no invariant zeros, V0 diagonal", zero_nums, mb_why,
-                                  "Chen-Gao-Lin Thm 2"))
+    verdicts.append(ExistenceReport(mb_ok, "q = l, no invariant zeros, V0 diagonal", zero_nums,
+                                    mb_why, design="MB-ESO", source="Chen-Gao-Lin Thm 2"))
     if square and no_zeros != rd.lemma2_no_zeros:
         notes.append("Lemma 2 (V0 nonsingular, sum r_i = n) disagrees with the zero computation")
 
     # Delayed UIO -------------------------------------------------------------
-    uio_nums = {"unstable zeros": [_fmt_z(v) for v in uio.unstable_zeros],
+    uio_nums = {"unstable zeros": [format_complex(v) for v in uio.unstable_zeros],
                 "normal rank": z.normal_rank, "n+rank G": sys.n + uio.rank_G,
                 "delay tau": uio.delay, "rank(Xi G)": uio.rank_XiG, "rank G": uio.rank_G}
     if uio.delayed_uio_exists:
@@ -267,12 +222,12 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
         uio_why = f"not left invertible (normal rank {z.normal_rank} < n + rank G)"
     elif uio.unstable_zeros.size:
         uio_why = (f"invariant zero(s) on/outside the unit circle: "
-                   f"{', '.join(_fmt_z(v) for v in uio.unstable_zeros)}")
+                   f"{format_complex_list(uio.unstable_zeros)}")
     else:
         uio_why = "no finite delay satisfies eq. (25)"
-    verdicts.append(DesignVerdict("delayed UIO", uio.delayed_uio_exists,
-                                  "condition (b): strongly detectable", uio_nums, uio_why,
-                                  "Chen-Gao-Lin Sec. III-A"))
+    verdicts.append(ExistenceReport(uio.delayed_uio_exists, "condition (b): strongly detectable",
+                                    uio_nums, uio_why, design="delayed UIO",
+                                    source="Chen-Gao-Lin Sec. III-A"))
 
     # Augmented-model observers -------------------------------------------------
     for name, cond, src in (("PIO", pio_conditions(sys, rtol=rtol), "Chang 2006"),
@@ -280,8 +235,7 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
                              "Fu-Wang"),
                             ("modular observer", modular_conditions(sys, rtol=rtol),
                              "modular observer Sec. VIII")):
-        c: ObserverCondition = cond
-        verdicts.append(DesignVerdict(name, c.exists, c.condition, c.numbers, c.reason, src))
+        verdicts.append(replace(cond, design=name, source=src))
     order = ["SMFDO", "MB-ESO", "variant MB-ESO", "delayed UIO", "PIO",
              "higher-order observer", "modular observer"]
     verdicts.sort(key=lambda v: order.index(v.design))

@@ -7,18 +7,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import eigvals, null_space, solve_discrete_are
+from scipy.linalg import eigvals, null_space
 
+from .._format import format_complex_list
+from .._riccati import lqe_gain
 from .._validation import as_matrix
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_FLOOR, RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, min_margin, orth_rows, rank_decision
+from ._linalg import (
+    RankDecision,
+    balance_system,
+    min_margin,
+    not_inside_unit_circle,
+    orth_rows,
+    rank_decision,
+)
 from .observability import ObservabilityReport, observability, observability_matrix
 
 __all__ = [
     "BoundedDOReport",
     "ErrorPoles",
-    "ObserverCondition",
+    "ExistenceReport",
     "bounded_do_exists",
     "fu_wang_eq10_matrix",
     "higher_order_conditions",
@@ -255,10 +264,10 @@ class ErrorPoles:
 
     def unstable_poles(self) -> NDArray[np.complex128]:
         """Poles with ``|z| >= 1 - UNIT_CIRCLE_TOL`` (on or outside the unit circle)."""
-        return self.poles[np.abs(self.poles) >= 1.0 - UNIT_CIRCLE_TOL]
+        return not_inside_unit_circle(self.poles)
 
     def __repr__(self) -> str:
-        ps = ", ".join(f"{p.real:.4g}" if abs(p.imag) < 1e-10 else f"{p:.4g}" for p in self.poles)
+        ps = format_complex_list(self.poles, digits=4)
         return (f"ErrorPoles([{ps}], spectral_radius={self.spectral_radius:.4g}, "
                 f"stable={self.stable})")
 
@@ -338,7 +347,8 @@ def fu_wang_eq10_matrix(z: complex, A, C, P0, L0, L1) -> NDArray[np.complex128]:
         The plant's ``A`` (n, n) and ``C`` (l, n).
     P0, L0, L1 : array_like
         The higher-order observer's gains: ``P0`` (n, l) of the state update, ``L0`` and
-        ``L1`` (n, l) of the two disturbance-estimate terms (Fu-Wang eq. (10)).
+        ``L1`` (q, l) of the two disturbance-estimate terms. Eq. (10) is stated for
+        Fu-Wang's plant ``x+ = A x + d``, so ``q = n`` here.
     """
     A_a, C_a = np.asarray(A, float), np.asarray(C, float)
     Ab = A_a - np.asarray(P0, float) @ C_a
@@ -349,24 +359,46 @@ def fu_wang_eq10_matrix(z: complex, A, C, P0, L0, L1) -> NDArray[np.complex128]:
 
 # ----------------------------------------------------------------------------- observer conditions
 @dataclass(frozen=True)
-class ObserverCondition:
-    """Existence of an observer design, with the numbers it was decided on.
+class ExistenceReport:
+    """Whether an observer design exists, with the numbers it was decided on.
+
+    The return type of the ``*_conditions`` checks and one row of
+    :class:`~setobs.analysis.Diagnosis`. ``decided`` is ``False`` when the
+    verdict is undecidable at this precision (``exists`` is then ``False`` and
+    ``reason`` says why).
 
     Attributes
     ----------
     exists : bool
+        Whether the design exists.
     condition : str
         The deciding condition, in words.
     numbers : dict
         The quantities it was decided on.
     reason : str
         One line: why not (empty when it exists).
+    design : str
+        The design (a key of the :class:`~setobs.analysis.Diagnosis`).
+    source : str
+        Paper and result the condition comes from.
+    decided : bool
+        ``False`` when undecidable at double precision.
     """
 
     exists: bool
     condition: str
     numbers: dict
     reason: str = ""
+    design: str = ""
+    source: str = ""
+    decided: bool = True
+
+    @property
+    def mark(self) -> str:
+        """``"yes"``, ``"NO"`` or ``"undecidable"``."""
+        if not self.decided:
+            return "undecidable"
+        return "yes" if self.exists else "NO"
 
 
 def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
@@ -376,7 +408,7 @@ def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
 
 
 def pio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
-    rtol: float = RANK_RTOL) -> ObserverCondition:
+    rtol: float = RANK_RTOL) -> ExistenceReport:
     """PIO (Chang 2006): stabilising gains exist iff the augmented pair (9)-(11) is detectable.
 
     Parameters
@@ -400,12 +432,12 @@ def pio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs =
     reason = "" if rep.detectable else (
         f"augmented pair not detectable: unobservable mode(s) {np.round(bad, 6).tolist()} "
         "on or outside the unit circle")
-    return ObserverCondition(rep.detectable,
+    return ExistenceReport(rep.detectable,
                              "augmented pair [[Phi, G], [0, I]], [Xi, 0] detectable", nums, reason)
 
 
 def higher_order_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
-    rtol: float = RANK_RTOL) -> ObserverCondition:
+    rtol: float = RANK_RTOL) -> ExistenceReport:
     """Higher-order observer (Fu-Wang) with ``d = G d*``: the pair with state
     ``(x, d*, Delta d*)``, ``[[Phi, G, 0], [0, I, I], [0, 0, I]]``, ``[Xi, 0, 0]``
     must be detectable (stable roots of eq. (10) for some gains).
@@ -422,23 +454,20 @@ def higher_order_conditions(sys: LinearSystem, *, disturbance_inputs: Disturbanc
     """
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     n, q = sys.n, sys.q
-    A = np.block([[sys.Phi, sys.G, np.zeros((n, q))],
-                  [np.zeros((q, n)), np.eye(q), np.eye(q)],
-                  [np.zeros((q, n + q)), np.eye(q)]])
-    C = np.hstack([sys.Xi, np.zeros((sys.l, 2 * q))])
-    rep = observability(A, C, rtol=rtol)
+    aug = sys.augmented(order=2)
+    rep = observability(aug.A, aug.C, rtol=rtol)
     bad = rep.unstable_unobservable_modes
     nums = {"N_o": rep.n_observable, "n_aug": n + 2 * q,
             "margin_decades": round(rep.margin_decades, 1)}
     reason = "" if rep.detectable else (
         f"pair with states (x, d, Delta d) not detectable: mode(s) {np.round(bad, 6).tolist()}")
-    return ObserverCondition(rep.detectable,
+    return ExistenceReport(rep.detectable,
                              "pair (x, d, Delta d) with double-integrator disturbance detectable",
                              nums, reason)
 
 
 def modular_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
-    rtol: float = RANK_RTOL) -> ObserverCondition:
+    rtol: float = RANK_RTOL) -> ExistenceReport:
     """Modular Luenberger observer (modular-observer paper, Sec. VIII, eqs. (45)-(52)).
 
     With ``F = Phi``, ``P = G``, ``H = Xi``, ``Q = 0``, ``S = I_q``: a
@@ -462,11 +491,10 @@ def modular_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInpu
     rep = observability(sys.Phi, sys.Xi, rtol=rtol)
     nums: dict = {"n_o": rep.n_observable, "detectable": rep.detectable}
     if not rep.detectable:
-        return ObserverCondition(False, "(Phi, Xi) detectable and rank(Xi V) = q", nums,
+        return ExistenceReport(False, "(Phi, Xi) detectable and rank(Xi V) = q", nums,
                                  "(Phi, Xi) is not detectable: no stabilising L0")
     Pb, Gb, Xb, _, _, _ = balance_system(sys.Phi, sys.G, sys.Xi)
-    X = solve_discrete_are(Pb.T, Xb.T, np.eye(sys.n), np.eye(sys.l))
-    L0 = Pb @ X @ Xb.T @ np.linalg.inv(Xb @ X @ Xb.T + np.eye(sys.l))
+    L0 = lqe_gain(Pb, Xb, np.eye(sys.n), np.eye(sys.l))
     V = np.linalg.solve(np.eye(sys.n) - Pb + L0 @ Xb, Gb)
     # Scale of the product, not of its (possibly pure-noise) value.
     d = rank_decision(Xb @ V, rtol, scale=float(np.linalg.norm(Xb, 2) * np.linalg.norm(V, 2)))
@@ -474,5 +502,5 @@ def modular_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInpu
     ok = d.rank == sys.q
     reason = "" if ok else (f"rank(Xi V) = {d.rank} < q = {sys.q}: a disturbance direction has "
                             "zero steady-state gain to the outputs (invariant zero at z = 1)")
-    return ObserverCondition(ok, "(Phi, Xi) detectable and rank(Xi V) = q", nums, reason)
+    return ExistenceReport(ok, "(Phi, Xi) detectable and rank(Xi V) = q", nums, reason)
 

@@ -9,8 +9,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals
 
 from ..systems import DisturbanceInputs, LinearSystem, require_system
-from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, min_margin, orth_rows
+from ..tolerances import RANK_RTOL
+from ._linalg import RankDecision, balance_system, min_margin, not_inside_unit_circle, orth_rows
 
 __all__ = [
     "ObservabilityDecomposition",
@@ -92,7 +92,7 @@ class ObservabilityReport:
     def unstable_unobservable_modes(self) -> NDArray[np.complex128]:
         """Unobservable modes on or outside the unit circle (within ``UNIT_CIRCLE_TOL``)."""
         m = self.unobservable_modes
-        return m[np.abs(m) >= 1.0 - UNIT_CIRCLE_TOL]
+        return not_inside_unit_circle(m)
 
     @property
     def margin_decades(self) -> float:

@@ -9,12 +9,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import PRODUCT_RTOL, RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, rank_decision
+from ._linalg import RankDecision, balance_system, not_inside_unit_circle, rank_decision
 from .zeros import ZerosResult, invariant_zeros
 
 __all__ = [
     "RelativeDegreeResult",
-    "UIOResult",
+    "UIOReport",
+    "markov_toeplitz",
     "relative_degrees",
     "uio_conditions",
     "uio_delay",
@@ -152,13 +153,39 @@ def _product_scales(A, E, count):
     return scales
 
 
-def _markov(A, E, C, count):
-    H = [np.zeros((C.shape[0], E.shape[1]))]
-    M = E
-    for _ in range(1, count):
-        H.append(C @ M)
-        M = A @ M
-    return H
+def markov_toeplitz(A: ArrayLike, E: ArrayLike, C: ArrayLike, tau: int) -> NDArray[np.float64]:
+    """Block lower-triangular Toeplitz ``M_tau`` of the Markov parameters (Chen-Gao-Lin eq. (26)).
+
+    Block ``(i, j)`` is ``H_(i-j)`` with ``H_0 = 0`` and ``H_i = C A^(i-1) E``:
+    ``Y[k:k+tau] = O_tau x(k) + M_tau U[k:k+tau]`` for ``x+ = A x + E u``, ``y = C x``.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    E : array_like, shape (n, m)
+        Input matrix.
+    C : array_like, shape (l, n)
+        Output matrix.
+    tau : int
+        Delay: ``tau + 1`` block rows and columns.
+
+    Returns
+    -------
+    ndarray, shape ((tau + 1) l, (tau + 1) m)
+    """
+    A_a, E_a, C_a = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, E, C))
+    l, m = C_a.shape[0], E_a.shape[1]
+    H = [np.zeros((l, m))]
+    P = E_a
+    for _ in range(tau):
+        H.append(C_a @ P)
+        P = A_a @ P
+    M = np.zeros(((tau + 1) * l, (tau + 1) * m))
+    for i in range(tau + 1):
+        for j in range(i + 1):
+            M[i * l : (i + 1) * l, j * m : (j + 1) * m] = H[i - j]
+    return M
 
 
 def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RTOL,
@@ -190,8 +217,6 @@ def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RT
     q = rank_decision(Eb, rtol).rank
     n = A_a.shape[0]
     mu_max = n + 2 if max_delay is None else int(max_delay)
-    H = _markov(Ab, Eb, Cb, mu_max + 2)
-    lb, pb = Cb.shape[0], Eb.shape[1]
     # Rounding scale of H_i = C A^(i-1) E: the threshold must not be relative to
     # M itself, which is pure rounding noise while the true H_i vanish.
     nC = max(float(np.linalg.norm(Cb, 2)), 1e-300)
@@ -199,10 +224,7 @@ def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RT
     decisions = []
     prev = 0
     for mu in range(mu_max + 1):
-        M = np.zeros(((mu + 1) * lb, (mu + 1) * pb))
-        for i in range(mu + 1):
-            for j in range(i + 1):
-                M[i * lb : (i + 1) * lb, j * pb : (j + 1) * pb] = H[i - j]
+        M = markov_toeplitz(Ab, Eb, Cb, mu)
         # No row normalisation either: a rounding-noise row (an exact zero computed
         # as 1e-17) would become a fake independent row.
         ref = nC * max(refs[: max(mu, 1)])
@@ -215,7 +237,7 @@ def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RT
 
 
 @dataclass(frozen=True)
-class UIOResult:
+class UIOReport:
     """UIO existence conditions (Chen-Gao-Lin, Sec. III-A) and the delay.
 
     Attributes
@@ -267,7 +289,7 @@ class UIOResult:
 
 def uio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rtol: float = RANK_RTOL,
-                   unit_tol: float = UNIT_CIRCLE_TOL) -> UIOResult:
+                   unit_tol: float = UNIT_CIRCLE_TOL) -> UIOReport:
     """UIO conditions (a), (b) for ``(Phi, G, Xi)`` and the delay for the augmented system.
 
     Parameters
@@ -288,9 +310,9 @@ def uio_conditions(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs =
     dG = rank_decision(Gb, rtol)
     dXG = rank_decision(Xb @ Gb, rtol, scale=float(np.linalg.norm(Xb, 2) * np.linalg.norm(Gb, 2)))
     z = invariant_zeros(sys, rtol=rtol)
-    unstable = z.zeros[np.abs(z.zeros) >= 1.0 - unit_tol]
+    unstable = not_inside_unit_circle(z.zeros, unit_tol)
     cond_b = z.normal_rank == sys.n + dG.rank and unstable.size == 0
     aug = sys.augmented()
     tau, dd = uio_delay(aug.A, aug.E, aug.C, rtol=rtol)
-    return UIOResult(dXG.rank == dG.rank, bool(cond_b), tau, dXG.rank, dG.rank, z, unstable,
+    return UIOReport(dXG.rank == dG.rank, bool(cond_b), tau, dXG.rank, dG.rank, z, unstable,
                      [dG, dXG, *dd])

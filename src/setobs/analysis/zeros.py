@@ -8,9 +8,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, svd
 
+from .._format import format_complex_list
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
-from ._linalg import RankDecision, balance_system, min_margin, rank_decision
+from ._linalg import RankDecision, balance_system, min_margin, not_inside_unit_circle, rank_decision
 
 __all__ = ["ZerosResult", "invariant_zeros", "system_zeros"]
 
@@ -61,10 +62,10 @@ class ZerosResult:
             Zeros with ``|z| >= 1 - tol`` count as on the circle (default
             ``UNIT_CIRCLE_TOL``).
         """
-        return self.zeros[np.abs(self.zeros) >= 1.0 - tol]
+        return not_inside_unit_circle(self.zeros, tol)
 
     def __repr__(self) -> str:
-        zs = ", ".join(f"{z.real:.6g}" if abs(z.imag) < 1e-12 else f"{z:.6g}" for z in self.zeros)
+        zs = format_complex_list(self.zeros)
         return (f"ZerosResult(zeros=[{zs}], normal_rank={self.normal_rank} of {self.n + self.q}, "
                 f"margin={self.margin_decades:.1f} decades)")
 

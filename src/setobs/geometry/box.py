@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecation import renamed
 from .._validation import as_vector, readonly
 from ..exceptions import DimensionError
 
-__all__ = ["Box", "box_center"]
+__all__ = ["Box", "box_center", "box_center_radius"]
 
 
 def box_center(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -22,6 +23,31 @@ def box_center(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.f
     with np.errstate(invalid="ignore"):
         mid = 0.5 * lo + 0.5 * hi
     return np.where(np.isfinite(mid), mid, np.nan)
+
+
+def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Centre and outward-rounded radii of a box: ``[lo, hi] in c + [-rad, rad]``.
+
+    The representation of a box as a set with generators ``I`` and factor
+    bounds ``rad`` (:meth:`ConstrainedZonotope.from_box`, Scott et al.'s
+    Theorem 1, the reduction's recentring): the centre is the rounded
+    midpoint, and the radius, rounded up, covers both ends from it. An
+    unbounded coordinate has centre 0 and radius ``inf``.
+
+    Parameters
+    ----------
+    lo, hi : ndarray, shape (n,)
+        Bounds (``lo <= hi``).
+    """
+    free = ~(np.isfinite(lo) & np.isfinite(hi))
+    anyfree = free.any()
+    lo_f = np.where(free, 0.0, lo) if anyfree else lo
+    hi_f = np.where(free, 0.0, hi) if anyfree else hi
+    c = 0.5 * lo_f + 0.5 * hi_f
+    rad = np.maximum(hi_f - c, c - lo_f)
+    rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
+    return c, (np.where(free, np.inf, rad) if anyfree else rad)
 
 
 class Box:
@@ -43,7 +69,7 @@ class Box:
     Examples
     --------
     >>> b = Box([0.0, -1.0], [2.0, 1.0])
-    >>> b.center.tolist(), b.radius.tolist()
+    >>> b.center.tolist(), b.half_width.tolist()
     ([1.0, 0.0], [1.0, 1.0])
     """
 
@@ -101,8 +127,10 @@ class Box:
         """Midpoints ``(lo + hi) / 2``; NaN where a coordinate is unbounded."""
         return box_center(self._lo, self._hi)
 
+    radius = renamed("radius", "half_width", "'radius' means a worst-case error elsewhere")
+
     @property
-    def radius(self) -> NDArray[np.float64]:
+    def half_width(self) -> NDArray[np.float64]:
         """Half-widths ``(hi - lo) / 2`` (``inf`` where unbounded)."""
         return 0.5 * (self._hi - self._lo)
 

@@ -152,7 +152,7 @@ class FixedStructureLP:
         Objectives (fixed).
     free : ndarray of bool, shape (n,)
         Factors with ``h = inf`` (fixed); the others must get finite bounds.
-    radius : float
+    unbounded_radius : float
         Radius on unbounded factors used in certification (see
         :mod:`setobs.geometry.lp`).
 
@@ -182,11 +182,11 @@ class FixedStructureLP:
 
     @with_single_threaded_blas
     def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
-                 free: NDArray[np.bool_], radius: float = UNBOUNDED_RADIUS) -> None:
+                 free: NDArray[np.bool_], unbounded_radius: float = UNBOUNDED_RADIUS) -> None:
         self.A = np.ascontiguousarray(A, dtype=np.float64)
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         self.free = np.asarray(free, dtype=bool)
-        self.radius = float(radius)
+        self.unbounded_radius = float(unbounded_radius)
         m, n = self.A.shape
         self.m, self.n = m, n
         self.n_lp = self.W.shape[0]
@@ -368,6 +368,6 @@ class FixedStructureLP:
              self.yU, self.Q2, self.R, self.dirstat),
             (b, h, berr, bred, hB),
             (st.bases, st.upper, st.binv, st.npiv),
-            (self.maxit, self.radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
+            (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
             (bounds, st.objs, codes, st.ys))
         return bounds, codes == _simplex.OPTIMAL

@@ -28,8 +28,8 @@ point is never relied upon.
 An unbounded factor (``h_j = inf``) contributes ``-inf`` unless ``r_j = 0``.
 The solver's ``y`` is refined by a least-squares correction on the unbounded
 columns, after which ``|r_j|`` is at round-off level but rarely exactly zero.
-The bound then holds for every point of ``F`` with ``|xi_j| <= radius`` on the
-unbounded factors (the term ``radius * (|r_j| + err_j)`` is added); when the
+The bound then holds for every point of ``F`` with ``|xi_j| <= unbounded_radius`` on the
+unbounded factors (the term ``unbounded_radius * (|r_j| + err_j)`` is added); when the
 relative residual stays above ``UNBOUNDED_REDUCED_COST_TOL`` the objective is
 declared unbounded below (``-inf``), which is always an outer answer.
 
@@ -75,7 +75,7 @@ from ..tolerances import (
     UNBOUNDED_REDUCED_COST_TOL,
 )
 
-__all__ = ["EmptinessReport", "FactorPolytope", "LPOutcome", "lagrangian_lower_bound"]
+__all__ = ["EmptinessReport", "FactorPolytope", "LPResult", "lagrangian_lower_bound"]
 
 _TINY = np.finfo(np.float64).tiny
 _INF = math.inf  # HiGHS's kHighsInf
@@ -85,7 +85,7 @@ highspy = lazy_module("highspy")
 
 
 @dataclass(frozen=True)
-class LPOutcome:
+class LPResult:
     """Result of one certified minimisation ``min w^T xi`` over a factor polytope.
 
     Attributes
@@ -206,7 +206,7 @@ def lagrangian_lower_bound(
     y: NDArray[np.float64],
     *,
     w_err: NDArray[np.float64] | None = None,
-    radius: float = UNBOUNDED_RADIUS,
+    unbounded_radius: float = UNBOUNDED_RADIUS,
     unbounded_pinv: NDArray[np.float64] | None = None,
     w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     b_err: NDArray[np.float64] | None = None,
@@ -224,7 +224,7 @@ def lagrangian_lower_bound(
     w_err : ndarray, optional
         Elementwise bound on the error of ``w`` itself (when ``w`` was computed
         in floating point, e.g. ``G^T d``).
-    radius : float
+    unbounded_radius : float
         Radius on unbounded factors (see module notes).
     unbounded_pinv : ndarray, optional
         ``pinv(A[:, unbounded].T)``, used to refine ``y``; computed if omitted.
@@ -294,7 +294,7 @@ def lagrangian_lower_bound(
         rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / scale_all
         if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
             return -np.inf, y1
-        t2 += radius * float(ru_bound.sum()) * (1.0 + gamma(ru_bound.size + 1))
+        t2 += unbounded_radius * float(ru_bound.sum()) * (1.0 + gamma(ru_bound.size + 1))
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
     # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
@@ -334,7 +334,7 @@ class FactorPolytope:
     A : ndarray, shape (n_c, n_g)
     b : ndarray, shape (n_c,)
     h : ndarray, shape (n_g,), entries in ``[0, inf]``
-    radius : float
+    unbounded_radius : float
         Radius on unbounded factors used in certification.
     b_err : ndarray, shape (n_c,), optional
         Bound on the uncertainty of ``b`` (see :func:`lagrangian_lower_bound`);
@@ -366,13 +366,13 @@ class FactorPolytope:
         A: NDArray[np.float64],
         b: NDArray[np.float64],
         h: NDArray[np.float64],
-        radius: float = UNBOUNDED_RADIUS,
+        unbounded_radius: float = UNBOUNDED_RADIUS,
         b_err: NDArray[np.float64] | None = None,
     ) -> None:
         self.A = A
         self.b = b
         self.h = h
-        self.radius = radius
+        self.unbounded_radius = unbounded_radius
         self.b_err = None if b_err is None or not np.any(b_err) else b_err
         self.n_c, self.n_g = A.shape
         self._unb = np.isinf(h)
@@ -496,7 +496,7 @@ class FactorPolytope:
 
     def _certify(self, w, y, w_err=None, w_pair=None) -> tuple[float, NDArray[np.float64]]:
         return lagrangian_lower_bound(
-            w, self.A, self.b, self.h, y, w_err=w_err, radius=self.radius,
+            w, self.A, self.b, self.h, y, w_err=w_err, unbounded_radius=self.unbounded_radius,
             unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
             b_err=self.b_err,
         )
@@ -537,7 +537,7 @@ class FactorPolytope:
         w: NDArray[np.float64],
         w_err: NDArray[np.float64] | None = None,
         w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
-    ) -> LPOutcome:
+    ) -> LPResult:
         """Certified ``min w^T xi`` over the polytope.
 
         Parameters
@@ -551,7 +551,7 @@ class FactorPolytope:
 
         Returns
         -------
-        LPOutcome
+        LPResult
             Status ``"optimal"``, ``"unbounded"`` or ``"fallback"`` (every
             solver attempt failed: the best certified bound of the multipliers
             seen, possibly ``-inf``; counted in :attr:`fallbacks`).
@@ -567,7 +567,7 @@ class FactorPolytope:
 
     def minimize_under_lock(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
                             w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
-                            ) -> LPOutcome:
+                            ) -> LPResult:
         """:meth:`minimize` for a caller that holds the polytope's lock.
 
         Parameters
@@ -583,9 +583,9 @@ class FactorPolytope:
             # No constraints: the minimum over the box is analytic and exact.
             bound = self.certify(w, np.zeros(0), w_err, w_pair)
             if not np.isfinite(bound):
-                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+                return LPResult(-np.inf, -np.inf, None, "unbounded")
             point = -np.sign(w) * np.where(self._unb, 0.0, self.h)
-            return LPOutcome(bound, float(w @ point), point, "optimal")
+            return LPResult(bound, float(w @ point), point, "optimal")
         # HiGHS sees the objective divided by a power of two (exact), so that its
         # tolerances act on a unit-size problem; certification uses the true w.
         scale = self.objective_scale(w)
@@ -608,10 +608,10 @@ class FactorPolytope:
                     if y_ref is not None:
                         bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
                 if np.isinf(bound):
-                    return LPOutcome(-np.inf, obj, x, "unbounded")
-                return LPOutcome(bound, obj, x, "optimal")
+                    return LPResult(-np.inf, obj, x, "unbounded")
+                return LPResult(bound, obj, x, "optimal")
             if st == highspy.HighsModelStatus.kUnbounded:
-                return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+                return LPResult(-np.inf, -np.inf, None, "unbounded")
             if st in (highspy.HighsModelStatus.kInfeasible,
                       highspy.HighsModelStatus.kUnboundedOrInfeasible):
                 rep = self.emptiness()
@@ -631,11 +631,11 @@ class FactorPolytope:
             return out
         best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
         self.fallbacks += 1
-        return LPOutcome(best, np.nan, None, "fallback")
+        return LPResult(best, np.nan, None, "fallback")
 
     def try_compiled(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
                      w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
-                     ) -> LPOutcome | None:
+                     ) -> LPResult | None:
         """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here.
 
         Parameters
@@ -649,7 +649,7 @@ class FactorPolytope:
         """
         from .fastlp import FixedStructureLP
 
-        lp = FixedStructureLP(self.A, w[None, :], self._unb, self.radius)
+        lp = FixedStructureLP(self.A, w[None, :], self._unb, self.unbounded_radius)
         if not lp.usable:
             return None
         bounds, ok, ys, objs = lp.minimize_all(self.b, self.h, b_err=self.b_err,
@@ -659,9 +659,9 @@ class FactorPolytope:
         bound = self.certify(w, ys[0], w_err, w_pair)
         if not np.isfinite(bound):
             return None
-        return LPOutcome(bound, float(objs[0]), None, "optimal")
+        return LPResult(bound, float(objs[0]), None, "optimal")
 
-    def _compiled_relaxed(self, w, delta, w_err, w_pair) -> LPOutcome | None:
+    def _compiled_relaxed(self, w, delta, w_err, w_pair) -> LPResult | None:
         """The relaxed LP by the compiled simplex: slack factors ``|s| <= delta`` turn
         ``|A xi - b| <= delta`` into ``A xi + s = b``, a fixed-structure LP."""
         from .fastlp import FixedStructureLP
@@ -669,7 +669,7 @@ class FactorPolytope:
         A2 = np.hstack([self.A, np.eye(self.n_c)])
         h2 = np.concatenate([self.h, delta])
         w2 = np.concatenate([w, np.zeros(self.n_c)])
-        lp = FixedStructureLP(A2, w2[None, :], np.isinf(h2), self.radius)
+        lp = FixedStructureLP(A2, w2[None, :], np.isinf(h2), self.unbounded_radius)
         if not lp.usable:
             return None
         bounds, ok, ys, objs = lp.minimize_all(self.b, h2, b_err=self.b_err,
@@ -680,10 +680,11 @@ class FactorPolytope:
         pair2 = None if w_pair is None else (
             np.hstack([w_pair[0], np.zeros((w_pair[0].shape[0], self.n_c))]), w_pair[1])
         bound, _ = lagrangian_lower_bound(w2, A2, self.b, h2, ys[0], w_err=werr2,
-                                          radius=self.radius, w_pair=pair2, b_err=self.b_err)
+                                          unbounded_radius=self.unbounded_radius, w_pair=pair2,
+                                          b_err=self.b_err)
         if not np.isfinite(bound):
             return None
-        return LPOutcome(bound, float(objs[0]), None, "optimal")
+        return LPResult(bound, float(objs[0]), None, "optimal")
 
     def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """Duals recomputed from HiGHS's optimal basis, with one refinement step.
@@ -714,7 +715,7 @@ class FactorPolytope:
         w: NDArray[np.float64],
         w_err: NDArray[np.float64] | None = None,
         w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
-    ) -> LPOutcome:
+    ) -> LPResult:
         """Certified ``min w^T xi`` with the rows relaxed to ``|A xi - b| <= delta``.
 
         Used when the set is not certified empty but the exact LP is infeasible
@@ -747,7 +748,7 @@ class FactorPolytope:
                 hs.run()
                 st = hs.getModelStatus()
                 if st == highspy.HighsModelStatus.kUnbounded:
-                    return LPOutcome(-np.inf, -np.inf, None, "unbounded")
+                    return LPResult(-np.inf, -np.inf, None, "unbounded")
                 if st == highspy.HighsModelStatus.kOptimal:
                     y = np.asarray(hs.getSolution().row_dual, dtype=np.float64) * scale
                     x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
@@ -762,10 +763,10 @@ class FactorPolytope:
             obj = float(w @ x) if x is not None else np.nan
             status = "optimal" if x is not None else "fallback"
             if np.isinf(bound):
-                return LPOutcome(-np.inf, obj, x, "unbounded" if x is not None else status)
+                return LPResult(-np.inf, obj, x, "unbounded" if x is not None else status)
             # Relaxed rows |A xi - b| <= delta add -sum |y_i| delta_i to the bound.
             relax = float(np.abs(y) @ delta) * (1.0 + 2.0 * gamma(self.n_c + 1))
-            return LPOutcome(round_down(bound - relax), obj, x, status)
+            return LPResult(round_down(bound - relax), obj, x, status)
 
     def _row_scale(self) -> NDArray[np.float64]:
         """Power-of-two row scales (so that scaling is exact in floating point)."""
@@ -833,7 +834,7 @@ class FactorPolytope:
         # Certified bound with the scaled data (exact: power-of-two scales); the
         # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
         lower, y = lagrangian_lower_bound(
-            np.zeros(n_g), As, bs, self.h, y, radius=self.radius,
+            np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
             unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
             b_err=None if self.b_err is None else self.b_err / scale,
         )

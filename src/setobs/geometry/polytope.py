@@ -20,6 +20,7 @@ from .._rounding import gamma
 from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import VERTEX_RTOL
+from .box import box_center_radius
 from .zonotope import ConstrainedZonotope, hull_with_status, support_unwarned, trusted_cz
 
 __all__ = ["HRep", "cz_from_hpolytope", "polygon_2d", "to_hrep", "vertices"]
@@ -264,8 +265,7 @@ def _scott_cz(H, k, lo, hi) -> ConstrainedZonotope:
     """Scott et al. (2016), Theorem 1: ``{x in box : H x <= k}`` as a constrained zonotope."""
     n = H.shape[1]
     m = H.shape[0]
-    c = 0.5 * lo + 0.5 * hi
-    dx = np.nextafter(np.maximum(hi - c, c - lo), np.inf)
+    c, dx = box_center_radius(lo, hi)
     # sigma = k - H x ranges over [0, dsig] on the box: dsig = k - min_box H x.
     hmin = H @ c - np.abs(H) @ dx
     dsig = np.maximum(k - hmin, 0.0)

@@ -34,6 +34,7 @@ from ..tolerances import (
     REDUNDANT_BOUND_MARGIN,
     ZERO_TOL,
 )
+from .box import box_center_radius
 from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
 
 __all__ = ["reduce_exact", "reduce_order", "remove_redundancy", "rescale"]
@@ -72,7 +73,7 @@ def remove_redundancy(Z: ConstrainedZonotope, tol: float = ZERO_TOL) -> Constrai
         rank = int((d > tol * d[0]).sum()) if d.size else 0
         rows = np.sort(piv[:rank])
         A, b, berr = A[rows], b[rows], berr[rows]
-    return trusted_cz(G, c, A, b, h, Z.radius, Z.c_err, berr)
+    return trusted_cz(G, c, A, b, h, Z.unbounded_radius, Z.c_err, berr)
 
 
 def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
@@ -108,12 +109,8 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     # Never widen beyond the original bound.
     lo = np.maximum(lo, -Z.h)
     hi = np.minimum(hi, Z.h)
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    m = np.where(finite, 0.5 * np.where(finite, lo, 0.0) + 0.5 * np.where(finite, hi, 0.0), 0.0)
-    r = np.where(finite, np.maximum(np.where(finite, hi, 0.0) - m, m - np.where(finite, lo, 0.0)),
-                 Z.h)
-    r = np.where(finite & (r > 0), np.nextafter(r, np.inf), r)
-    r = np.maximum(r, 0.0)
+    # lo = -h and hi = h where unbounded (the interval of a factor is bounded or R)
+    m, r = box_center_radius(lo, hi)
     c = Z.c + Z.G @ m
     b = Z.b - Z.A @ m
     # rounding of the recentring (Higham's bounds), on top of what Z carried
@@ -121,7 +118,7 @@ def rescale(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     cerr = Z.c_err + g * (np.abs(Z.c) + np.abs(Z.G) @ np.abs(m))
     berr = Z.b_err + g * (np.abs(Z.b) + np.abs(Z.A) @ np.abs(m))
     keep = r > 0
-    return trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.radius,
+    return trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, r[keep], Z.unbounded_radius,
                                         cerr, berr)
 
 
@@ -181,7 +178,7 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     G = np.hstack([Z.G[:, cols], box[:n]])
     A = np.hstack([Z.A[:, cols], box[n:]])
     h = np.concatenate([Z.h[cols], np.ones(rows.size)])
-    return trusted_cz(G, Z.c, A, Z.b, h, Z.radius, Z.c_err, Z.b_err)
+    return trusted_cz(G, Z.c, A, Z.b, h, Z.unbounded_radius, Z.c_err, Z.b_err)
 
 
 def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_]
@@ -334,5 +331,5 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
             raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
         A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.radius,
+    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius,
                                         cerr, berr)

@@ -19,7 +19,7 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
-from .box import Box
+from .box import Box, box_center_radius
 from .lp import EmptinessReport, FactorPolytope
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -90,27 +90,9 @@ def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
     return base * (1.0 + gamma(k + 3)) if base.any() else None
 
 
-def _rebuild(G, c, A, b, h, radius, cerr, berr) -> ConstrainedZonotope:
+def _rebuild(G, c, A, b, h, unbounded_radius, cerr, berr) -> ConstrainedZonotope:
     """Unpickling helper of :class:`ConstrainedZonotope`."""
-    return ConstrainedZonotope._trusted(G, c, A, b, h, radius, cerr, berr)
-
-
-def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
-                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Centre and outward-rounded radii of a box (``inf`` radius where ``lo = -inf``).
-
-    The representation used by :meth:`ConstrainedZonotope.from_box`: generators
-    ``I``, factor bounds ``rad``; the radius covers both ends from the rounded
-    centre.
-    """
-    free = np.isinf(lo)
-    anyfree = free.any()
-    lo_f = np.where(free, 0.0, lo) if anyfree else lo
-    hi_f = np.where(free, 0.0, hi) if anyfree else hi
-    c = 0.5 * lo_f + 0.5 * hi_f
-    rad = np.maximum(hi_f - c, c - lo_f)
-    rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
-    return c, (np.where(free, np.inf, rad) if anyfree else rad)
+    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr)
 
 
 class ConstrainedZonotope:
@@ -130,7 +112,7 @@ class ConstrainedZonotope:
         Factor bounds in ``[0, +inf]`` (default: all ones). ``h_j = inf`` makes
         factor ``j`` unbounded, so sets such as ``R^n`` and affine sets are
         representable (Li-Cong-Dong, Definition 2, eq. (19)).
-    radius : float
+    unbounded_radius : float
         Bound up to which unbounded factors (``h_j = inf``) are certified, in the set's
         normalised units (default :data:`setobs.tolerances.UNBOUNDED_RADIUS`).
 
@@ -172,7 +154,7 @@ class ConstrainedZonotope:
     True
     """
 
-    __slots__ = ("_A", "_G", "_b", "_berr", "_c", "_cache", "_cerr", "_h", "radius")
+    __slots__ = ("_A", "_G", "_b", "_berr", "_c", "_cache", "_cerr", "_h", "unbounded_radius")
     __array_ufunc__ = None  # so that ndarray @ Z calls Z.__rmatmul__
 
     def __init__(
@@ -183,7 +165,7 @@ class ConstrainedZonotope:
         b: ArrayLike | None = None,
         h: ArrayLike | None = None,
         *,
-        radius: float = UNBOUNDED_RADIUS,
+        unbounded_radius: float = UNBOUNDED_RADIUS,
     ) -> None:
         c_a = as_vector("c", c)
         n = c_a.size
@@ -215,17 +197,17 @@ class ConstrainedZonotope:
             if (h_a < 0).any():
                 j = int(np.argmax(h_a < 0))
                 raise DimensionError(f"h must be nonnegative (h[{j}] = {h_a[j]})")
-        if not radius > 0:
-            raise DimensionError(f"radius must be positive, got {radius}")
+        if not unbounded_radius > 0:
+            raise DimensionError(f"unbounded_radius must be positive, got {unbounded_radius}")
         for name, val in (("_G", G_a), ("_c", c_a), ("_A", A_a), ("_b", b_a), ("_h", h_a)):
             object.__setattr__(self, name, readonly(val))
-        object.__setattr__(self, "radius", float(radius))
+        object.__setattr__(self, "unbounded_radius", float(unbounded_radius))
         object.__setattr__(self, "_cerr", None)
         object.__setattr__(self, "_berr", None)
         object.__setattr__(self, "_cache", {})
 
     @classmethod
-    def _trusted(cls, G, c, A, b, h, radius: float = UNBOUNDED_RADIUS, cerr=None,
+    def _trusted(cls, G, c, A, b, h, unbounded_radius: float = UNBOUNDED_RADIUS, cerr=None,
                  berr=None) -> ConstrainedZonotope:
         """Build from arrays already validated (internal fast path).
 
@@ -240,7 +222,7 @@ class ConstrainedZonotope:
             if val is not None and np.any(val):
                 arr = readonly(np.array(val, dtype=np.float64))
             object.__setattr__(self, name, arr)
-        object.__setattr__(self, "radius", radius)
+        object.__setattr__(self, "unbounded_radius", unbounded_radius)
         object.__setattr__(self, "_cache", {})
         return self
 
@@ -249,7 +231,7 @@ class ConstrainedZonotope:
 
     def __reduce__(self):
         # Pickling and deepcopy rebuild from the data (the LP cache is dropped).
-        return (_rebuild, (self._G, self._c, self._A, self._b, self._h, self.radius,
+        return (_rebuild, (self._G, self._c, self._A, self._b, self._h, self.unbounded_radius,
                            self._cerr, self._berr))
 
     # ------------------------------------------------------------------ constructors
@@ -473,7 +455,7 @@ class ConstrainedZonotope:
             _blockdiag2(self._A, other._A),
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
-            min(self.radius, other.radius),
+            min(self.unbounded_radius, other.unbounded_radius),
             _sum_err(self._c, other._c, _add(self._cerr, other._cerr)),
             _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
@@ -508,7 +490,7 @@ class ConstrainedZonotope:
     def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64],
                       cerr: NDArray[np.float64] | None) -> ConstrainedZonotope:
         """A set with the same factor polytope; shares its LP model (and emptiness cache)."""
-        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.radius,
+        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.unbounded_radius,
                                            cerr, self._berr)
         if "lp" in self._cache:
             out._cache["lp"] = self._cache["lp"]
@@ -536,7 +518,7 @@ class ConstrainedZonotope:
             _blockdiag2(self._A, other._A),
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
-            min(self.radius, other.radius),
+            min(self.unbounded_radius, other.unbounded_radius),
             _cat(self._cerr, self.dim, other._cerr, other.dim),
             _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
@@ -571,7 +553,7 @@ class ConstrainedZonotope:
             self._G, self._c,
             np.vstack([self._A, C_a @ self._G]),
             np.concatenate([self._b, y_a - C_a @ self._c]),
-            self._h, self.radius, self._cerr,
+            self._h, self.unbounded_radius, self._cerr,
             _cat(self._berr, self.n_con, _diff_err(y_a, C_a, self._c, self._cerr, ye),
                  C_a.shape[0]),
         )
@@ -608,7 +590,7 @@ class ConstrainedZonotope:
         berr = _cat(_cat(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err, other.dim)
         return ConstrainedZonotope._trusted(
             np.hstack([self._G, np.zeros((self.dim, other.n_gen))]), self._c, A, b,
-            np.concatenate([self._h, other._h]), min(self.radius, other.radius),
+            np.concatenate([self._h, other._h]), min(self.unbounded_radius, other.unbounded_radius),
             self._cerr, berr,
         )
 
@@ -632,7 +614,7 @@ class ConstrainedZonotope:
     def _lp(self) -> FactorPolytope:
         fp = self._cache.get("lp")
         if fp is None:
-            fp = FactorPolytope(self._A, self._b, self._h, radius=self.radius,
+            fp = FactorPolytope(self._A, self._b, self._h, unbounded_radius=self.unbounded_radius,
                                 b_err=self._berr)
             self._cache["lp"] = fp
         return fp
@@ -861,7 +843,7 @@ class ConstrainedZonotope:
         return to_hrep(self)
 
     def plot(self, ax: Axes | None = None, dims: Sequence[int] = (0, 1), **kwargs: Any) -> Patch:
-        """Plot the projection onto ``dims``; see :func:`setobs.geometry.plotting.plot_cz`.
+        """Plot the projection onto ``dims``; see :func:`setobs.plotting.plot_set`.
 
         Parameters
         ----------
@@ -872,9 +854,9 @@ class ConstrainedZonotope:
         **kwargs
             Passed to :class:`matplotlib.patches.Polygon`.
         """
-        from .plotting import plot_cz
+        from ._draw import plot_set
 
-        return plot_cz(self, ax=ax, dims=dims, **kwargs)
+        return plot_set(self, ax=ax, dims=dims, **kwargs)
 
 
 # ---------------------------------------------------------------- package-internal access
@@ -886,14 +868,14 @@ class ConstrainedZonotope:
 
 def trusted_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.float64],
                b: NDArray[np.float64], h: NDArray[np.float64],
-               radius: float = UNBOUNDED_RADIUS, cerr: NDArray[np.float64] | None = None,
+               unbounded_radius: float = UNBOUNDED_RADIUS, cerr: NDArray[np.float64] | None = None,
                berr: NDArray[np.float64] | None = None) -> ConstrainedZonotope:
     """Build from arrays the caller has already validated (no checks, no copies of shape).
 
     ``cerr``, ``berr``: elementwise bounds on the rounding errors already in
     ``c`` and ``b`` (``None``: exact); certified queries widen by them.
     """
-    return ConstrainedZonotope._trusted(G, c, A, b, h, radius, cerr, berr)
+    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr)
 
 
 def factor_polytope(Z: ConstrainedZonotope) -> FactorPolytope:

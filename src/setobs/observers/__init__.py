@@ -1,4 +1,30 @@
-"""Point observers on one interface (``reset``, ``step``, ``run``), from the seed papers."""
+"""Point observers on one interface (``reset``, ``step``, ``run``), from the seed papers.
+
+Gain names
+----------
+Constructor arguments keep each paper's symbols, so a design can be checked
+against its paper; the symbols are not shared between observers:
+
+============================  =============================================================
+observer                      gains (all multiply the output innovation)
+============================  =============================================================
+:class:`PIO`                  ``P`` (n, l) into the state, ``L`` (q, l) into the disturbance
+:class:`HigherOrderObserver`  ``P0`` (n, l) into the state, ``L0``, ``L1`` (q, l) into the
+                              disturbance (Fu-Wang eq. (10))
+:class:`ModularObserver`      ``L0`` (n, l) of the disturbance-free observer, ``Lw`` (q, l)
+                              of the disturbance observer
+:class:`MBESO`                ``L`` (n + p, p) on the extended state (from ``omega``)
+:class:`DelayedUIO`           ``K`` on the stacked window ``Y[k:k+tau]`` (eq. (23))
+:class:`DescriptorObserver`   ``L`` on the descriptor state (eq. (18)); its ``F`` is the
+                              sensor-noise matrix, not a gain
+============================  =============================================================
+
+``observer.gains`` (and ``ObserverResult.gains``) holds exactly these, keyed
+by the symbols above: no covariance, transition matrix, eigenvalue or delay.
+A :class:`StateSpaceObserver`'s realisation has role names (``transition``,
+``output_gain``, ``input_matrix``, ``disturbance_map``, ``state_map``);
+``transition`` is also available on the :class:`DelayedUIO` (its ``J``).
+"""
 
 from .base import DesignError, ObserverResult, PointObserver, StateSpaceObserver
 from .descriptor import DescriptorObserver

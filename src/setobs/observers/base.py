@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -10,6 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecation import renamed
 from .._validation import as_matrix, as_vector
 from ..exceptions import DesignError, DimensionError
 from ..results import error_summary, time_axis, time_index
@@ -50,12 +50,7 @@ class ObserverResult:
     names: tuple[str, ...] = ()
     observer: str = "observer"
 
-    @property
-    def d_hat(self) -> NDArray[np.float64]:
-        """Deprecated name of :attr:`estimate`."""
-        warnings.warn("ObserverResult.d_hat is deprecated; use .estimate (the same name as "
-                      "SMFDOResult's)", DeprecationWarning, stacklevel=2)
-        return self.estimate
+    d_hat = renamed("d_hat", "estimate", "the same name as SMFDOResult's")
 
     @property
     def time(self) -> NDArray[np.float64]:
@@ -150,7 +145,10 @@ class PointObserver:
 
     @property
     def gains(self) -> dict[str, Any]:
-        """The gains used (for reports)."""
+        """The design's gain matrices, keyed by the paper's symbols (for reports).
+
+        Only gains: no covariance, transition matrix, eigenvalue or delay (those
+        are attributes of their own)."""
         return {}
 
     def reset(self) -> None:  # pragma: no cover - overridden
@@ -233,10 +231,14 @@ class PointObserver:
 
 
 class StateSpaceObserver(PointObserver):
-    """A linear observer ``xi+ = F xi + K y + M u``, ``d_hat = H xi`` (+ optional delay line).
+    """A linear observer ``xi+ = transition xi + output_gain y + input_matrix u``,
+    ``d_hat = disturbance_map xi`` (+ optional delay line).
 
-    Subclasses set ``F, K, M, H`` (and ``Hx`` for the state estimate), the
-    initial state ``xi0`` and an optional per-channel output delay.
+    Subclasses set these (and ``state_map`` for the state estimate), the
+    initial state ``xi0`` and an optional per-channel output delay. The names
+    are roles, not a paper's symbols (``F``, ``K``, ``M``, ``H`` mean other
+    things in the papers); for the Luenberger-type designs ``transition`` is
+    also the error dynamics' matrix.
 
     Parameters
     ----------
@@ -247,11 +249,14 @@ class StateSpaceObserver(PointObserver):
         names) that are disturbances.
     """
 
-    def _init_state_space(self, F, K, M, H, Hx=None, xi0=None, channel_delays=None,
+    def _init_state_space(self, transition, output_gain, input_matrix, disturbance_map,
+                          state_map=None, xi0=None, channel_delays=None,
                           output_map=None) -> None:
-        self.F, self.K, self.M, self.H = F, K, M, H
-        self.Hx = Hx
-        self.xi0 = np.zeros(F.shape[0]) if xi0 is None else np.asarray(xi0, float)
+        self.transition, self.output_gain = transition, output_gain
+        self.input_matrix, self.disturbance_map = input_matrix, disturbance_map
+        self.state_map = state_map
+        self.xi0 = (np.zeros(transition.shape[0]) if xi0 is None
+                    else np.asarray(xi0, float))
         self.channel_delays = channel_delays
         self.output_map = output_map
         self.reset()
@@ -266,9 +271,10 @@ class StateSpaceObserver(PointObserver):
 
     def step(self, y: ArrayLike, u: ArrayLike | None = None) -> NDArray[np.float64]:
         yv, uv = self._check(y, u)
-        d = self.H @ self.xi  # the estimate at k uses data up to k-1 (as in the papers)
+        d = self.disturbance_map @ self.xi  # the estimate at k uses data up to k-1 (papers)
         self._xk = self.xi.copy()
-        self.xi = self.F @ self.xi + self.K @ yv + (self.M @ uv if uv.size else 0.0)
+        self.xi = (self.transition @ self.xi + self.output_gain @ yv
+                   + (self.input_matrix @ uv if uv.size else 0.0))
         if self.channel_delays is not None:
             self._buf.append(d)
             out = np.full(d.shape, np.nan)
@@ -281,4 +287,4 @@ class StateSpaceObserver(PointObserver):
         return d
 
     def state_estimate(self) -> NDArray[np.float64] | None:
-        return None if self.Hx is None else self.Hx @ self._xk
+        return None if self.state_map is None else self.state_map @ self._xk

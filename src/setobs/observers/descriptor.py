@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_discrete_are
 
 from .._validation import as_matrix
 from ..analysis import observability
 from ..systems import DisturbanceInputs, LinearSystem
+from ._gains import lqe_gain
 from .base import DesignError, PointObserver
 
 __all__ = ["DescriptorObserver"]
@@ -81,15 +81,14 @@ class DescriptorObserver(PointObserver):
                               "(Assumptions 2-3 of the fragment fail)", "Assumptions 2-3")
         Qw = np.eye(nz + q) if Q_w is None else as_matrix("Q_w", Q_w, nz + q, nz + q)
         Rw = np.eye(ly) if R_w is None else as_matrix("R_w", R_w, ly, ly)
-        P = solve_discrete_are(A_w.T, C_w.T, Qw, Rw)
-        L = A_w @ P @ C_w.T @ np.linalg.inv(Rw + C_w @ P @ C_w.T)  # eq. (18)
+        L, P = lqe_gain(A_w, C_w, Qw, Rw, return_solution=True)  # eqs. (18)-(19)
         self.A_w, self.B_w, self.C_w, self.L, self.P_dare = A_w, B_w, C_w, L, P
-        self.F, self.n_noise = F_a, ln
+        self.noise_matrix, self.n_noise = F_a, ln
         self.reset()
 
     @property
     def gains(self) -> dict:
-        return {"L": self.L, "P": self.P_dare}
+        return {"L": self.L}
 
     def reset(self) -> None:
         """Restart with ``w^(0) = 0``."""

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import block_diag, solve_discrete_are, solve_sylvester
+from scipy.linalg import block_diag, solve_sylvester
 
 from .._validation import as_matrix
 from ..analysis import (
@@ -182,16 +182,6 @@ def _check_design(design: str, poles, gains_given: bool) -> None:
         raise DesignError("design='lqe' computes the gains: do not pass them", "design")
 
 
-def _ho_matrices(sys: LinearSystem):
-    """State ``(x, d*, Delta d*)`` of the higher-order observer and its output map."""
-    n, q = sys.n, sys.q
-    A = np.block([[sys.Phi, sys.G, np.zeros((n, q))],
-                  [np.zeros((q, n)), np.eye(q), np.eye(q)],
-                  [np.zeros((q, n + q)), np.eye(q)]])
-    C = np.hstack([sys.Xi, np.zeros((sys.l, 2 * q))])
-    return A, C
-
-
 def design_higher_order(sys: LinearSystem, poles: Sequence[complex]
                         ) -> dict[str, NDArray[np.float64]]:
     """Gains ``P0, L0, L1`` of the higher-order observer placing its ``n + 2q`` error poles.
@@ -212,10 +202,8 @@ def design_higher_order(sys: LinearSystem, poles: Sequence[complex]
     cond = higher_order_conditions(sys)
     if not cond.exists:
         raise DesignError(f"higher-order observer: {cond.reason}", cond.condition)
-    A, C = _ho_matrices(sys)
-    K = place_gain(A, C, poles)
-    n, q = sys.n, sys.q
-    return _ho_gains_from_injection(K, n, q)
+    aug = sys.augmented(order=2)
+    return _ho_gains_from_injection(place_gain(aug.A, aug.C, poles), sys.n, sys.q)
 
 
 def _ho_gains_from_injection(K, n, q):
@@ -274,8 +262,8 @@ class HigherOrderObserver(StateSpaceObserver):
         n, q, l = sys.n, sys.q, sys.l
         _check_design(design, poles, P0 is not None or L0 is not None or L1 is not None)
         if (P0 is None or L0 is None or L1 is None) and design == "lqe":
-            A, C = _ho_matrices(sys)
-            K = lqe_gain(A, C, block_diag(_cov("process_cov", process_cov, n, 0.0),
+            aug = sys.augmented(order=2)
+            K = lqe_gain(aug.A, aug.C, block_diag(_cov("process_cov", process_cov, n, 0.0),
                                           np.zeros((q, q)),
                                           _cov("increment_cov", increment_cov, q, None)),
                          _cov("measurement_cov", measurement_cov, l, None))
@@ -293,11 +281,10 @@ class HigherOrderObserver(StateSpaceObserver):
             L1_a = as_matrix("L1", L1, rows=q, cols=l)
         self.P0, self.L0, self.L1 = P0_a, L0_a, L1_a
         self.error_poles = higher_order_error_poles(sys.Phi, sys.Xi, P0_a, L0_a, L1_a, E=sys.G)
-        A, C = _ho_matrices(sys)
+        aug = sys.augmented(order=2)
         K = np.vstack([P0_a, L0_a + L1_a, L0_a])
-        B = np.vstack([sys.Gamma, np.zeros((2 * q, sys.p))])
-        self._init_state_space(A - K @ C, K, B, np.hstack([np.zeros((q, n)), np.eye(q),
-                                                            np.zeros((q, q))]),
+        self._init_state_space(aug.A - K @ aug.C, K, aug.Gamma,
+                               np.hstack([np.zeros((q, n)), np.eye(q), np.zeros((q, q))]),
                                np.hstack([np.eye(n), np.zeros((n, 2 * q))]))
 
     @property
@@ -349,8 +336,7 @@ class ModularObserver(StateSpaceObserver):
         F, P, H = sys.Phi, sys.G, sys.Xi
         S = np.eye(q)
         if L0 is None:
-            X = solve_discrete_are(F.T, H.T, np.eye(n), np.eye(l))
-            L0_a = F @ X @ H.T @ np.linalg.inv(H @ X @ H.T + np.eye(l))
+            L0_a = lqe_gain(F, H, np.eye(n), np.eye(l))
         else:
             L0_a = as_matrix("L0", L0, rows=n, cols=l)
         Fc = F - L0_a @ H
@@ -375,4 +361,4 @@ class ModularObserver(StateSpaceObserver):
 
     @property
     def gains(self) -> dict:
-        return {"L0": self.L0, "Lw": self.Lw, "V": self.V}
+        return {"L0": self.L0, "Lw": self.Lw}

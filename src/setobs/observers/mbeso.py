@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag, lstsq
 
+from .._format import format_complex_list
 from ..analysis import invariant_zeros, relative_degrees
 from ..systems import DisturbanceInputs, LinearSystem
 from .base import DesignError, StateSpaceObserver
@@ -128,7 +129,7 @@ def _check_assumption1(sys: LinearSystem, name: str):
                           f"l = {sys.l})", "q = l")
     z = invariant_zeros(sys)
     if not z.full_normal_rank or z.zeros.size:
-        zs = ", ".join(f"{v.real:.6g}" if abs(v.imag) < 1e-12 else f"{v:.6g}" for v in z.zeros)
+        zs = format_complex_list(z.zeros)
         raise DesignError(f"{name} requires Assumption 1 (no invariant zeros); zeros: "
                           f"{zs or 'pencil not of full normal rank'}", "Assumption 1")
     return relative_degrees(sys)
@@ -198,7 +199,7 @@ class MBESO(StateSpaceObserver):
 
     @property
     def gains(self) -> dict:
-        return {"L": self.L, "omega": self.omegas}
+        return {"L": self.L}
 
 
 class VariantMBESO(MBESO):

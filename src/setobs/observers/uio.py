@@ -9,27 +9,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import lstsq, svd
 
-from ..analysis import uio_conditions, uio_delay
+from .._format import format_complex_list
+from ..analysis import markov_toeplitz, uio_conditions, uio_delay
 from ..systems import DisturbanceInputs, LinearSystem
 from ._gains import place_gain
 from .base import DesignError, PointObserver
 
 __all__ = ["DelayedUIO"]
-
-
-def _toeplitz(C, A, B, tau):
-    """Block lower-triangular Toeplitz of ``H_0 = 0``, ``H_i = C A^(i-1) B`` (eq. (26))."""
-    l, m = C.shape[0], B.shape[1]
-    H = [np.zeros((l, m))]
-    P = B
-    for _ in range(tau):
-        H.append(C @ P)
-        P = A @ P
-    M = np.zeros(((tau + 1) * l, (tau + 1) * m))
-    for i in range(tau + 1):
-        for j in range(i + 1):
-            M[i * l : (i + 1) * l, j * m : (j + 1) * m] = H[i - j]
-    return M
 
 
 class DelayedUIO(PointObserver):
@@ -71,7 +57,7 @@ class DelayedUIO(PointObserver):
         sys = self.sys
         cond = uio_conditions(sys)
         if not cond.delayed_uio_exists:
-            zs = ", ".join(f"{z.real:.6g}" for z in cond.unstable_zeros)
+            zs = format_complex_list(cond.unstable_zeros)
             raise DesignError("delayed UIO needs condition (b) (strong detectability); "
                               f"invariant zeros on/outside the unit circle: {zs or 'n/a'}",
                               "condition (b)")
@@ -83,8 +69,8 @@ class DelayedUIO(PointObserver):
             raise DesignError("no finite delay satisfies eq. (25)", "eq. (25)")
         self.delay = tau
         O = np.vstack([C @ np.linalg.matrix_power(A, i) for i in range(tau + 1)])
-        M = _toeplitz(C, A, E, tau)
-        Nu = _toeplitz(C, A, B, tau) if sys.p else np.zeros((O.shape[0], 0))
+        M = markov_toeplitz(A, E, C, tau)
+        Nu = markov_toeplitz(A, B, C, tau) if sys.p else np.zeros((O.shape[0], 0))
         target = np.hstack([E, np.zeros((N, tau * E.shape[1]))])
         F = lstsq(M.T, target.T)[0].T
         if np.abs(F @ M - target).max() > 1e-8 * max(1.0, np.abs(target).max()):
@@ -99,7 +85,7 @@ class DelayedUIO(PointObserver):
             raise DesignError(f"need {N} poles, got {pol.size}", "poles")
         Zbar = place_gain(A1, Cbar, pol, check="radius")
         K = F + Zbar @ U[:, :r].T @ Pi
-        self.J, self.K, self.O, self.M, self.Nu, self.B = A - K @ O, K, O, M, Nu, B
+        self.J, self.K, self.O_tau, self.M_tau, self.Nu, self.B = A - K @ O, K, O, M, Nu, B
         self.tau = tau
         self.reset()
 
@@ -126,4 +112,9 @@ class DelayedUIO(PointObserver):
 
     @property
     def gains(self) -> dict:
-        return {"J": self.J, "K": self.K, "tau": self.tau}
+        return {"K": self.K}
+
+    @property
+    def transition(self) -> NDArray[np.float64]:
+        """The error dynamics' matrix ``J = A - K O_tau`` (eq. (24))."""
+        return self.J

@@ -75,7 +75,7 @@ class WindowModel:
     P : ndarray or None
         Extra objective rows (``P`` of Algorithm 1, line 14) when the hull of
         ``P Z`` is not a coordinate selection of the hull of ``Z``.
-    radius : float
+    unbounded_radius : float
         Radius on unbounded factors (certification).
     noise : ConstrainedZonotope or None
         Measurement-noise set in the coordinates of ``C_o`` (``y = C_o z + v``,
@@ -91,7 +91,7 @@ class WindowModel:
 
     def __init__(self, A_o, B_o, C_o, Gamma_o, *, increment: ConstrainedZonotope,
                  G_S, A_S, free_S, s: int, first_posterior: bool,
-                 P: NDArray[np.float64] | None, radius: float,
+                 P: NDArray[np.float64] | None, unbounded_radius: float,
                  noise: ConstrainedZonotope | None = None, masks=None) -> None:
         N, nS = G_S.shape
         GD, AD = increment.G, increment.A
@@ -216,8 +216,8 @@ class WindowModel:
         self.n_dir = W.shape[0]
         self.P = P
         self._absP = None if P is None else np.abs(P)
-        self.radius = radius
-        self.lp = FixedStructureLP(self.A, hull_objectives(W), self.free, radius)
+        self.unbounded_radius = unbounded_radius
+        self.lp = FixedStructureLP(self.A, hull_objectives(W), self.free, unbounded_radius)
 
     @property
     def usable(self) -> bool:
@@ -325,4 +325,4 @@ class WindowModel:
 
     def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""
-        return trusted_cz(self.G, c, self.A, b, h, self.radius, c_err, b_err)
+        return trusted_cz(self.G, c, self.A, b, h, self.unbounded_radius, c_err, b_err)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecation import renamed
 from .._lazy import optional_import
 from ..exceptions import SolverError, UnboundedSetError
 from ..geometry import ConstrainedZonotope
@@ -22,15 +23,18 @@ class PointEstimate:
     ----------
     point : ndarray
         The estimate ``d^``.
-    radius : float
-        ``max_{d in S} ||d^ - d||`` in the stated norm (``inf`` if unbounded).
+    worst_case_error : float
+        ``max_{d in S} ||d^ - d||`` in the stated norm (``inf`` if unbounded):
+        for the Chebyshev centre, the radius of the minimum enclosing ball.
     norm : str
         ``"inf"`` or ``"2"``.
     """
 
     point: NDArray[np.float64]
-    radius: float
+    worst_case_error: float
     norm: str
+
+    radius = renamed("radius", "worst_case_error")
 
 
 def interval_center(Z: ConstrainedZonotope) -> PointEstimate:
@@ -40,7 +44,7 @@ def interval_center(Z: ConstrainedZonotope) -> PointEstimate:
     minimised coordinate by coordinate at ``c = (lo + hi)/2``, with value
     ``max_i (hi_i - lo_i)/2``. (It is *not* optimal for the Euclidean norm in
     general: see :func:`chebyshev_center`.) Unbounded coordinates give NaN and
-    ``radius = inf``.
+    ``worst_case_error = inf``.
 
     Parameters
     ----------
@@ -48,7 +52,7 @@ def interval_center(Z: ConstrainedZonotope) -> PointEstimate:
         The set.
     """
     box = Z.interval_hull()
-    r = box.radius
+    r = box.half_width
     return PointEstimate(box.center, float(r.max(initial=0.0)), "inf")
 
 

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._blas import with_single_threaded_blas
+from .._deprecation import renamed
 from .._lazy import progress_bar
 from .._rounding import UNIT_ROUNDOFF, gamma, pow2_inverse
 from .._validation import as_matrix, as_vector, check_real_scalar
@@ -28,8 +29,8 @@ from ..exceptions import (
     SolverWarning,
 )
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.box import box_center, trusted_box
-from ..geometry.zonotope import box_center_radius, hull_with_status, trusted_cz
+from ..geometry.box import box_center, box_center_radius, trusted_box
+from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
@@ -69,8 +70,11 @@ class SMFDOStep:
         NaN where the set is still unbounded.
     lo, hi : ndarray, shape (q,)
         Certified interval hull of the disturbance set (``+-inf`` while unbounded).
-    radius : float
-        Worst-case infinity-norm error of ``estimate`` over the set.
+    error_bound : float
+        Certified bound on the infinity-norm error of ``estimate``:
+        ``max_i (hi_i - lo_i) / 2``, its worst case over the computed set (the
+        optimal worst-case error in exact mode, an upper bound on it with a
+        window).
     disturbance_set : ConstrainedZonotope or None
         ``P Z_k`` when requested (``keep_sets=True``).
     status : str
@@ -88,9 +92,11 @@ class SMFDOStep:
     estimate: NDArray[np.float64]
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
-    radius: float
+    error_bound: float
     disturbance_set: ConstrainedZonotope | None = None
     status: str = "ok"
+
+    radius = renamed("radius", "error_bound")
 
     def contains(self, d: ArrayLike) -> bool:
         """Whether ``d`` lies in ``[lo, hi]``.
@@ -108,7 +114,7 @@ class SMFDOStep:
 class SMFDOResult:
     """Batch result of :meth:`SMFDO.run` (the protocol of :mod:`setobs.results`).
 
-    Arrays of shape ``(N, q)`` (``radius``, ``status``: ``(N,)``). Unpacks as
+    Arrays of shape ``(N, q)`` (``error_bound``, ``status``: ``(N,)``). Unpacks as
     ``t, estimate, lo, hi = smfdo.run(Y)``.
 
     Attributes
@@ -119,9 +125,9 @@ class SMFDOResult:
     lo, hi : ndarray, shape (N, q)
         Certified interval hull of the consistent disturbances (``-inf``/``inf``
         while unbounded).
-    radius : ndarray, shape (N,)
-        Worst-case infinity-norm error of :attr:`estimate` (the ``optimal``
-        metric): ``max_i (hi_i - lo_i) / 2``.
+    error_bound : ndarray, shape (N,)
+        Certified bound on the infinity-norm error of :attr:`estimate`:
+        ``max_i (hi_i - lo_i) / 2`` (in exact mode the ``optimal`` metric).
     steps : list of SMFDOStep
         The per-step records.
     status : ndarray of str, shape (N,)
@@ -140,12 +146,14 @@ class SMFDOResult:
     estimate: NDArray[np.float64]
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
-    radius: NDArray[np.float64]
+    error_bound: NDArray[np.float64]
     steps: list[SMFDOStep]
     status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
     first_inconsistent: int | None = None
     dt: float | None = None
     names: tuple[str, ...] = ()
+
+    radius = renamed("radius", "error_bound")
 
     @property
     def time(self) -> NDArray[np.float64]:
@@ -178,8 +186,9 @@ class SMFDOResult:
         return plot_estimate_band(self, truth=truth, component=component, ax=ax)
 
     def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
-        """One row (index ``"SMFDO"``) over steps ``k >= start``: ``optimal`` (mean
-        radius over the bounded steps), ``max_optimal``, ``unbounded`` steps,
+        """One row (index ``"SMFDO"``) over steps ``k >= start``: ``error_bound`` (mean
+        certified error bound over the bounded steps; the ``optimal`` worst-case
+        error in exact mode), ``max_error_bound``, ``unbounded`` steps,
         ``inconsistent`` steps and, with the truth, ``error_inf``, ``max_error_inf``,
         ``error_2`` and ``truth_inside`` (fraction of steps whose certified interval
         holds the truth).
@@ -196,12 +205,12 @@ class SMFDOResult:
         pandas.DataFrame
             The summary row.
         """
-        r = self.radius[start:]
+        r = self.error_bound[start:]
         fin = np.isfinite(r)
         st = self.status[start:] if self.status.size else np.zeros(0, dtype="<U9")
         extra: dict[str, Any] = {
-            "optimal": float(r[fin].mean()) if fin.any() else np.inf,
-            "max_optimal": float(r[fin].max()) if fin.any() else np.inf,
+            "error_bound": float(r[fin].mean()) if fin.any() else np.inf,
+            "max_error_bound": float(r[fin].max()) if fin.any() else np.inf,
             "unbounded": int((~fin).sum()),
             "inconsistent": int(np.isin(st, ("skipped", "reset")).sum()),
         }
@@ -213,7 +222,7 @@ class SMFDOResult:
 
     def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
         """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
-        (the estimate and its certified interval), then ``radius`` and ``status``.
+        (the estimate and its certified interval), then ``error_bound`` and ``status``.
 
         The index is the time ``k dt`` (named ``"time"``) when a sampling time is
         known (``dt`` or the system's), else the step ``k``.
@@ -242,7 +251,7 @@ class SMFDOResult:
             cols[name] = self.estimate[:, i]
             cols[f"{name}_lo"] = self.lo[:, i]
             cols[f"{name}_hi"] = self.hi[:, i]
-        cols["radius"] = self.radius
+        cols["error_bound"] = self.error_bound
         cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
         return pd.DataFrame(cols, index=time_index(N, dt if dt is not None else self.dt))
 
@@ -408,7 +417,7 @@ def _normalize_free_columns(Z: ConstrainedZonotope) -> ConstrainedZonotope:
         return Z
     norms = np.linalg.norm(np.vstack([Z.G, Z.A]), axis=0)
     s = np.where(free, pow2_inverse(norms), 1.0)
-    return trusted_cz(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.radius, Z.c_err,
+    return trusted_cz(Z.G * s, Z.c, Z.A * s, Z.b, Z.h, Z.unbounded_radius, Z.c_err,
                                         Z.b_err)
 
 
@@ -755,7 +764,8 @@ class SMFDO:
             a = np.ascontiguousarray(a)
             hsh.update(str(a.shape).encode())
             hsh.update(a.tobytes())
-        hsh.update(repr((self._P_coords is None, min(Z0.radius, inc.radius if inc else 0.0),
+        r_inc = inc.unbounded_radius if inc else 0.0
+        hsh.update(repr((self._P_coords is None, min(Z0.unbounded_radius, r_inc),
                          self.window)).encode())
         return hsh.digest()
 
@@ -888,25 +898,25 @@ class SMFDO:
             b_S = np.zeros(0)
             c_S_err = b_S_err = None
             key = ("box", free.tobytes(), mkey)
-            radius = min(UNBOUNDED_RADIUS, inc.radius)
+            unbounded_radius = min(UNBOUNDED_RADIUS, inc.unbounded_radius)
 
             def build() -> WindowModel:
                 return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
                                    G_S=np.eye(N), A_S=np.zeros((0, N)), free_S=free, s=win,
-                                   first_posterior=False, P=P_extra, radius=radius,
-                                   noise=V, masks=masks)
+                                   first_posterior=False, P=P_extra,
+                                   unbounded_radius=unbounded_radius, noise=V, masks=masks)
         else:  # "init": the whole history from Z_0^-
             Z0 = self._Z0_prior
             c_S, b_S, h_S = Z0.c, Z0.b, Z0.h
             c_S_err, b_S_err = Z0.c_err, Z0.b_err
             key = ("init", k, mkey)
-            radius = min(Z0.radius, inc.radius)
+            unbounded_radius = min(Z0.unbounded_radius, inc.unbounded_radius)
 
             def build() -> WindowModel:
                 return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
                                    G_S=Z0.G, A_S=Z0.A, free_S=np.isinf(Z0.h), s=k,
-                                   first_posterior=True, P=P_extra, radius=radius, noise=V,
-                                   masks=masks)
+                                   first_posterior=True, P=P_extra,
+                                   unbounded_radius=unbounded_radius, noise=V, masks=masks)
         model = MODEL_CACHE.get((self._digest, *key), build)
         if not model.usable:
             return None
@@ -984,7 +994,7 @@ class SMFDO:
         # noise's own constraints, generators -G_V
         cY = ym - V.c[m]
         cY_err = UNIT_ROUNDOFF * np.abs(cY) + V.c_err[m] + y_err
-        Yset = trusted_cz(-V.G[m], cY, V.A, V.b, V.h, V.radius, cY_err,
+        Yset = trusted_cz(-V.G[m], cY, V.A, V.b, V.h, V.unbounded_radius, cY_err,
                                             V.b_err)
         return Zp.intersect(Yset, R=C)
 
@@ -1236,7 +1246,7 @@ class SMFDO:
         Returns
         -------
         SMFDOResult
-            ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``radius`` and
+            ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``error_bound`` and
             ``status`` ``(N,)``, ``first_inconsistent``.
 
         Warns
@@ -1295,7 +1305,7 @@ class SMFDO:
             np.array([s.estimate for s in steps]).reshape(N, q),
             np.array([s.lo for s in steps]).reshape(N, q),
             np.array([s.hi for s in steps]).reshape(N, q),
-            np.array([s.radius for s in steps]),
+            np.array([s.error_bound for s in steps]),
             steps,
             status,
             first,

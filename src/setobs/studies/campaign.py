@@ -129,10 +129,10 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     approximation, so worst-case scores are upper bounds).
 
     Returns tidy rows ``(run, observer, k, error_inf, error_2, worst_case_error,
-    optimal, radius, truth_inside)`` (the metric names of :mod:`setobs.results`):
+    optimal, error_bound, truth_inside)`` (the metric names of :mod:`setobs.results`):
     actual errors, worst-case infinity-norm error over the consistent set, the
-    optimal worst-case error (the reference's radius), the observer's own
-    interval radius (SMFDO only) and whether the truth lies in that interval
+    optimal worst-case error (the reference's ``error_bound``), the observer's own
+    ``error_bound`` (SMFDO only) and whether the truth lies in that interval
     (SMFDO only).
 
     Parameters
@@ -163,11 +163,11 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
             # The same deterministic computation as the reference: reuse it.
             res = ref if params == ref_params else _smfdo_for(params, scenario, sys,
                                                               reset).run(traj.Y, traj.U)
-            est, radius = res.estimate, res.radius
+            est, bound = res.estimate, res.error_bound
             inside = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
         else:
             est = _point_observer(spec, sys).run(traj.Y, traj.U).estimate
-            radius = np.full(scenario.horizon, np.nan)
+            bound = np.full(scenario.horizon, np.nan)
             inside = np.full(scenario.horizon, np.nan)
         err = est - traj.D
         worst = worst_case_error(est, ref.lo, ref.hi)
@@ -177,8 +177,8 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
         for k in range(scenario.horizon):
             rows.append({"run": int(run), "observer": spec.name, "k": k,
                          "error_inf": float(e_inf[k]), "error_2": float(e_2[k]),
-                         "worst_case_error": float(worst[k]), "optimal": float(ref.radius[k]),
-                         "radius": float(radius[k]), "truth_inside": float(inside[k])})
+                         "worst_case_error": float(worst[k]), "optimal": float(ref.error_bound[k]),
+                         "error_bound": float(bound[k]), "truth_inside": float(inside[k])})
     return rows
 
 
@@ -190,7 +190,7 @@ class CampaignResult:
     ----------
     table : pandas.DataFrame
         One row per run, observer and step: ``run, observer, k, error_inf,
-        error_2, worst_case_error, optimal, radius, truth_inside``.
+        error_2, worst_case_error, optimal, error_bound, truth_inside``.
     metadata : dict
         The request, versions, machine and timing (also in ``metadata.json``).
     """
@@ -219,11 +219,12 @@ class CampaignResult:
         Returns
         -------
         pandas.DataFrame
-            Columns ``error_inf, error_2, worst_case_error, optimal, radius,
+            Columns ``error_inf, error_2, worst_case_error, optimal, error_bound,
             truth_inside``.
         """
         t = self.table[self.table["k"] >= start]
-        cols = ["error_inf", "error_2", "worst_case_error", "optimal", "radius", "truth_inside"]
+        cols = ["error_inf", "error_2", "worst_case_error", "optimal", "error_bound",
+                "truth_inside"]
         return t.groupby("observer", sort=False)[cols].mean()
 
     def plot(self, ax: Any = None, metric: str = "error_inf", logy: bool = True) -> Any:

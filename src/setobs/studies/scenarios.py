@@ -220,12 +220,7 @@ class Scenario:
         x = (rng.uniform(-self.x0_box, self.x0_box, sys.n) if self.x0_box is not None
              else rng.normal(size=sys.n))
         U = np.zeros((self.horizon, sys.p)) if sys.p else None
-        X = np.empty((self.horizon, sys.n))
-        Y = np.empty((self.horizon, sys.l))
-        for k in range(self.horizon):
-            X[k] = x
-            Y[k] = sys.Xi @ x
-            x = sys.Phi @ x + sys.G @ D[k] + (sys.Gamma @ U[k] if U is not None else 0.0)
+        Y, X = sys.simulate(D, U, x0=x)
         if self.noise_std > 0:
             Y = Y + rng.normal(0.0, self.noise_std, size=Y.shape)
         return Trajectory(Y, D, X, U)

@@ -1,4 +1,7 @@
-"""2-D plotting of constrained zonotopes (matplotlib is imported lazily)."""
+"""2-D drawing of constrained zonotopes, public as :func:`setobs.plotting.plot_set`.
+
+matplotlib is imported lazily.
+"""
 
 from __future__ import annotations
 
@@ -13,10 +16,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.patches import Patch
 
-__all__ = ["plot_cz"]
+__all__ = ["plot_set"]
 
 
-def plot_cz(
+def plot_set(
     Z: ConstrainedZonotope,
     ax: Axes | None = None,
     dims: Sequence[int] = (0, 1),
