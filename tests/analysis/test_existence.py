@@ -356,7 +356,7 @@ def test_undecidable_is_reported_by_diagnose_and_the_smfdo():
     r = bounded_do_exists(S)
     assert r.verdict == "undecidable" and not r.decided and not r.satisfied
     v = diagnose(S)["SMFDO"]
-    assert v.mark == "undecidable" and "undecidable at this precision" in v.reason
+    assert v.verdict == "undecidable" and "undecidable at this precision" in v.reason
     assert "undecidable" in repr(diagnose(S))
     with pytest.raises(ExistenceError, match="undecidable at this precision"):
         so.SMFDO(S)

@@ -83,7 +83,7 @@ class Diagnosis:
         width = max(len(v.design) for v in self.verdicts)
         lines = ["Diagnosis", "  " + self._header()]
         for v in self.verdicts:
-            mark = f"{v.mark:<3}"
+            mark = f"{'NO' if v.verdict == 'no' else v.verdict:<3}"
             lines.append(f"  {v.design:<{width}}  {mark}  {v.condition}")
             if not v.exists:
                 lines.append(f"  {'':<{width}}       -> {v.reason}")
@@ -101,7 +101,7 @@ class Diagnosis:
                "|---|---|---|---|---|"]
         for v in self.verdicts:
             nums = "; ".join(f"{k}={_fmt(val)}" for k, val in v.numbers.items())
-            out.append(f"| {v.design} | {v.mark.lower()} | {v.condition} | "
+            out.append(f"| {v.design} | {v.verdict} | {v.condition} | "
                        f"{nums} | {v.reason or '—'} |")
         if self.notes:
             out += ["", *[f"- {n}" for n in self.notes]]

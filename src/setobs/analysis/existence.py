@@ -52,6 +52,21 @@ def ibar(blocks: int, l: int) -> NDArray[np.float64]:
     return np.kron(np.tril(np.ones((blocks, blocks)), -1), np.eye(l))
 
 
+def verdict_word(holds: bool, decided: bool) -> str:
+    """``"yes"``, ``"no"`` or ``"undecidable"``: the word of every existence report.
+
+    Parameters
+    ----------
+    holds : bool
+        The condition's value.
+    decided : bool
+        Whether it was decided at this precision.
+    """
+    if not decided:
+        return "undecidable"
+    return "yes" if holds else "no"
+
+
 @dataclass(frozen=True)
 class BoundedDOReport:
     """Existence of a bounded disturbance observer (Li-Cong-Dong, Theorem 1).
@@ -121,9 +136,7 @@ class BoundedDOReport:
     @property
     def verdict(self) -> str:
         """``"yes"``, ``"no"`` or ``"undecidable"`` (at this precision)."""
-        if not self.decided:
-            return "undecidable"
-        return "yes" if self.satisfied else "no"
+        return verdict_word(self.satisfied, self.decided)
 
     @property
     def forms_agree(self) -> bool:
@@ -394,11 +407,9 @@ class ExistenceReport:
     decided: bool = True
 
     @property
-    def mark(self) -> str:
-        """``"yes"``, ``"NO"`` or ``"undecidable"``."""
-        if not self.decided:
-            return "undecidable"
-        return "yes" if self.exists else "NO"
+    def verdict(self) -> str:
+        """``"yes"``, ``"no"`` or ``"undecidable"`` (at this precision)."""
+        return verdict_word(self.exists, self.decided)
 
 
 def _pbh_at_one(sys: LinearSystem, rtol: float) -> RankDecision:
