@@ -67,6 +67,51 @@ def round_down(x: ArrayLike) -> NDArray[np.float64] | float:
     return float(out) if np.ndim(out) == 0 else out
 
 
+def outward_interval(c: NDArray[np.float64], c_err: NDArray[np.float64] | None,
+                     low: NDArray[np.float64], upp: NDArray[np.float64],
+                     offset: NDArray[np.bool_] | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``[c + low, c + upp]`` widened by ``c_err`` and rounded outward.
+
+    The one rounding of an interval hull from certified factor-space bounds
+    (the reference path's :meth:`ConstrainedZonotope.interval_hull` and the
+    compiled fast path's :func:`setobs.geometry.fastlp.hull_from_bounds`):
+    ``lo = down(down(c - c_err) + low)``, ``hi = up(up(c + c_err) + upp)``,
+    with ``c`` used as is where ``c_err = 0`` and ``-inf``/``inf`` where a
+    bound is infinite.
+
+    Parameters
+    ----------
+    c : ndarray, shape (n,)
+        Centre.
+    c_err : ndarray, shape (n,) or None
+        Bound on the error of ``c`` (``None``: exact).
+    low, upp : ndarray, shape (n,)
+        Certified bounds of the offset from ``c``.
+    offset : ndarray of bool, shape (n,), optional
+        Coordinates that have an offset (default all); the others get the
+        rounded bounds of ``c`` alone.
+
+    Returns
+    -------
+    lo, hi : ndarray, shape (n,)
+    """
+    c = np.asarray(c, dtype=np.float64)
+    if c_err is None:
+        c_lo = c_hi = c
+    else:
+        e = np.asarray(c_err, dtype=np.float64)
+        c_lo = np.where(e > 0, np.nextafter(c - e, -np.inf), c)
+        c_hi = np.where(e > 0, np.nextafter(c + e, np.inf), c)
+    with np.errstate(invalid="ignore"):
+        lo = np.where(np.isfinite(low), np.nextafter(low + c_lo, -np.inf), -np.inf)
+        hi = np.where(np.isfinite(upp), np.nextafter(upp + c_hi, np.inf), np.inf)
+    if offset is not None:
+        lo = np.where(offset, lo, c_lo)
+        hi = np.where(offset, hi, c_hi)
+    return lo, hi
+
+
 def pow2_inverse(v: NDArray[np.float64]) -> NDArray[np.float64]:
     """Powers of two ``s`` with ``s v`` in ``[0.5, 1)`` (1 where ``v`` is zero).
 

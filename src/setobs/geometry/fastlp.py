@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import lazy_module
-from .._rounding import pow2_inverse
+from .._rounding import outward_interval, pow2_inverse
 from ..tolerances import (
     EQUILIBRATION_FLOOR,
     FASTLP_BOUNDED_CLEAR,
@@ -103,14 +103,7 @@ def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64],
     low, upp = bounds[0::2], -bounds[1::2]
     if (low > upp).any():
         return None
-    c_lo, c_hi = c, c
-    if c_err is not None:
-        c_lo = np.nextafter(c - c_err, -np.inf)
-        c_hi = np.nextafter(c + c_err, np.inf)
-    with np.errstate(invalid="ignore"):
-        lo = np.where(np.isfinite(low), np.nextafter(low + c_lo, -np.inf), -np.inf)
-        hi = np.where(np.isfinite(upp), np.nextafter(upp + c_hi, np.inf), np.inf)
-    return lo, hi
+    return outward_interval(c, c_err, low, upp)
 
 
 class LPState:

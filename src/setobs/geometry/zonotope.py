@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._rounding import UNIT_ROUNDOFF, gamma, round_down, round_up
+from .._rounding import UNIT_ROUNDOFF, gamma, outward_interval, round_up
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
     DimensionError,
@@ -651,32 +651,26 @@ class ConstrainedZonotope:
         if cached is not None:
             return cached
         n = self.dim
-        lo = np.empty(n)
-        hi = np.empty(n)
+        low = np.zeros(n)
+        upp = np.zeros(n)
         fp = self._lp()
         before = fp.fallbacks
         zero_rows = ~self._G.any(axis=1)
         if self.n_con and zero_rows.any() and fp.emptiness().empty:
             raise EmptySetError("the set is empty (certified by the phase-1 LP)")
-        cerr = np.zeros(n) if self._cerr is None else self._cerr
-        for i in range(n):
+        for i in np.flatnonzero(~zero_rows):
             g = self._G[i]
-            ce = float(cerr[i])
-            if zero_rows[i]:
-                lo[i] = round_down(self._c[i] - ce) if ce else self._c[i]
-                hi[i] = round_up(self._c[i] + ce) if ce else self._c[i]
-                continue
-            low = fp.minimize(g).bound
-            upp = -fp.minimize(-g).bound
-            if low > upp:
+            lw = fp.minimize(g).bound
+            up = -fp.minimize(-g).bound
+            if lw > up:
                 # Crossing certified bounds prove the exact set empty; within the
                 # emptiness tolerance it may not be: decide, then relax outward.
                 if fp.emptiness().empty:
                     raise EmptySetError("the set is empty (certified by the phase-1 LP)")
-                low = fp.minimize_relaxed(g).bound
-                upp = -fp.minimize_relaxed(-g).bound
-            lo[i] = round_down(round_down(self._c[i] - ce) + low) if np.isfinite(low) else -np.inf
-            hi[i] = round_up(round_up(self._c[i] + ce) + upp) if np.isfinite(upp) else np.inf
+                lw = fp.minimize_relaxed(g).bound
+                up = -fp.minimize_relaxed(-g).bound
+            low[i], upp[i] = lw, up
+        lo, hi = outward_interval(self._c, self._cerr, low, upp, offset=~zero_rows)
         out = (Box(lo, hi), fp.fallbacks > before)
         self._cache["hull"] = out
         return out
