@@ -221,10 +221,13 @@ def uio_delay(A: ArrayLike, E: ArrayLike, C: ArrayLike, *, rtol: float = RANK_RT
     # M itself, which is pure rounding noise while the true H_i vanish.
     nC = max(float(np.linalg.norm(Cb, 2)), 1e-300)
     refs = _product_scales(Ab, Eb, mu_max + 2)
+    # M_mu is the leading block of M_mu_max (block lower-triangular Toeplitz)
+    M_all = markov_toeplitz(Ab, Eb, Cb, mu_max)
+    lb, mb = Cb.shape[0], Eb.shape[1]
     decisions = []
     prev = 0
     for mu in range(mu_max + 1):
-        M = markov_toeplitz(Ab, Eb, Cb, mu)
+        M = M_all[: (mu + 1) * lb, : (mu + 1) * mb]
         # No row normalisation either: a rounding-noise row (an exact zero computed
         # as 1e-17) would become a fake independent row.
         ref = nC * max(refs[: max(mu, 1)])
