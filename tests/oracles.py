@@ -287,3 +287,129 @@ def exact_hpolytope_vertices(H: np.ndarray, k: np.ndarray) -> list[list[Fraction
             out[tuple(x)] = x
             break
     return list(out.values())
+
+
+def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_box=None,
+                     noise_w=None, noise_v=None, Du=None, r_inc_set=None, y_rtol=0.0):
+    """``(lo, hi)`` of ``d_k`` over the whole history by a sparse float LP (HiGHS).
+
+    For long horizons where :func:`exact_history_bounds` is too slow. Every
+    state is a variable (``x_0 .. x_k``, ``d_0 .. d_k``, the increments and the
+    noise), so no power of ``Phi`` is formed: ``x_(j+1) = Phi x_j + Gamma u_j +
+    G d_j + E w_j``, ``d_(j+1) = d_j + dd_j``, ``Xi x_j + F nu_j = y_j - Du u_j``
+    on the measured (non-NaN) entries; ``|dd_j| <= r_inc`` or, with
+    ``r_inc_set = (H, h)``, ``H dd_j <= h``; ``noise_w = (E, r_w)``,
+    ``noise_v = (F, r_v)`` boxes; ``x_box``, ``d_box``: optional ``(lo, hi)``;
+    ``y_rtol``: each measurement is known to ``y_rtol |y|`` (a slack per row; the
+    float simulation's data are consistent only up to their rounding).
+    Tight solver tolerances (1e-10); the optimum is a float, not certified.
+    """
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    Phi, G, Xi = (np.atleast_2d(np.asarray(M, float)) for M in (Phi, G, Xi))
+    n, q, l = Phi.shape[0], G.shape[1], Xi.shape[0]
+    E, r_w = (None, None) if noise_w is None else (np.atleast_2d(noise_w[0]), noise_w[1])
+    F, r_v = (None, None) if noise_v is None else (np.atleast_2d(noise_v[0]), noise_v[1])
+    nw = 0 if E is None else E.shape[1]
+    nv = 0 if F is None else F.shape[1]
+    ix = lambda j: j * n  # noqa: E731
+    o_d = (k + 1) * n
+    idd = lambda j: o_d + j * q  # noqa: E731
+    o_dd = o_d + (k + 1) * q
+    o_w = o_dd + k * q
+    o_v = o_w + k * nw
+    o_e = o_v + (k + 1) * nv
+    n_meas = int(sum((~np.isnan(Y[j])).sum() for j in range(k + 1))) if y_rtol else 0
+    nvar = o_e + n_meas
+    e_bounds = []
+    rows, cols, vals, rhs = [], [], [], []
+    r = 0
+
+    def put(i, js, M):
+        M = np.atleast_2d(M)
+        for a in range(M.shape[0]):
+            for b in range(M.shape[1]):
+                if M[a, b] != 0.0:
+                    rows.append(i + a)
+                    cols.append(js + b)
+                    vals.append(M[a, b])
+
+    for j in range(k):
+        put(r, ix(j + 1), np.eye(n))
+        put(r, ix(j), -Phi)
+        put(r, idd(j), -G)
+        if nw:
+            put(r, o_w + j * nw, -E)
+        u = np.zeros(n) if U is None or Gamma is None else np.asarray(Gamma) @ U[j]
+        rhs.extend(u)
+        r += n
+        put(r, idd(j + 1), np.eye(q))
+        put(r, idd(j), -np.eye(q))
+        put(r, o_dd + j * q, -np.eye(q))
+        rhs.extend(np.zeros(q))
+        r += q
+    for j in range(k + 1):
+        m = ~np.isnan(Y[j])
+        for i in np.flatnonzero(m):
+            put(r, ix(j), Xi[i:i + 1])
+            if nv:
+                put(r, o_v + j * nv, F[i:i + 1])
+            yv = Y[j][i] - (0.0 if Du is None else float(np.asarray(Du)[i] @ U[j]))
+            if y_rtol:
+                put(r, o_e + len(e_bounds), -np.ones((1, 1)))
+                e_bounds.append(y_rtol * abs(Y[j][i]))
+            rhs.append(yv)
+            r += 1
+    A_eq = sp.csr_array((vals, (rows, cols)), shape=(r, nvar))
+    bounds = [(None, None)] * nvar
+    if x_box is not None:
+        for i in range(n):
+            bounds[ix(0) + i] = (x_box[0][i], x_box[1][i])
+    if d_box is not None:
+        for i in range(q):
+            bounds[idd(0) + i] = (d_box[0][i], d_box[1][i])
+    A_ub = b_ub = None
+    if r_inc_set is None:
+        rr = np.broadcast_to(np.asarray(r_inc, float), (q,))
+        for j in range(k):
+            for i in range(q):
+                bounds[o_dd + j * q + i] = (-rr[i], rr[i])
+    else:
+        Hs, hs = np.atleast_2d(r_inc_set[0]), np.asarray(r_inc_set[1], float)
+        ur, uc, uv = [], [], []
+        for j in range(k):
+            for a in range(Hs.shape[0]):
+                for b in range(q):
+                    ur.append(j * Hs.shape[0] + a)
+                    uc.append(o_dd + j * q + b)
+                    uv.append(Hs[a, b])
+        A_ub = sp.csr_array((uv, (ur, uc)), shape=(k * Hs.shape[0], nvar))
+        b_ub = np.tile(hs, k)
+    for j in range(k):
+        for i in range(nw):
+            bounds[o_w + j * nw + i] = (-r_w[i], r_w[i])
+    for j in range(k + 1):
+        for i in range(nv):
+            bounds[o_v + j * nv + i] = (-r_v[i], r_v[i])
+    for t, eb in enumerate(e_bounds):
+        bounds[o_e + t] = (-eb, eb)
+    opts = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
+    lo, hi = np.empty(q), np.empty(q)
+    for i in range(q):
+        for sgn in (1.0, -1.0):
+            cst = np.zeros(nvar)
+            cst[idd(k) + i] = sgn
+            res = linprog(cst, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=np.asarray(rhs),
+                          bounds=bounds, method="highs", options=opts)
+            if res.status == 3:
+                val = -np.inf if sgn > 0 else np.inf
+            elif res.status != 0:
+                raise RuntimeError(f"HiGHS: {res.message}")
+            else:
+                val = res.fun if sgn > 0 else -res.fun
+            if sgn > 0:
+                lo[i] = val
+            else:
+                hi[i] = val
+    return lo, hi

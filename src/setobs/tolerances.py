@@ -37,6 +37,9 @@ __all__ = [
     "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
     "FRAGILE_MARGIN_DECADES",
+    "HREP_CLIP_RTOL",
+    "HREP_FLAT_RTOL",
+    "HREP_SNAP_TOL",
     "IMAG_DISPLAY_RTOL",
     "LP_REFINE_GAP",
     "PRODUCT_RTOL",
@@ -134,6 +137,18 @@ LP_REFINE_GAP: float = 1e-9
 #: confirmed when the certified support in its normal exceeds its offset by at
 #: most this times the set's size; flat directions have certified width below it.
 VERTEX_RTOL: float = 1e-9
+
+# ---- exact mode's H-representation recursion (setobs.setmembership._hrep)
+#: Singular values of a point cloud below this fraction of the largest are flat
+#: directions of the approximate geometry (they only choose normals: the
+#: offsets in flat directions are certified like every other).
+HREP_FLAT_RTOL: float = 1e-10
+#: Two unit normals closer than this (infinity norm) are the same normal: the
+#: previous step's is reused bit for bit, so that the LP structure stays fixed.
+HREP_SNAP_TOL: float = 1e-10
+#: Relative tolerance below which a point lies on a measurement hyperplane when
+#: the approximate geometry is clipped.
+HREP_CLIP_RTOL: float = 1e-12
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

@@ -261,20 +261,42 @@ def to_hrep(Z: ConstrainedZonotope) -> HRep:
     return HRep(H, k, E, f)
 
 
-def _scott_cz(H, k, lo, hi) -> ConstrainedZonotope:
-    """Scott et al. (2016), Theorem 1: ``{x in box : H x <= k}`` as a constrained zonotope."""
+def hpolytope_in_box(H: NDArray[np.float64], k: NDArray[np.float64], lo: NDArray[np.float64],
+                     hi: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """``{x in [lo, hi] : H x <= k}`` as ``x = c + xi_x``, ``H xi_x + xi_s = b``.
+
+    Scott et al. (2016), Theorem 1, unscaled: ``|xi_x| <= dx`` (the box) and the
+    slack ``sigma = k - H x`` in ``[0, dsig]`` written as ``dsig/2 + xi_s``,
+    ``|xi_s| <= dsig/2``. Returns ``(c, dx, dsig, b, b_err)``: ``dsig`` is
+    rounded up (it covers ``k - min_box H x``), ``b = k - H c - dsig/2`` and
+    ``b_err`` bounds its rounding.
+
+    Parameters
+    ----------
+    H, k : ndarray
+        Half-spaces ``H x <= k``.
+    lo, hi : ndarray
+        A box containing the polytope.
+    """
     n = H.shape[1]
-    m = H.shape[0]
     c, dx = box_center_radius(lo, hi)
     # sigma = k - H x ranges over [0, dsig] on the box: dsig = k - min_box H x.
     hmin = H @ c - np.abs(H) @ dx
     dsig = np.maximum(k - hmin, 0.0)
     dsig = np.nextafter(dsig * (1 + 4 * np.finfo(float).eps * (n + 2)), np.inf)
-    G = np.hstack([np.diag(dx), np.zeros((n, m))])
-    A = np.hstack([H * dx, np.diag(dsig / 2.0)])
     b = k - H @ c - dsig / 2.0
     g = gamma(n + 3) * (1.0 + gamma(n + 4))
     berr = g * (np.abs(k) + np.abs(H) @ np.abs(c) + dsig / 2.0)
+    return c, dx, dsig, b, berr
+
+
+def _scott_cz(H, k, lo, hi) -> ConstrainedZonotope:
+    """Scott et al. (2016), Theorem 1: ``{x in box : H x <= k}`` as a constrained zonotope."""
+    n = H.shape[1]
+    m = H.shape[0]
+    c, dx, dsig, b, berr = hpolytope_in_box(H, k, lo, hi)
+    G = np.hstack([np.diag(dx), np.zeros((n, m))])
+    A = np.hstack([H * dx, np.diag(dsig / 2.0)])
     return trusted_cz(G, c, A, b, np.ones(n + m), berr=berr)
 
 

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._blas import with_single_threaded_blas
 from .._deprecation import renamed
 from .._lazy import progress_bar
-from .._rounding import UNIT_ROUNDOFF, gamma, pow2_inverse
+from .._rounding import UNIT_ROUNDOFF, gamma, pow2_inverse, round_down, round_up
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
 from ..exceptions import (
@@ -34,6 +34,7 @@ from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
+from ._hrep import HState, step_geometry
 from ._window import WindowModel, model_rtol
 
 __all__ = [
@@ -55,6 +56,18 @@ ON_INCONSISTENT = ("raise", "skip", "reset")
 #: Distinct missing-sample patterns an SMFDO sets up fast-path structures for;
 #: steps with further patterns go to the reference path.
 MAX_MASK_STRUCTURES = 64
+
+#: LP budget of converting a bounded posterior to the H-representation of exact
+#: mode (a beneath-beyond vertex enumeration); beyond it the set recursion goes on.
+H_CONVERSION_LPS = 150
+
+#: Complexity beyond which exact mode leaves the H-representation recursion for
+#: the set recursion (vertices, normals): measurement noise can make the exact
+#: set's complexity grow quickly (the paper example with a noise box: 178, 401,
+#: 846 vertices in three steps), and then the vertex geometry costs more than
+#: the whole-history LPs.
+H_MAX_VERTICES = 128
+H_MAX_NORMALS = 64
 
 
 @dataclass(frozen=True)
@@ -697,6 +710,12 @@ class SMFDO:
         # growth from Z_0^- (numerically unbounded hulls), restart anyway.
         self._grow_limit = 4 * ((window or 0) + self.mu_o) + 16
         self._warned_fallback = False
+        # Exact mode's H-representation recursion (setmembership._hrep): fixed
+        # uncertainty sets; their vertices are computed on first use.
+        self._hrep = (window is None and self.fast and self._inc_fixed is not None
+                      and not self._noise_varies)
+        self._h_images: list[NDArray[np.float64]] | None = None
+        self._h_noise: dict[bytes, list] = {}
         self.reset_state()
 
     # ------------------------------------------------------------------ setup helpers
@@ -787,12 +806,17 @@ class SMFDO:
         self._mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
         self._depth = 0  # recursion steps since the start set of the current posterior
         self.first_inconsistent: int | None = None
+        self._last_y = np.zeros(0)  # the last step's measurement (balanced units)
+        self._h_fails = 0  # failed conversions to the H-representation in a row
+        self._h_retry_at = 0  # first step at which the next conversion is tried
         self._warned_inconsistent = False
         self._in_run = False
 
     @property
     def _Z(self) -> ConstrainedZonotope | None:
         src = self._Z_src
+        if isinstance(src, HState):
+            return src.to_cz()
         if isinstance(src, tuple):
             model, c, b, h, c_err, b_err = src
             src = model.to_cz(c, b, h, c_err, b_err)
@@ -951,6 +975,171 @@ class SMFDO:
             box = trusted_box(lo[N:], hi[N:])
         return (model, c, b, h, c_err, b_err), box, box_o
 
+    # ------------------------------------------------------------------ exact mode
+    def _to_hstate(self, Z: ConstrainedZonotope) -> HState | None:
+        """The H-representation of a bounded posterior (certified facets and box,
+        :func:`setobs.geometry.polytope.to_hrep`'s construction), or ``None``."""
+        from ..exceptions import SetobsError
+        from ..geometry.polytope import _VerifiedHull
+        from ..geometry.zonotope import support_unwarned
+
+        try:
+            box, _ = hull_with_status(Z)
+            if not box.is_bounded:
+                return None
+            vh = _VerifiedHull(Z, max_lps=H_CONVERSION_LPS)
+            V, F, gF = vh.run()
+            flats = vh.flat
+            g_flat = [support_unwarned(Z, f) for f in flats] + \
+                [support_unwarned(Z, -f) for f in flats]
+        except SetobsError:
+            return None
+        # Flat only where the data make it so (the measured rows without noise): a
+        # set whose width is below the enumeration's tolerance relative to its
+        # coordinates (growing states) is left to the set recursion.
+        n_flat = int((~np.isnan(self._last_y)).sum()) if self._V_fixed is None else 0
+        if flats.shape[0] > n_flat:
+            return None
+        H = np.vstack([F, flats, -flats])
+        g = np.concatenate([gF, np.asarray(g_flat, dtype=float)])
+        if not np.isfinite(g).all() or V.shape[0] > H_MAX_VERTICES or \
+                H.shape[0] > H_MAX_NORMALS:
+            return None
+        return HState(H, g, box.lo, box.hi, V)
+
+    def _h_setup(self) -> list[NDArray[np.float64]]:
+        """Vertices of the increment (and process-noise) sets mapped into the state."""
+        if self._h_images is None:
+            from ..geometry.polytope import vertices
+
+            images = [vertices(self._inc_fixed) @ self.B_o.T]
+            if self._W_fixed is not None:
+                images.append(vertices(self._W_fixed) @ self._E_o.T)
+            self._h_images = images
+        return self._h_images
+
+    def _h_clips(self, y: NDArray[np.float64], m: NDArray[np.bool_]) -> list:
+        """The measurement of eq. (21) as hyperplanes (no noise) or half-spaces of
+        ``y - F_b V`` (its H-representation on the measured rows, computed once
+        per missing-sample pattern)."""
+        C = self.C_o[m]
+        ym = y[m]
+        V = self._V_fixed
+        if V is None:
+            return [(C[i], float(ym[i]), True) for i in range(C.shape[0])]
+        key = m.tobytes()
+        hr = self._h_noise.get(key)
+        if hr is None:
+            from ..geometry.polytope import to_hrep
+
+            hr = self._h_noise[key] = to_hrep(V.project(np.flatnonzero(m).tolist()))
+        # v = y - C z in V_m:  H_v (y - C z) <= k_v,  E_v (y - C z) = f_v
+        out = [(-(hv @ C), float(kv - hv @ ym), False) for hv, kv in zip(hr.H, hr.k,
+                                                                         strict=True)]
+        out += [(-(ev @ C), float(fv - ev @ ym), True) for ev, fv in zip(hr.E, hr.f,
+                                                                        strict=True)]
+        return out
+
+    def _hrep_step(self, e: _Entry):
+        """One exact step by the H-representation recursion (:mod:`._hrep`), or
+        ``None`` (the reference path decides it)."""
+        st = self._Z_src
+        if not isinstance(st, HState):
+            if not isinstance(st, ConstrainedZonotope) or self.k + 1 < self._h_retry_at:
+                return None
+            st = self._to_hstate(st)
+            if st is None:
+                # not bounded yet, or the conversion failed: back off geometrically
+                self._h_fails += 1
+                self._h_retry_at = self.k + 1 + min(2 ** self._h_fails, 64)
+                return None
+            self._h_fails = 0
+            self._Z_src = st
+        N = self.A_o.shape[0]
+        y = e.y
+        m = ~np.isnan(y)
+        shift = np.zeros(N)
+        if self.sys.p and e.u is not None:
+            shift = self.Gamma_o @ e.u
+        flat_cand = None
+        if self._V_fixed is None and m.any():
+            Cm = self.C_o[m]
+            flat_cand = Cm / np.linalg.norm(Cm, axis=1)[:, None]
+        geo = step_geometry(st.V, self.A_o, shift, self._h_setup(),
+                            self._h_clips(y, m) if m.any() else [], flat_cand)
+        if geo is None or geo[0].shape[0] > H_MAX_VERTICES or geo[1].shape[0] > H_MAX_NORMALS:
+            # too complex, or the approximate geometry sees no consistent point: the
+            # set recursion decides this step; back off before converting again
+            self._h_fails += 1
+            self._h_retry_at = self.k + 2 + min(2 ** self._h_fails, 64)
+            return None
+        V_new, H_new = geo
+        from ._hrep import snap_normals
+
+        H_new = snap_normals(H_new, st.H)
+        inc, B_step, Vn = self._step_set, self._B_step, self._V_fixed
+        P_rows = [H_new] if self._P_coords is not None else [self.P, H_new]
+        P_ext = np.vstack(P_rows)
+        mkey = m.tobytes()
+        key = ("hrep", st.H.shape, st.H.tobytes(), H_new.shape, H_new.tobytes(), mkey)
+        H_prev = st.H
+
+        def build() -> WindowModel:
+            from ._hrep import structure_A
+
+            mp = H_prev.shape[0]
+            G_S = np.hstack([np.eye(N), np.zeros((N, mp))])
+            return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
+                               G_S=G_S, A_S=structure_A(H_prev),
+                               free_S=np.zeros(N + mp, dtype=bool), s=1,
+                               first_posterior=False, P=P_ext,
+                               unbounded_radius=min(UNBOUNDED_RADIUS, inc.unbounded_radius),
+                               noise=Vn, masks=[m])
+
+        model = MODEL_CACHE.get((self._digest, *key), build)
+        if not model.usable:
+            return None
+        state = self._states.get(key)
+        if state is None:
+            if len(self._states) > 64:
+                self._states.clear()
+            state = self._states[key] = model.new_state()
+        c_S, b_S, h_S, b_S_err = st.start()
+        U = (e.u if e.u is not None else np.zeros(self.sys.p))[None, :] if self.sys.p \
+            else np.zeros((1, 0))
+        Y_err = None if e.yerr is None else e.yerr[None, :]
+        c, b, h, c_err, b_err = model.assemble(c_S, b_S, h_S, y[None, :], U,
+                                               b_S_err=b_S_err, data_rtol=self.data_rtol,
+                                               Y_err=Y_err)
+        y_scale = float(np.abs(y[m]).max(initial=0.0))
+        out = model.hull(c, b, h, y_scale, state, b_err, c_err)
+        if out is None:
+            return None
+        lo, hi = out
+        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            return None
+        box_o = trusted_box(lo[:N], hi[:N])
+        if self._P_coords is not None:
+            j = self._P_coords
+            box = trusted_box(lo[j], hi[j])
+            g = hi[N:]
+        else:
+            q = self.P.shape[0]
+            box = trusted_box(lo[N:N + q], hi[N:N + q])
+            g = hi[N + q:]
+        Zd = self.P @ model.to_cz(c, b, h, c_err, b_err) if self.keep_sets else None
+        # The carried set covers the rounding of the objectives' products with the
+        # generators (P_ext G, the model's G = [A_o, 0, B_o G_D]), which the LP
+        # certificate takes as given: gamma-bounded, on the factor ranges. (Not the
+        # reported bounds' relative margin: that, carried from step to step, grows
+        # with the set recursion's gain and costs exactness.)
+        rng_z = np.abs(model.G) @ h
+        gm = gamma(2 * (N + model.G.shape[1]) + 4)
+        lo_c = round_down(box_o.lo - gm * rng_z)
+        hi_c = round_up(box_o.hi + gm * rng_z)
+        g = round_up(g + gm * (np.abs(H_new) @ rng_z))
+        return HState(H_new, g, lo_c, hi_c, V_new), box, box_o, Zd
+
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, e: _Entry) -> ConstrainedZonotope:
         """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``."""
@@ -1082,6 +1271,13 @@ class SMFDO:
         e, self._u_pending = self._entry(y, u_prev, u)
         k = self.k + 1
         mode = "init" if k == 0 else self._start_mode(k)
+        if self._hrep and k > 0:
+            hstep = self._hrep_step(e)
+            if hstep is not None:
+                self.stats["fast"] += 1
+                hst, box, box_o, Zd = hstep
+                self._depth = 0
+                return self._commit(k, mode, hst, box, box_o, Zd, e, "ok")
         fast = self._fast_step(k, mode, e)
         if fast is not None:
             self.stats["fast"] += 1
@@ -1164,6 +1360,7 @@ class SMFDO:
 
     def _commit(self, k, mode, Z_src, box, box_o, Zd, e: _Entry, status) -> SMFDOStep:
         self.k = k
+        self._last_y = e.y
         self._Z_src = Z_src
         if mode == "box":
             self._windowing = True
