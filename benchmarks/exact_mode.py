@@ -2,6 +2,13 @@
 
 Measures, in one run:
 
+* the H-representation recursion (the default exact path, ``fast=True``):
+  median time per update around k = 100, 1 000 and 10 000 on one record, and
+  the size of the carried representation (normals, vertices) over k;
+* the whole-history set recursion (``fast=False``, the exact mode before the
+  H-representation) on the same record up to k = 150, in the same run;
+* the exact-mode Fig. 1(b) campaign (SMFDO exact + PIO, local processes on
+  both cores) on a sample of runs, extrapolated to 5000 runs;
 * time per exact-mode update around k = 50, 100 and 150, under three BLAS
   settings, each on an idle machine and with the other core busy (a spinning
   process, as in a two-process campaign): the library's single-threaded BLAS
@@ -15,7 +22,7 @@ Measures, in one run:
 Each setting runs in a fresh subprocess (BLAS thread pools are per process).
 Writes ``benchmarks/results/exact_mode.json``.
 
-Run: ``python benchmarks/exact_mode.py [--kmax 150]``.
+Run: ``python benchmarks/exact_mode.py [--kmax 150] [--long 10100] [--runs 200]``.
 """
 
 from __future__ import annotations
@@ -74,6 +81,55 @@ def sizes(kmax: int) -> list[dict]:
     return rows
 
 
+def h_recursion(long: int) -> dict:
+    """Per-update times and representation sizes of the default exact path."""
+    from benchmarks.smfdo import data
+
+    import setobs as so
+    from setobs.setmembership._hrep import HState
+
+    sysm, Y, _ = data(long)
+    obs = so.SMFDO(sysm, window=None)
+    times, sizes_k = [], []
+    for k, y in enumerate(Y):
+        t0 = time.perf_counter()
+        obs.update(y)
+        times.append(time.perf_counter() - t0)
+        st = obs.exact_representation
+        if k in (10, 100, 300, 1000, 3000, 10000) and isinstance(st, HState):
+            sizes_k.append({"k": k, "normals": int(st.H.shape[0]),
+                            "vertices": int(st.V.shape[0]),
+                            "posterior_n_gen": obs.posterior_set.n_gen,
+                            "posterior_n_con": obs.posterior_set.n_con})
+    out = {}
+    for k in (100, 1000, 10000):
+        if k < long:
+            out[str(k)] = 1e3 * statistics.median(times[max(0, k - 50):k + 50])
+    ref = so.SMFDO(sysm, window=None, fast=False)
+    rtimes = []
+    for y in Y[:151]:
+        t0 = time.perf_counter()
+        ref.update(y)
+        rtimes.append(time.perf_counter() - t0)
+    old = {str(k): 1e3 * statistics.median(rtimes[k - 5:k + 5]) for k in (50, 100, 145)}
+    return {"ms_per_update": out, "steps": long, "total_s": float(sum(times)),
+            "stats": dict(obs.stats), "representation": sizes_k,
+            "set_recursion_ms_per_update": old}
+
+
+def exact_campaign(runs: int) -> dict:
+    from setobs.studies import ObserverSpec, Scenario, run_campaign
+
+    sc = Scenario(system="chang2006", horizon=100, increment=1.0, x0_box=1.0)
+    specs = [ObserverSpec("SMFDO exact", "smfdo", {"window": None}),
+             ObserverSpec("PIO (printed gains)", "pio_printed")]
+    t0 = time.perf_counter()
+    run_campaign(sc, specs, runs, reference_window=None, progress=False)
+    wall = time.perf_counter() - t0
+    return {"runs": runs, "horizon": 100, "wall_s": wall,
+            "extrapolated_5000_runs_min": 5000 * wall / runs / 60}
+
+
 def run_setting(name: str, env_extra: dict, load: bool, kmax: int) -> dict:
     env = {k: v for k, v in os.environ.items()
            if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "SETOBS_BLAS_LIMIT")}
@@ -95,12 +151,25 @@ def run_setting(name: str, env_extra: dict, load: bool, kmax: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kmax", type=int, default=150)
+    ap.add_argument("--long", type=int, default=10100)
+    ap.add_argument("--runs", type=int, default=200)
     ap.add_argument("--child", action="store_true")
     ap.add_argument("--out", default=str(HERE / "results" / "exact_mode.json"))
     args = ap.parse_args()
     if args.child:
         print(json.dumps(child(args.kmax)))
         return
+    sys.path.insert(0, str(HERE.parent))
+    hrec = h_recursion(args.long)
+    print("H-representation recursion: " + ", ".join(
+        f"k={k}: {v:.2f} ms" for k, v in hrec["ms_per_update"].items()))
+    print("set recursion (before):    " + ", ".join(
+        f"k={k}: {v:.1f} ms" for k, v in hrec["set_recursion_ms_per_update"].items()))
+    for r in hrec["representation"]:
+        print(f"  k={r['k']:5d}: {r['normals']} normals, {r['vertices']} vertices")
+    camp = exact_campaign(args.runs)
+    print(f"exact campaign: {camp['runs']} runs in {camp['wall_s']:.1f} s -> 5000 runs "
+          f"~ {camp['extrapolated_5000_runs_min']:.1f} min")
     settings = [("library limit (default)", {}),
                 ("limit off, default BLAS threads", {"SETOBS_BLAS_LIMIT": "0"}),
                 ("OPENBLAS_NUM_THREADS=1", {"OPENBLAS_NUM_THREADS": "1"})]
@@ -123,7 +192,13 @@ def main() -> None:
     out = {"benchmark": "exact_mode", "system": "chang2006 (Li-Cong-Dong eq. 25)",
            "increment": "|dd_i| <= 1", "setobs": so.__version__,
            "python": platform.python_version(), "machine": platform.machine(),
-           "cpus": os.cpu_count(), "timings": rows, "representation": size_rows}
+           "cpus": os.cpu_count(), "h_recursion": hrec, "exact_campaign": camp,
+           "targets": {"ms_per_update_k1000": 0.5, "ms_per_update_k10000": 0.5,
+                       "campaign_5000_runs_min": 5},
+           "targets_met": {"k1000": hrec["ms_per_update"].get("1000", 1e9) <= 0.5,
+                           "k10000": hrec["ms_per_update"].get("10000", 1e9) <= 0.5,
+                           "campaign": camp["extrapolated_5000_runs_min"] <= 5},
+           "blas_timings_k_le_150": rows, "posterior_set_representation": size_rows}
     Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
     print(f"wrote {args.out}")
 

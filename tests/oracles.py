@@ -308,7 +308,7 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     from scipy.optimize import linprog
 
     Phi, G, Xi = (np.atleast_2d(np.asarray(M, float)) for M in (Phi, G, Xi))
-    n, q, l = Phi.shape[0], G.shape[1], Xi.shape[0]
+    n, q = Phi.shape[0], G.shape[1]
     E, r_w = (None, None) if noise_w is None else (np.atleast_2d(noise_w[0]), noise_w[1])
     F, r_v = (None, None) if noise_v is None else (np.atleast_2d(noise_v[0]), noise_v[1])
     nw = 0 if E is None else E.shape[1]

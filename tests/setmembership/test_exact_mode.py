@@ -66,7 +66,7 @@ def test_the_representation_stays_small_while_k_grows():
     for k, y in enumerate(Y):
         obs.update(y)
         if k >= 10:
-            st = obs._Z_src
+            st = obs.exact_representation
             assert isinstance(st, HState)
             n_vertices.append(st.V.shape[0])
             n_normals.append(st.H.shape[0])

@@ -189,6 +189,25 @@ class _VerifiedHull:
         return tuple(np.round(np.concatenate([eq[:-1], [-eq[-1] / self.scale]]), 9))
 
 
+def verified_facets(Z: ConstrainedZonotope, max_lps: int = 20_000
+                    ) -> tuple[NDArray[np.float64], ...]:
+    """``(vertices, normals, offsets, flat)`` of a bounded set by :class:`_VerifiedHull`.
+
+    ``normals @ x <= offsets`` are the confirmed facets (certified offsets);
+    ``flat`` (rows) are the directions of certified width below the tolerance.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        A bounded set.
+    max_lps : int
+        LP budget (:class:`~setobs.SolverError` beyond it).
+    """
+    vh = _VerifiedHull(Z, max_lps=max_lps)
+    V, H, k = vh.run()
+    return V, H, k, vh.flat
+
+
 def _complement(M: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     """Orthonormal basis (columns) of the orthogonal complement of ``range(M)``."""
     if M.shape[1] == 0:

@@ -444,9 +444,15 @@ class SMFDO:
     window : int or None
         Filtering interval ``delta``. ``None`` selects the **exact mode**: no
         reset, so the posterior is exactly ``[[d_k | u_0:k-1, y_0:k]]`` when the
-        uncertainty sets are exact (Theorem 3). Its cost grows with ``k``
-        (``q`` generators and ``l`` constraints per step, so every LP grows);
-        use it as the worst-case-optimal reference on bounded horizons.
+        uncertainty sets are exact (Theorem 3). Once the posterior is bounded
+        it is carried as a certified H-representation (facets and box) and
+        advanced one step at a time (:mod:`setobs.setmembership._hrep`), so a
+        step costs what the *set's* complexity costs, not ``k`` (about 3 ms on
+        the paper example at any ``k``). Sets of growing complexity (more than
+        ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets: typically with
+        measurement noise), time-varying uncertainty sets and ``fast=False``
+        keep the whole history in one constrained zonotope instead, whose
+        cost grows with ``k``.
     increment_set : ConstrainedZonotope, Box, array_like, callable or None
         Bounded set containing ``dd_k``: a CZ, a :class:`Box`, a vector ``r``
         meaning the box ``|dd_i| <= r_i``, or a callable ``k -> CZ`` for a
@@ -514,10 +520,12 @@ class SMFDO:
         HiGHS path (:mod:`setobs.geometry.fastlp`). Any LP the fast path
         cannot solve and certify tightly (infeasible, degenerate beyond its
         tolerances, ambiguous unboundedness), a time-varying increment set,
-        the steps after a ``reset="box"`` and the exact mode (whose closed
-        forms would each be used once) go to the reference path (the set
-        operations plus HiGHS, with retries). ``False`` forces the reference
-        path. ``stats`` counts the steps of each path.
+        the steps after a ``reset="box"`` go to the reference path (the set
+        operations plus HiGHS, with retries). In exact mode the fast path is
+        the H-representation recursion (see ``window``; its LPs go through the
+        same compiled simplex). ``False`` forces the reference path (the
+        whole-history set recursion in exact mode). ``stats`` counts the steps
+        of each path.
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances; the others are control inputs.
@@ -834,6 +842,18 @@ class SMFDO:
         return self._Z
 
     @property
+    def exact_representation(self) -> HState | None:
+        """Exact mode's carried H-representation of the posterior, or ``None``.
+
+        ``H``, ``g`` (certified ``H z <= g``), ``lo``, ``hi`` (certified box)
+        and ``V`` (approximate vertices) in the internal coordinates ``z_o``;
+        ``None`` while the set recursion carries the posterior (windowed mode,
+        before the posterior is bounded, or for sets too complex for it).
+        """
+        src = self._Z_src
+        return src if isinstance(src, HState) else None
+
+    @property
     def fast_path_instance(self) -> tuple[WindowModel, NDArray[np.float64], NDArray[np.float64],
                                           NDArray[np.float64]] | None:
         """``(model, c, b, h)`` of the last step if the compiled fast path solved it, else ``None``.
@@ -980,16 +1000,14 @@ class SMFDO:
         """The H-representation of a bounded posterior (certified facets and box,
         :func:`setobs.geometry.polytope.to_hrep`'s construction), or ``None``."""
         from ..exceptions import SetobsError
-        from ..geometry.polytope import _VerifiedHull
+        from ..geometry.polytope import verified_facets
         from ..geometry.zonotope import support_unwarned
 
         try:
             box, _ = hull_with_status(Z)
             if not box.is_bounded:
                 return None
-            vh = _VerifiedHull(Z, max_lps=H_CONVERSION_LPS)
-            V, F, gF = vh.run()
-            flats = vh.flat
+            V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS)
             g_flat = [support_unwarned(Z, f) for f in flats] + \
                 [support_unwarned(Z, -f) for f in flats]
         except SetobsError:
