@@ -246,23 +246,22 @@ def step_geometry(V: NDArray[np.float64], A_o: NDArray[np.float64], shift: NDArr
         every step.
     """
     N = V.shape[1]
+
+    def pruned(P: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        out = hull_points(P)
+        return None if out is None else out[0]
+
     P = V @ A_o.T + shift
     for W in images:
         P = (P[:, None, :] + W[None, :, :]).reshape(-1, N)
-        if P.shape[0] > 256:
-            out = hull_points(P)
-            if out is None:
-                return None
-            P = out[0]
+        if P.shape[0] > 256 and (P := pruned(P)) is None:
+            return None
     for i, (a, b, eq) in enumerate(clips):
         P = clip(P, a, b, eq)
         if P.shape[0] == 0:
             return None
-        if i < len(clips) - 1 and P.shape[0] > 8 * N:
-            out = hull_points(P)
-            if out is None:
-                return None
-            P = out[0]
+        if i < len(clips) - 1 and P.shape[0] > 8 * N and (P := pruned(P)) is None:
+            return None
     out = hull_points(P)
     if out is None:
         return None

@@ -34,7 +34,7 @@ from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
-from ._hrep import HState, step_geometry
+from ._hrep import HState, snap_normals, step_geometry, structure_A
 from ._window import WindowModel, model_rtol
 
 __all__ = [
@@ -1058,6 +1058,12 @@ class SMFDO:
                                                                         strict=True)]
         return out
 
+    def _h_back_off(self, step: int) -> None:
+        """After a failed conversion or step: the next conversion is tried at
+        ``step + 2^fails`` (at most 64 steps later)."""
+        self._h_fails += 1
+        self._h_retry_at = step + min(2 ** self._h_fails, 64)
+
     def _hrep_step(self, e: _Entry):
         """One exact step by the H-representation recursion (:mod:`._hrep`), or
         ``None`` (the reference path decides it)."""
@@ -1066,10 +1072,8 @@ class SMFDO:
             if not isinstance(st, ConstrainedZonotope) or self.k + 1 < self._h_retry_at:
                 return None
             st = self._to_hstate(st)
-            if st is None:
-                # not bounded yet, or the conversion failed: back off geometrically
-                self._h_fails += 1
-                self._h_retry_at = self.k + 1 + min(2 ** self._h_fails, 64)
+            if st is None:  # not bounded yet, or the conversion failed
+                self._h_back_off(self.k + 1)
                 return None
             self._h_fails = 0
             self._Z_src = st
@@ -1088,12 +1092,9 @@ class SMFDO:
         if geo is None or geo[0].shape[0] > H_MAX_VERTICES or geo[1].shape[0] > H_MAX_NORMALS:
             # too complex, or the approximate geometry sees no consistent point: the
             # set recursion decides this step; back off before converting again
-            self._h_fails += 1
-            self._h_retry_at = self.k + 2 + min(2 ** self._h_fails, 64)
+            self._h_back_off(self.k + 2)
             return None
         V_new, H_new = geo
-        from ._hrep import snap_normals
-
         H_new = snap_normals(H_new, st.H)
         inc, B_step, Vn = self._step_set, self._B_step, self._V_fixed
         P_rows = [H_new] if self._P_coords is not None else [self.P, H_new]
@@ -1103,8 +1104,6 @@ class SMFDO:
         H_prev = st.H
 
         def build() -> WindowModel:
-            from ._hrep import structure_A
-
             mp = H_prev.shape[0]
             G_S = np.hstack([np.eye(N), np.zeros((N, mp))])
             return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
