@@ -37,6 +37,7 @@ __all__ = [
     "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
     "FRAGILE_MARGIN_DECADES",
+    "HREP_ACTIVE_RTOL",
     "HREP_CLIP_RTOL",
     "HREP_FLAT_RTOL",
     "HREP_SNAP_TOL",
@@ -149,6 +150,10 @@ HREP_SNAP_TOL: float = 1e-10
 #: Relative tolerance below which a point lies on a measurement hyperplane when
 #: the approximate geometry is clipped.
 HREP_CLIP_RTOL: float = 1e-12
+#: A vertex of the approximate geometry lies on a facet ``H_i z <= g_i`` of the
+#: certified set when its slack is below this fraction of the set's extent:
+#: vertices with the same facets are one vertex (near-duplicates from clipping).
+HREP_ACTIVE_RTOL: float = 1e-6
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

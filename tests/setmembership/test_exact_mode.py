@@ -17,7 +17,7 @@ from scipy.optimize import linprog
 
 import setobs as so
 from setobs import ConstrainedZonotope, LinearSystem
-from setobs.setmembership._hrep import HState, clip, hull_points, snap_normals
+from setobs.setmembership._hrep import HState, clip, hull_points, snap_normals, tidy_vertices
 from tests.oracles import history_lp_highs
 from tests.setmembership.test_noise import simulate_noisy
 
@@ -249,3 +249,62 @@ def test_snap_normals_reuses_the_previous_array():
     out = snap_normals(np.vstack([H[0] + 1e-13, [0.6, 0.8, 0.0]]), H)
     assert out[0] is not H[0] and np.array_equal(out[0], H[0])
     assert np.array_equal(out[1], [0.6, 0.8, 0.0])
+
+
+def test_tidy_vertices_keeps_one_copy_of_each_vertex_of_a_flat_box():
+    """A box [-1, 1]^3 x {0.5} x {-2} far from the origin (centre 300, as the
+    paper example's states reach by k = 10 000): copies of its 8 vertices that
+    differ by rounding, edge and facet midpoints (what clipping produces) and a
+    redundant normal touching one vertex; tidying leaves the 8 vertices."""
+    rng = np.random.default_rng(3)
+    centre = np.array([300.0, -250.0, 120.0, 0.5, -2.0])
+    cube = np.array([[i, j, k, 0, 0] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+    true = cube + centre
+    copies = np.vstack([true + 1e-11 * rng.uniform(-1, 1, true.shape) for _ in range(3)])
+    mids = np.vstack([0.5 * (true[0] + true[1]), 0.5 * (true[0] + true[3]),
+                      (true[0] + true[1] + true[2] + true[3]) / 4])
+    I5 = np.eye(5)
+    spurious = np.ones(5) / np.sqrt(5)  # touches the set at the vertex (1, 1, 1) only
+    H = np.vstack([I5, -I5, spurious])
+    hi = np.concatenate([centre[:3] + 1, centre[3:]])
+    lo = np.concatenate([centre[:3] - 1, centre[3:]])
+    g = np.concatenate([hi, -lo, [spurious @ (centre + np.array([1.0, 1, 1, 0, 0]))]])
+    V = tidy_vertices(rng.permutation(np.vstack([copies, mids])), H, g)
+    assert V.shape == (8, 5)
+    d = np.abs(V[:, None, :] - true[None, :, :]).max(axis=2)
+    assert d.min(axis=1).max() <= 1e-10 and len(set(d.argmin(axis=1))) == 8
+
+
+def test_the_carried_vertices_are_the_vertices_of_the_certified_set():
+    """After every H step the carried points are the vertices of the certified
+    polytope ``{z in [lo, hi] : H z <= g}``, one each (pycddlib's exact
+    enumeration of the H-representation, a different algorithm)."""
+    import cdd
+
+    sys, Y, _ = _paper_data(120)
+    obs = so.SMFDO(sys, window=None)
+    seen = 0
+    for k, y in enumerate(Y):
+        obs.update(y)
+        st = obs.exact_representation
+        if st is None or k % 10:
+            continue
+        N = st.V.shape[1]
+        A = np.vstack([st.H, np.eye(N), -np.eye(N)])
+        b = np.concatenate([st.g, st.hi, -st.lo])
+        mat = cdd.matrix_from_array(np.hstack([b[:, None], -A]).tolist(),
+                                    rep_type=cdd.RepType.INEQUALITY)
+        gen = np.array(cdd.copy_generators(cdd.polyhedron_from_matrix(mat)).array)
+        W = gen[gen[:, 0] == 1][:, 1:]
+        # the flat pairs g(+f), g(-f) differ by the certificate's rounding: cdd
+        # sees a sliver, whose vertices come in close pairs; one of each
+        ext = np.abs(W - W.mean(axis=0)).max()
+        _, idx = np.unique(np.round((W - W.mean(axis=0)) / (1e-6 * ext)), axis=0,
+                           return_index=True)
+        W = W[idx]
+        d = np.abs(st.V[:, None, :] - W[None, :, :]).max(axis=2)
+        assert st.V.shape[0] == W.shape[0]
+        assert d.min(axis=1).max() <= 1e-7 * ext
+        assert np.unique(d.argmin(axis=1)).size == st.V.shape[0]
+        seen += 1
+    assert seen >= 10

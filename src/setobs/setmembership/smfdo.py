@@ -34,7 +34,7 @@ from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
-from ._hrep import HState, snap_normals, step_geometry, structure_A
+from ._hrep import HState, snap_normals, step_geometry, structure_A, tidy_vertices
 from ._window import WindowModel, model_rtol
 
 __all__ = [
@@ -63,9 +63,9 @@ H_CONVERSION_LPS = 150
 
 #: Complexity beyond which exact mode leaves the H-representation recursion for
 #: the set recursion (vertices, normals): measurement noise can make the exact
-#: set's complexity grow quickly (the paper example with a noise box: 178, 401,
-#: 846 vertices in three steps), and then the vertex geometry costs more than
-#: the whole-history LPs.
+#: set's complexity grow quickly (the paper example with a noise box: 44, 107,
+#: 264 facets and 178, 361, 754 vertices at k = 2, 3, 4; benchmarks/exact_mode.py),
+#: and then the vertex geometry costs more than the whole-history LPs.
 H_MAX_VERTICES = 128
 H_MAX_NORMALS = 64
 
@@ -1155,7 +1155,7 @@ class SMFDO:
         lo_c = round_down(box_o.lo - gm * rng_z)
         hi_c = round_up(box_o.hi + gm * rng_z)
         g = round_up(g + gm * (np.abs(H_new) @ rng_z))
-        return HState(H_new, g, lo_c, hi_c, V_new), box, box_o, Zd
+        return HState(H_new, g, lo_c, hi_c, tidy_vertices(V_new, H_new, g)), box, box_o, Zd
 
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, e: _Entry) -> ConstrainedZonotope:
