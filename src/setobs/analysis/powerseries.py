@@ -1,0 +1,347 @@
+"""Truncated multivariate power series and the observer-linearization equation.
+
+The nonlinear modular observer (modular-observer paper, Sections III-VII) is
+designed by solving *linear functional equations* (LFEs) of the form
+
+.. math::  \\Phi(F(v)) = A\\,\\Phi(v) + B\\,h(v),
+
+eq. (17) for one system, eq. (31) for the disturbance-free part
+``F = f(x, 0)``, eqs. (22)-(23) for the extended system ``F = (f(x, w), s(w))``,
+by the power-series method of Section VII: with ``F(0) = 0`` and ``h(0) = 0``
+the linear part ``T`` of ``Phi`` solves the Sylvester equation
+``T F_1 - A T = B H_1`` (assumption 1 of Proposition 2), and each homogeneous
+part ``Phi_d`` of degree ``d >= 2`` solves
+
+.. math::  \\Phi_d \\circ F_1 - A\\,\\Phi_d = B\\,h_d - [\\Phi_{<d} \\circ F]_d,
+
+a Sylvester equation on the coefficients of degree ``d`` that is uniquely
+solvable exactly when no eigenvalue of ``A`` equals a product
+``prod lambda_i^m_i`` (``sum m_i = d``) of eigenvalues of ``F_1``
+(non-resonance, assumption 2 of Proposition 2).
+
+A polynomial map is a coefficient matrix over the monomials of the variables
+up to the truncation degree, ordered by degree (:class:`Monomials`);
+compositions are truncated at that degree. Taylor coefficients of sympy
+expressions (or of Python callables that accept sympy symbols) come from
+:func:`taylor`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_sylvester
+
+from .._lazy import optional_import
+from ..exceptions import DesignError
+
+__all__ = ["LFEConditions", "LFESolution", "Monomials", "lfe_conditions", "solve_lfe", "taylor"]
+
+
+class Monomials:
+    """The monomials of ``n_vars`` variables up to degree ``order``, by degree.
+
+    Index 0 is the constant; then degree 1 (the variables in order), degree
+    2, ... Within a degree, exponents in reverse lexicographic order (the
+    first variable's highest power first).
+
+    Parameters
+    ----------
+    n_vars : int
+        Number of variables.
+    order : int
+        Truncation degree.
+    """
+
+    def __init__(self, n_vars: int, order: int) -> None:
+        if n_vars < 1 or order < 1:
+            raise ValueError("need at least one variable and order >= 1")
+        self.n_vars, self.order = int(n_vars), int(order)
+        exps: list[tuple[int, ...]] = []
+        for d in range(order + 1):
+            exps += sorted((e for e in itertools.product(range(d + 1), repeat=n_vars)
+                            if sum(e) == d), reverse=True)
+        self.exponents = np.array(exps, dtype=int)
+        self.index = {e: i for i, e in enumerate(exps)}
+        self.degree = self.exponents.sum(axis=1)
+        #: slices of each degree's block
+        self.block = [slice(int(np.searchsorted(self.degree, d)),
+                            int(np.searchsorted(self.degree, d, side="right")))
+                      for d in range(order + 1)]
+        # a + b for every pair with deg(a) + deg(b) <= order (-1: truncated)
+        M = len(exps)
+        self._sum = np.full((M, M), -1, dtype=int)
+        for i, a in enumerate(exps):
+            for j, b in enumerate(exps):
+                if self.degree[i] + self.degree[j] <= order:
+                    self._sum[i, j] = self.index[tuple(x + y for x, y in zip(a, b, strict=True))]
+
+    def __len__(self) -> int:
+        return self.exponents.shape[0]
+
+    def multiply(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The truncated product of two series.
+
+        Parameters
+        ----------
+        a, b : ndarray, shape (len(self),)
+            Coefficient vectors.
+        """
+        out = np.zeros(len(self))
+        for i in np.flatnonzero(a):
+            ok = self._sum[i] >= 0
+            np.add.at(out, self._sum[i, ok], a[i] * b[ok])
+        return out
+
+    def substitution(self, F: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Matrix ``MF`` with row ``alpha`` the series of ``v^alpha`` at ``v = F(v)``.
+
+        So a map with coefficients ``C`` composed with ``F`` has coefficients
+        ``C @ MF`` (truncated). ``F`` has one row per variable and no constant
+        term (``F(0) = 0``).
+
+        Parameters
+        ----------
+        F : ndarray, shape (n_vars, len(self))
+            Coefficients of the substituted map.
+        """
+        F = np.asarray(F, dtype=float)
+        if F.shape != (self.n_vars, len(self)):
+            raise ValueError(f"F must have shape ({self.n_vars}, {len(self)})")
+        if np.any(F[:, 0] != 0.0):
+            raise ValueError("F(0) must be 0 (expand around an equilibrium)")
+        M = len(self)
+        MF = np.zeros((M, M))
+        MF[0, 0] = 1.0
+        for i in range(1, M):
+            e = self.exponents[i]
+            j = int(np.flatnonzero(e)[0])
+            prev = e.copy()
+            prev[j] -= 1
+            MF[i] = self.multiply(MF[self.index[tuple(prev)]], F[j])
+        return MF
+
+    def evaluate(self, C: NDArray[np.float64], v: ArrayLike) -> NDArray[np.float64]:
+        """The polynomial map with coefficients ``C`` (rows) at the points ``v``.
+
+        Parameters
+        ----------
+        C : ndarray, shape (r, len(self))
+            Coefficients.
+        v : array_like, shape (n_points, n_vars)
+            Points.
+        """
+        v = np.atleast_2d(np.asarray(v, dtype=float))
+        mon = np.prod(v[:, None, :] ** self.exponents[None, :, :], axis=2)
+        out = mon @ np.asarray(C, dtype=float).T
+        return out
+
+
+def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],
+           basis: Monomials) -> NDArray[np.float64]:
+    """Taylor coefficients at the origin of sympy expressions, up to ``basis.order``.
+
+    Parameters
+    ----------
+    exprs : sequence of sympy expressions, or a callable
+        The components; a callable is called with the sympy symbols
+        ``variables`` and must return a sequence of expressions.
+    variables : sequence of sympy symbols
+        The variables, in the order of ``basis``.
+    basis : Monomials
+
+    Returns
+    -------
+    ndarray, shape (len(exprs), len(basis))
+        Row ``i``: the coefficients of component ``i``.
+    """
+    sp = optional_import("sympy", extra="nonlinear", feature="Taylor series of nonlinear models")
+    variables = list(variables)
+    if len(variables) != basis.n_vars:
+        raise ValueError(f"{len(variables)} variables for a basis of {basis.n_vars}")
+    if callable(exprs):
+        exprs = exprs(*variables)
+    exprs = [sp.sympify(e) for e in exprs]
+    t = sp.Symbol("_t_scale")
+    out = np.zeros((len(exprs), len(basis)))
+    scale = {v: t * v for v in variables}
+    for r, e in enumerate(exprs):
+        ser = sp.series(e.subs(scale, simultaneous=True), t, 0, basis.order + 1).removeO()
+        poly = sp.Poly(sp.expand(ser), t, *variables)
+        for monom, coef in poly.terms():
+            d, e_v = monom[0], tuple(monom[1:])
+            if d != sum(e_v):
+                raise ValueError("unexpected term in the Taylor expansion")
+            out[r, basis.index[e_v]] = float(coef)
+    return out
+
+
+@dataclass(frozen=True)
+class LFEConditions:
+    """Proposition 2's local solvability conditions for ``Phi(F) = A Phi + B h``.
+
+    Attributes
+    ----------
+    observable : bool
+        ``(H_1, F_1)`` is observable (assumption 1 is then solvable with an
+        invertible ``T`` for a suitable ``A, B``).
+    T_invertible : bool
+        The Sylvester solution ``T`` of ``T F_1 - A T = B H_1`` is invertible.
+    nonresonant : bool
+        No eigenvalue of ``A`` equals a product of eigenvalues of ``F_1`` of
+        total degree 1..order (assumption 2, checked up to the truncation).
+    min_divisor : float
+        The smallest ``|a_j - prod lambda_i^m_i|`` over those products.
+    poincare : bool
+        The eigenvalues of ``F_1`` all lie strictly inside the unit disc, or all
+        strictly outside (assumption 3).
+    eigenvalues_F : ndarray
+    eigenvalues_A : ndarray
+    """
+
+    observable: bool
+    T_invertible: bool
+    nonresonant: bool
+    min_divisor: float
+    poincare: bool
+    eigenvalues_F: NDArray[np.complex128]
+    eigenvalues_A: NDArray[np.complex128]
+
+    @property
+    def satisfied(self) -> bool:
+        """All of Proposition 2's assumptions hold."""
+        return self.T_invertible and self.nonresonant and self.poincare
+
+    def reason(self) -> str:
+        """What fails, in words (empty when all hold)."""
+        out = []
+        if not self.observable:
+            out.append("the linearization (H_1, F_1) is not observable")
+        if not self.T_invertible:
+            out.append("T of T F_1 - A T = B H_1 is singular")
+        if not self.nonresonant:
+            out.append(f"resonance: an eigenvalue of A equals a product of eigenvalues of F_1 "
+                       f"(smallest divisor {self.min_divisor:.2e})")
+        if not self.poincare:
+            out.append("eigenvalues of F_1 on the unit circle or on both sides of it (not in "
+                       "the Poincare domain; the series may still converge when the divisors "
+                       "stay away from 0)")
+        return "; ".join(out)
+
+
+def _observable(F1: NDArray[np.float64], H1: NDArray[np.float64]) -> bool:
+    n = F1.shape[0]
+    O = np.vstack([H1 @ np.linalg.matrix_power(F1, k) for k in range(n)])
+    return bool(np.linalg.matrix_rank(O) == n)
+
+
+def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
+                   order: int) -> LFEConditions:
+    """Check Proposition 2's assumptions for the linear parts ``F_1``, ``H_1``.
+
+    Parameters
+    ----------
+    F1 : array_like, shape (N, N)
+        Jacobian of ``F`` at 0.
+    H1 : array_like, shape (p, N)
+        Jacobian of ``h`` at 0.
+    A : array_like, shape (r, r)
+    B : array_like, shape (r, p)
+    order : int
+        Degree up to which non-resonance is checked.
+    """
+    F1, H1 = np.atleast_2d(np.asarray(F1, float)), np.atleast_2d(np.asarray(H1, float))
+    A, B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
+    lam, a = np.linalg.eigvals(F1), np.linalg.eigvals(A)
+    T = solve_sylvester(-A, F1, B @ H1)
+    sv = np.linalg.svd(T, compute_uv=False) if T.shape[0] == T.shape[1] else np.zeros(1)
+    T_inv = bool(T.shape[0] == T.shape[1] and sv[-1] > 1e-10 * max(sv[0], 1e-300))
+    divisors = []
+    for d in range(1, order + 1):
+        for m in itertools.combinations_with_replacement(range(lam.size), d):
+            prod = np.prod(lam[list(m)])
+            divisors.append(np.abs(a - prod).min())
+    md = float(min(divisors))
+    scale = max(1.0, float(np.abs(a).max()))
+    inside = np.abs(lam) < 1.0
+    outside = np.abs(lam) > 1.0
+    return LFEConditions(_observable(F1, H1), T_inv, md > 1e-9 * scale, md,
+                         bool(inside.all() or outside.all()), lam, a)
+
+
+@dataclass(frozen=True)
+class LFESolution:
+    """A truncated power-series solution ``Phi`` of ``Phi(F(v)) = A Phi(v) + B h(v)``.
+
+    Attributes
+    ----------
+    basis : Monomials
+    C : ndarray, shape (r, len(basis))
+        Coefficients of ``Phi``.
+    conditions : LFEConditions
+    """
+
+    basis: Monomials
+    C: NDArray[np.float64]
+    conditions: LFEConditions
+
+    @property
+    def T(self) -> NDArray[np.float64]:
+        """The linear part (Jacobian at 0) of ``Phi``."""
+        return self.C[:, self.basis.block[1]]
+
+    def __call__(self, v: ArrayLike) -> NDArray[np.float64]:
+        """``Phi`` at the points ``v`` (rows); shape (n_points, r)."""
+        return self.basis.evaluate(self.C, v)
+
+
+def solve_lfe(F: NDArray[np.float64], h: NDArray[np.float64], A: ArrayLike, B: ArrayLike,
+              basis: Monomials) -> LFESolution:
+    """Solve the LFE ``Phi(F(v)) = A Phi(v) + B h(v)`` degree by degree (Section VII).
+
+    Parameters
+    ----------
+    F : ndarray, shape (N, len(basis))
+        Taylor coefficients of the map (``F(0) = 0``), e.g. from :func:`taylor`.
+    h : ndarray, shape (p, len(basis))
+        Taylor coefficients of the output map (``h(0) = 0``).
+    A : array_like, shape (r, r)
+        Observer matrix (the assigned eigenvalues).
+    B : array_like, shape (r, p)
+    basis : Monomials
+
+    Returns
+    -------
+    LFESolution
+
+    Raises
+    ------
+    DesignError
+        On resonance at some degree (the degree's Sylvester equation is
+        singular).
+    """
+    F, h = np.asarray(F, float), np.asarray(h, float)
+    A, B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
+    if np.any(h[:, 0] != 0.0):
+        raise ValueError("h(0) must be 0 (expand around an equilibrium)")
+    MF = basis.substitution(F)
+    blk = basis.block
+    F1 = F[:, blk[1]]
+    H1 = h[:, blk[1]]
+    cond = lfe_conditions(F1, H1, A, B, basis.order)
+    if not cond.nonresonant:
+        raise DesignError("observer linearization: " + cond.reason(), "non-resonance")
+    r = A.shape[0]
+    C = np.zeros((r, len(basis)))
+    Bh = B @ h
+    for d in range(1, basis.order + 1):
+        b = blk[d]
+        # Phi_d (F_1 v) = C_d MF[d, d]; lower degrees through the nonlinear part
+        rhs = Bh[:, b] - C[:, :b.start] @ MF[:b.start, b]
+        C[:, b] = solve_sylvester(-A, MF[b, b], rhs)
+    return LFESolution(basis, C, cond)
