@@ -45,24 +45,24 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 
+def ms_around(times: list[float], ks, half: int = 5) -> dict[str, float]:
+    """Median time per update (ms) over ``times[k - half : k + half]`` for each ``k`` recorded."""
+    return {str(k): 1e3 * statistics.median(times[max(0, k - half):k + half])
+            for k in ks if k < len(times)}
+
+
 def child(kmax: int) -> dict:
     sys.path.insert(0, str(HERE.parent))
     import numpy as np
-    from benchmarks.smfdo import data
+    from benchmarks.smfdo import data, time_updates
 
     import setobs as so
 
     sysm, Y, _ = data(kmax + 1)
     out = {}
     for name, fast in (("ms_per_update", True), ("whole_history_ms_per_update", False)):
-        obs = so.SMFDO(sysm, window=None, fast=fast)
-        times = []
-        for y in Y[:kmax + 1]:
-            t0 = time.perf_counter()
-            obs.update(y)
-            times.append(time.perf_counter() - t0)
-        out[name] = {str(k): 1e3 * statistics.median(times[max(0, k - 5):k + 5])
-                     for k in (50, 100, 150) if k <= kmax}
+        times, _ = time_updates(so.SMFDO(sysm, window=None, fast=fast), Y[:kmax + 1], 0)
+        out[name] = ms_around(times, (50, 100, 150))
         out["total_s" if fast else "whole_history_total_s"] = float(np.sum(times))
     return out
 
@@ -88,7 +88,7 @@ def sizes(kmax: int) -> list[dict]:
 
 def h_recursion(long: int) -> dict:
     """Per-update times and representation sizes of the default exact path."""
-    from benchmarks.smfdo import data
+    from benchmarks.smfdo import data, time_updates
 
     import setobs as so
     from setobs.setmembership._hrep import HState
@@ -106,33 +106,12 @@ def h_recursion(long: int) -> dict:
                             "vertices": int(st.V.shape[0]),
                             "posterior_n_gen": obs.posterior_set.n_gen,
                             "posterior_n_con": obs.posterior_set.n_con})
-    out = {}
-    for k in (100, 1000, 10000):
-        if k < long:
-            out[str(k)] = 1e3 * statistics.median(times[max(0, k - 50):k + 50])
-    ref = so.SMFDO(sysm, window=None, fast=False)
-    rtimes = []
-    for y in Y[:151]:
-        t0 = time.perf_counter()
-        ref.update(y)
-        rtimes.append(time.perf_counter() - t0)
-    old = {str(k): 1e3 * statistics.median(rtimes[k - 5:k + 5]) for k in (50, 100, 145)}
+    out = ms_around(times, (100, 1000, 10000), half=50)
+    rtimes, _ = time_updates(so.SMFDO(sysm, window=None, fast=False), Y[:151], 0)
+    old = ms_around(rtimes, (50, 100, 145))
     return {"ms_per_update": out, "steps": long, "total_s": float(sum(times)),
             "stats": dict(obs.stats), "representation": sizes_k,
             "set_recursion_ms_per_update": old}
-
-
-def noisy_record(sysm, N: int, rng, r_inc, r_v):
-    """A record of ``sysm`` with increments ``|dd_i| <= r_inc`` and noise ``|v_i| <= r_v``."""
-    import numpy as np
-
-    x, d = rng.uniform(-1, 1, sysm.n), rng.uniform(-1, 1, sysm.q)
-    V, D = np.empty((N, sysm.l)), np.empty((N, sysm.q))
-    for k in range(N):
-        V[k] = r_v * rng.uniform(-1, 1, sysm.l)
-        D[k] = d
-        d = d + r_inc * rng.uniform(-1, 1, sysm.q)
-    return sysm.simulate(D, None, x0=x)[0] + V
 
 
 def growing(kmax: int, kcount: int) -> dict:
@@ -145,6 +124,8 @@ def growing(kmax: int, kcount: int) -> dict:
     set recursion).
     """
     import numpy as np
+    from benchmarks.smfdo import time_updates
+    from tests.datasets import noisy_record
 
     import setobs as so
     from setobs.exceptions import SetobsError
@@ -154,13 +135,8 @@ def growing(kmax: int, kcount: int) -> dict:
     noise = 0.05 * shape
     Y = noisy_record(sysm, max(kmax, kcount) + 1, np.random.default_rng(0), inc, noise)
     obs = so.SMFDO(sysm, window=None, increment_set=inc, measurement_noise=noise)
-    times = []
-    for y in Y[:kmax + 1]:
-        t0 = time.perf_counter()
-        obs.update(y)
-        times.append(time.perf_counter() - t0)
-    ms = {str(k): 1e3 * statistics.median(times[max(0, k - 5):k + 5])
-          for k in (5, 25, 50, 100, 200, 300) if k <= kmax}
+    times, _ = time_updates(obs, Y[:kmax + 1], 0)
+    ms = ms_around(times, (5, 25, 50, 100, 200, 300))
     whole = so.SMFDO(sysm, window=None, fast=False, increment_set=inc,
                      measurement_noise=noise)
     rows = []

@@ -1,13 +1,16 @@
-"""Where the shared measured records are (never copied into the repository or package).
+"""Records for the tests and benchmarks: where the shared measured ones are (never
+copied into the repository or package), and a simulated noisy one.
 
-Looked up in ``$SETOBS_DATA``, then ``<repo>/../shared/data``, then
-``/work/shared/data``; tests that need a record skip when it is absent.
+Measured records are looked up in ``$SETOBS_DATA``, then ``<repo>/../shared/data``,
+then ``/work/shared/data``; tests that need a record skip when it is absent.
 """
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
+
+import numpy as np
 
 _REPO = Path(__file__).resolve().parents[1]
 
@@ -28,3 +31,18 @@ if HSM150 is None and os.environ.get("SETOBS_REQUIRE_DATA") == "1":
     raise RuntimeError("SETOBS_REQUIRE_DATA=1 but the HSM150 record was not found "
                        "($SETOBS_DATA, <repo>/../shared/data, /work/shared/data): the tests "
                        "that need it would silently skip")
+
+
+def noisy_record(sys, N, rng, r_inc, r_v, U=None):
+    """``N`` outputs of ``sys`` with ``|dd_i| <= r_inc`` increments and ``|v_i| <= r_v`` noise.
+
+    ``x_0`` and ``d_0`` uniform in ``[-1, 1]``; per step the draws in the order
+    noise, increment (uniform in their boxes); ``U`` the inputs, if any.
+    """
+    x, d = rng.uniform(-1, 1, sys.n), rng.uniform(-1, 1, sys.q)
+    V, D = np.empty((N, sys.l)), np.empty((N, sys.q))
+    for k in range(N):
+        V[k] = r_v * rng.uniform(-1, 1, sys.l)
+        D[k] = d
+        d = d + r_inc * rng.uniform(-1, 1, sys.q)
+    return sys.simulate(D, U, x0=x)[0] + V

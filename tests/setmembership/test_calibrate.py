@@ -11,7 +11,7 @@ import pytest
 import setobs as so
 from setobs.exceptions import DimensionError
 from setobs.setmembership import ModelInvalidatedWarning
-from tests.datasets import HSM150
+from tests.datasets import HSM150, noisy_record
 
 
 def _consistent(sys, Y, U, inc, radii, process_noise=None):
@@ -32,16 +32,6 @@ def _bisect(pred, lo, hi, rel=1e-4):
     return lo, hi
 
 
-def _record(sys, N, rng, r_inc, r_v, U=None):
-    x, d = rng.uniform(-1, 1, sys.n), rng.uniform(-1, 1, sys.q)
-    V, D = np.empty((N, sys.l)), np.empty((N, sys.q))
-    for k in range(N):  # the draws in the order noise, increment
-        V[k] = r_v * rng.uniform(-1, 1, sys.l)
-        D[k] = d
-        d = d + r_inc * rng.uniform(-1, 1, sys.q)
-    return sys.simulate(D, U, x0=x)[0] + V
-
-
 @pytest.mark.parametrize("case", range(3))
 def test_scale_matches_bisection_with_the_exact_smfdo(case):
     """On short records of the paper example and of the servo motor (with input),
@@ -54,7 +44,7 @@ def test_scale_matches_bisection_with_the_exact_smfdo(case):
         sys = so.examples.servo_motor()
         U = 0.05 * np.ones((25, 1))
         inc, shape = np.array([0.01]), [1e-3]
-    Y = _record(sys, 25, rng, inc, 0.05 * np.asarray(shape), U)
+    Y = noisy_record(sys, 25, rng, inc, 0.05 * np.asarray(shape), U)
     cal = so.calibrate_noise(sys, Y, U, increment=inc, shape=shape)
     radii = np.asarray(shape, float)
     lo, hi = _bisect(lambda a: _consistent(sys, Y, U, inc, a * radii), 0.0, 1.0)
@@ -94,7 +84,7 @@ def test_per_channel_and_process_noise():
 def test_tradeoff_curve_is_monotone_and_consistent_with_calibration():
     rng = np.random.default_rng(5)
     sys = so.examples.chang2006()
-    Y = _record(sys, 40, rng, np.array([0.3, 0.3]), 0.02)
+    Y = noisy_record(sys, 40, rng, np.array([0.3, 0.3]), 0.02)
     curve = so.noise_tradeoff(sys, Y, increment=[1.0, 1.0], betas=[0.01, 0.1, 1.0, 10.0])
     assert np.all(np.diff(curve.alpha) <= 1e-9)
     one = so.calibrate_noise(sys, Y, increment=[0.1, 0.1])

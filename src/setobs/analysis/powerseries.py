@@ -39,6 +39,8 @@ from scipy.linalg import solve_sylvester
 
 from .._lazy import optional_import
 from ..exceptions import DesignError
+from ._linalg import rank_decision
+from .observability import observability
 
 __all__ = ["LFEConditions", "LFESolution", "Monomials", "lfe_conditions", "solve_lfe", "taylor"]
 
@@ -138,8 +140,7 @@ class Monomials:
         """
         v = np.atleast_2d(np.asarray(v, dtype=float))
         mon = np.prod(v[:, None, :] ** self.exponents[None, :, :], axis=2)
-        out = mon @ np.asarray(C, dtype=float).T
-        return out
+        return mon @ np.asarray(C, dtype=float).T
 
 
 def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],
@@ -191,7 +192,8 @@ class LFEConditions:
         ``(H_1, F_1)`` is observable (assumption 1 is then solvable with an
         invertible ``T`` for a suitable ``A, B``).
     T_invertible : bool
-        The Sylvester solution ``T`` of ``T F_1 - A T = B H_1`` is invertible.
+        The Sylvester solution ``T`` of ``T F_1 - A T = B H_1`` is invertible
+        (numerical rank at :data:`setobs.tolerances.RANK_RTOL`).
     nonresonant : bool
         No eigenvalue of ``A`` equals a product of eigenvalues of ``F_1`` of
         total degree 1..order (assumption 2, checked up to the truncation).
@@ -234,12 +236,6 @@ class LFEConditions:
         return "; ".join(out)
 
 
-def _observable(F1: NDArray[np.float64], H1: NDArray[np.float64]) -> bool:
-    n = F1.shape[0]
-    O = np.vstack([H1 @ np.linalg.matrix_power(F1, k) for k in range(n)])
-    return bool(np.linalg.matrix_rank(O) == n)
-
-
 def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
                    order: int) -> LFEConditions:
     """Check Proposition 2's assumptions for the linear parts ``F_1``, ``H_1``.
@@ -259,8 +255,7 @@ def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
     A, B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
     lam, a = np.linalg.eigvals(F1), np.linalg.eigvals(A)
     T = solve_sylvester(-A, F1, B @ H1)
-    sv = np.linalg.svd(T, compute_uv=False) if T.shape[0] == T.shape[1] else np.zeros(1)
-    T_inv = bool(T.shape[0] == T.shape[1] and sv[-1] > 1e-10 * max(sv[0], 1e-300))
+    T_inv = T.shape[0] == T.shape[1] and rank_decision(T).rank == T.shape[0]
     divisors = []
     for d in range(1, order + 1):
         for m in itertools.combinations_with_replacement(range(lam.size), d):
@@ -270,7 +265,8 @@ def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
     scale = max(1.0, float(np.abs(a).max()))
     inside = np.abs(lam) < 1.0
     outside = np.abs(lam) > 1.0
-    return LFEConditions(_observable(F1, H1), T_inv, md > 1e-9 * scale, md,
+    observable = observability(F1, H1).n_observable == F1.shape[0]
+    return LFEConditions(observable, T_inv, md > 1e-9 * scale, md,
                          bool(inside.all() or outside.all()), lam, a)
 
 
