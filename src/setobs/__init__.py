@@ -25,6 +25,7 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
+from .nonlinear import NonlinearSystem
 from .setmembership import SMFDO, calibrate_noise, noise_tradeoff
 from .systems import LinearSystem
 
@@ -42,6 +43,7 @@ __all__ = [
     "ModelFileError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
+    "NonlinearSystem",
     "SetobsError",
     "SolverError",
     "SolverWarning",

@@ -1,7 +1,8 @@
 """Every system printed in the seed papers, as ready constructors.
 
-Each function returns a :class:`~setobs.systems.LinearSystem` and says in its
-docstring where the numbers come from. Where text extraction damaged a matrix,
+Each function returns a :class:`~setobs.systems.LinearSystem` (the modular-observer
+paper's nonlinear example a :class:`~setobs.nonlinear.NonlinearSystem`) and says in
+its docstring where the numbers come from. Where text extraction damaged a matrix,
 the reconstruction is stated.
 """
 
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .nonlinear import NonlinearSystem
 from .systems import LinearSystem
 
 __all__ = [
@@ -17,6 +19,7 @@ __all__ = [
     "chen_gao_lin_example2",
     "chen_gao_lin_example4",
     "chen_gao_lin_example5",
+    "modular_example",
     "servo_motor",
 ]
 
@@ -208,3 +211,18 @@ def servo_motor(J: float = 1.2e-4, B: float = 7.03e-5, dt: float = 1e-3, *,
                                         state_names=["theta", "omega"],
                                         disturbance_names=["tau_L"], input_names=["tau"],
                                         output_names=outputs)
+
+
+def modular_example() -> NonlinearSystem:
+    """The modular-observer paper's nonlinear example (Section VI, eq. (40)); needs sympy.
+
+    ``x+ = (x - w)/(2 + x + (2x + 3) w)``, ``w+ = w``,
+    ``y = 2x/(1 + x) + w/(1 + w)``: a scalar state and a constant (step)
+    disturbance. The printed equation is damaged by text extraction; this is
+    the reconstruction consistent with the paper's closed-form solution: in
+    ``xi = 2x/(1 + x)``, ``eta = w/(1 + w)`` the system is linear
+    (``xi+ = xi/2 - eta``, ``eta+ = eta``, ``y = xi + eta``).
+    """
+    return NonlinearSystem(lambda x, w: [(x[0] - w[0]) / (2 + x[0] + (2 * x[0] + 3) * w[0])],
+                           lambda x, w: [2 * x[0] / (1 + x[0]) + w[0] / (1 + w[0])],
+                           ["x"], ["w"])

@@ -30,6 +30,7 @@ __all__ = [
     "ELIMINATION_ERR_RTOL",
     "ELIMINATION_PIVOT_TOL",
     "EQUILIBRATION_FLOOR",
+    "EQUILIBRIUM_ATOL",
     "FASTLP_BOUNDED_CLEAR",
     "FASTLP_CONSISTENCY_RTOL",
     "FASTLP_GAP_RTOL",
@@ -43,10 +44,12 @@ __all__ = [
     "HREP_SNAP_TOL",
     "IMAG_DISPLAY_RTOL",
     "LP_REFINE_GAP",
+    "NEWTON_RTOL",
     "PRODUCT_RTOL",
     "RANK_FLOOR",
     "RANK_RTOL",
     "REDUNDANT_BOUND_MARGIN",
+    "RESONANCE_RTOL",
     "UNBOUNDED_RADIUS",
     "UNBOUNDED_REDUCED_COST_TOL",
     "UNIT_CIRCLE_TOL",
@@ -172,3 +175,15 @@ CALIBRATION_RTOL: float = 1e-6
 #: Absolute margin (data units) added to the recommended bound: HiGHS's primal
 #: feasibility tolerance, by which its optimum may undercut the true minimum.
 CALIBRATION_ATOL: float = 1e-7
+
+# ---- nonlinear modular observer (setobs.nonlinear, setobs.analysis.modular)
+#: Largest ``|f(0, 0)|``, ``|s(0)|``, ``|h(0, 0)|`` accepted as an equilibrium at
+#: the origin (the power series expand there).
+EQUILIBRIUM_ATOL: float = 1e-12
+#: Newton's method (eqs. (32), (36)) stops when its step falls below this,
+#: relative to the iterate's size (at least 1).
+NEWTON_RTOL: float = 1e-12
+#: An observer eigenvalue within this (relative to the largest eigenvalue's
+#: modulus, at least 1) of a product of the linearization's eigenvalues is
+#: resonant (Proposition 2, assumption 2).
+RESONANCE_RTOL: float = 1e-9

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -34,18 +35,20 @@ class Diagnosis:
     zeros : ZerosResult
     relative_degrees : RelativeDegreeResult
     uio : UIOReport
-    system : LinearSystem
+        (``None`` for a nonlinear system whose linearization is not a
+        :class:`LinearSystem`, these four)
+    system : LinearSystem or NonlinearSystem
         The diagnosed system.
     notes : list of str
         Remarks that apply to several designs (e.g. undecidable rank decisions).
     """
 
-    system: LinearSystem
+    system: Any
     verdicts: list[ExistenceReport]
-    bounded_do: BoundedDOReport
-    zeros: ZerosResult
-    relative_degrees: RelativeDegreeResult
-    uio: UIOReport
+    bounded_do: BoundedDOReport | None
+    zeros: ZerosResult | None
+    relative_degrees: RelativeDegreeResult | None
+    uio: UIOReport | None
     notes: list[str] = field(default_factory=list)
 
     def __getitem__(self, design: str) -> ExistenceReport:
@@ -61,6 +64,9 @@ class Diagnosis:
 
     def _header(self) -> str:
         s = self.system
+        if self.zeros is None:
+            return (f"nonlinear system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs "
+                    "(linear designs: see the linearization)")
         zs = format_complex_list(self.zeros.zeros) or "none"
         head = (f"system: n={s.n} states, q={s.q} disturbances, l={s.l} outputs; "
                 f"finite invariant zeros: {zs}")
@@ -70,7 +76,7 @@ class Diagnosis:
         """The system's signal names, when the user gave any (empty for default names)."""
         s = self.system
         groups = [("disturbances", s.disturbance_names, "d"), ("outputs", s.output_names, "y"),
-                  ("inputs", s.input_names, "u"), ("states", s.state_names, "x")]
+                  ("inputs", getattr(s, "input_names", ()), "u"), ("states", s.state_names, "x")]
         custom = [(label, names) for label, names, prefix in groups
                   if names != tuple(f"{prefix}{i}" for i in range(len(names)))]
         if not custom:
@@ -116,6 +122,26 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def _diagnose_nonlinear(sys: Any, rtol: float) -> Diagnosis:
+    from ..systems import LinearSystem as _LS
+    from .modular import nonlinear_modular_conditions
+
+    row = nonlinear_modular_conditions(sys)
+    extra = [f"nonlinear modular observer: {row.reason.removeprefix('note: ')}"
+             ] if row.exists and row.reason else []
+    lin = sys.linearization()
+    if np.all(lin["Q"] == 0) and np.array_equal(lin["S"], np.eye(sys.q)):
+        d = diagnose(_LS(lin["F"], lin["P"], lin["H"], dt=sys.dt), rtol=rtol)
+        notes = [*d.notes, *extra, "rows other than the nonlinear modular observer are for the "
+                 "linearization at the equilibrium (local statements)"]
+        return replace(d, system=sys, verdicts=[*d.verdicts, row], notes=notes)
+    why = ("the linearization has a disturbance feedthrough Q != 0" if np.any(lin["Q"] != 0)
+           else "the exosystem is not a constant disturbance (S != I)")
+    return Diagnosis(sys, [row], None, None, None, None,
+                     [*extra, f"linear designs not checked: {why}, which LinearSystem does not "
+                      "represent"])
+
+
 def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     rtol: float = RANK_RTOL) -> Diagnosis:
     """For each observer design in the library, whether it exists for ``sys`` and why not.
@@ -132,11 +158,18 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     * **higher-order observer** (Fu-Wang): pair with a double-integrator
       disturbance model detectable.
     * **modular observer** (Sec. VIII): ``(Phi, Xi)`` detectable, ``rank(Xi V) = q``.
+    * **nonlinear modular observer** (modular-observer paper, Prop. 2-3), for a
+      :class:`~setobs.nonlinear.NonlinearSystem`: the linearization observable
+      (disturbance-free and extended); the Poincare-domain assumption is
+      reported, not decided on (it fails for every constant disturbance, the
+      paper's example included). The linear rows are then those of the
+      linearization, when it is a :class:`LinearSystem` (``Q = 0``, ``S = I``).
 
     Parameters
     ----------
-    sys : LinearSystem or control.StateSpace
-        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x``.
+    sys : LinearSystem, control.StateSpace or NonlinearSystem
+        The system ``x+ = Phi x + Gamma u + G d``, ``y = Xi x`` (or
+        ``x+ = f(x, w)``, ``w+ = s(w)``, ``y = h(x, w)``).
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
@@ -150,6 +183,10 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     >>> d.existing
     ['SMFDO', 'PIO', 'higher-order observer', 'modular observer']
     """
+    from ..nonlinear import NonlinearSystem
+
+    if isinstance(sys, NonlinearSystem):
+        return _diagnose_nonlinear(sys, rtol)
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     bdo = bounded_do_exists(sys, rtol=rtol)
     rd = relative_degrees(sys, rtol=rtol)

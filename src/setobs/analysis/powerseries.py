@@ -39,10 +39,12 @@ from scipy.linalg import solve_sylvester
 
 from .._lazy import optional_import
 from ..exceptions import DesignError
+from ..tolerances import RESONANCE_RTOL
 from ._linalg import rank_decision
 from .observability import observability
 
-__all__ = ["LFEConditions", "LFESolution", "Monomials", "lfe_conditions", "solve_lfe", "taylor"]
+__all__ = ["LFEConditions", "LFESolution", "Monomials", "invert", "lfe_conditions", "solve_lfe",
+           "taylor"]
 
 
 class Monomials:
@@ -100,33 +102,77 @@ class Monomials:
             np.add.at(out, self._sum[i, ok], a[i] * b[ok])
         return out
 
-    def substitution(self, F: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Matrix ``MF`` with row ``alpha`` the series of ``v^alpha`` at ``v = F(v)``.
+    def substitution(self, F: NDArray[np.float64], target: Monomials | None = None
+                     ) -> NDArray[np.float64]:
+        """Matrix ``MF`` with row ``alpha`` the series of ``v^alpha`` at ``v = F(u)``.
 
-        So a map with coefficients ``C`` composed with ``F`` has coefficients
-        ``C @ MF`` (truncated). ``F`` has one row per variable and no constant
-        term (``F(0) = 0``).
+        So a map with coefficients ``C`` (over this basis) composed with ``F``
+        has coefficients ``C @ MF`` over ``target`` (truncated at its order).
+        ``F`` has one row per variable of this basis and no constant term
+        (``F(0) = 0``).
 
         Parameters
         ----------
-        F : ndarray, shape (n_vars, len(self))
-            Coefficients of the substituted map.
+        F : ndarray, shape (n_vars, len(target))
+            Coefficients of the substituted map over ``target``.
+        target : Monomials, optional
+            The basis of ``F``'s variables ``u`` (default: this basis).
         """
+        target = self if target is None else target
         F = np.asarray(F, dtype=float)
-        if F.shape != (self.n_vars, len(self)):
-            raise ValueError(f"F must have shape ({self.n_vars}, {len(self)})")
+        if F.shape != (self.n_vars, len(target)):
+            raise ValueError(f"F must have shape ({self.n_vars}, {len(target)})")
         if np.any(F[:, 0] != 0.0):
             raise ValueError("F(0) must be 0 (expand around an equilibrium)")
-        M = len(self)
-        MF = np.zeros((M, M))
+        MF = np.zeros((len(self), len(target)))
         MF[0, 0] = 1.0
-        for i in range(1, M):
+        for i in range(1, len(self)):
             e = self.exponents[i]
+            if self.degree[i] > target.order:
+                break
             j = int(np.flatnonzero(e)[0])
             prev = e.copy()
             prev[j] -= 1
-            MF[i] = self.multiply(MF[self.index[tuple(prev)]], F[j])
+            MF[i] = target.multiply(MF[self.index[tuple(prev)]], F[j])
         return MF
+
+    def derivative(self, C: NDArray[np.float64], j: int) -> NDArray[np.float64]:
+        """Coefficients of ``dC/dv_j`` (same basis; the top degree drops out).
+
+        Parameters
+        ----------
+        C : ndarray, shape (r, len(self))
+            Coefficients.
+        j : int
+            Variable.
+        """
+        C = np.atleast_2d(np.asarray(C, dtype=float))
+        out = np.zeros_like(C)
+        for i in np.flatnonzero(self.exponents[:, j] > 0):
+            e = self.exponents[i].copy()
+            e[j] -= 1
+            out[:, self.index[tuple(e)]] += self.exponents[i, j] * C[:, i]
+        return out
+
+    def embed(self, other: Monomials, positions: Sequence[int]) -> NDArray[np.int64]:
+        """Where this basis's monomials sit in ``other`` when variable ``i`` of this
+        basis is variable ``positions[i]`` of ``other`` (the others set to 0).
+
+        ``C_other[:, idx] = C`` lifts a map; ``C_other[:, idx]`` restricts one
+        (to the remaining variables at 0).
+
+        Parameters
+        ----------
+        other : Monomials
+            The larger basis (same order).
+        positions : sequence of int
+            The positions of this basis's variables among ``other``'s.
+        """
+        if other.order != self.order:
+            raise ValueError("the bases must have the same order")
+        e = np.zeros((len(self), other.n_vars), dtype=int)
+        e[:, list(positions)] = self.exponents
+        return np.array([other.index[tuple(r)] for r in e], dtype=int)
 
     def evaluate(self, C: NDArray[np.float64], v: ArrayLike) -> NDArray[np.float64]:
         """The polynomial map with coefficients ``C`` (rows) at the points ``v``.
@@ -266,7 +312,7 @@ def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
     inside = np.abs(lam) < 1.0
     outside = np.abs(lam) > 1.0
     observable = observability(F1, H1).n_observable == F1.shape[0]
-    return LFEConditions(observable, T_inv, md > 1e-9 * scale, md,
+    return LFEConditions(observable, T_inv, md > RESONANCE_RTOL * scale, md,
                          bool(inside.all() or outside.all()), lam, a)
 
 
@@ -341,3 +387,41 @@ def solve_lfe(F: NDArray[np.float64], h: NDArray[np.float64], A: ArrayLike, B: A
         rhs = Bh[:, b] - C[:, :b.start] @ MF[:b.start, b]
         C[:, b] = solve_sylvester(-A, MF[b, b], rhs)
     return LFESolution(basis, C, cond)
+
+
+def invert(C: NDArray[np.float64], basis: Monomials) -> NDArray[np.float64]:
+    """The truncated series of the local inverse of a map with invertible linear part.
+
+    With ``Phi = T v + Phi_{>=2}``, the inverse ``G`` has ``G_1 = T^{-1}`` and
+    ``G_d = -T^{-1} [Phi_{>=2} o G_{<d}]_d`` (the degree-``d`` part of
+    ``Phi(G(z)) = z``).
+
+    Parameters
+    ----------
+    C : ndarray, shape (n_vars, len(basis))
+        Coefficients of ``Phi`` (``Phi(0) = 0``).
+    basis : Monomials
+
+    Returns
+    -------
+    ndarray, shape (n_vars, len(basis))
+        Coefficients of ``G`` with ``Phi(G(z)) = z`` up to ``basis.order``.
+
+    Raises
+    ------
+    DesignError
+        When the linear part is singular.
+    """
+    C = np.asarray(C, dtype=float)
+    blk = basis.block
+    T = C[:, blk[1]]
+    if T.shape[0] != T.shape[1] or rank_decision(T).rank < T.shape[0]:
+        raise DesignError("the map's linear part is singular: no local inverse",
+                          "invertible linear part")
+    Tinv = np.linalg.inv(T)
+    G = np.zeros_like(C)
+    G[:, blk[1]] = Tinv
+    for d in range(2, basis.order + 1):
+        comp = C @ basis.substitution(G)
+        G[:, blk[d]] = -Tinv @ comp[:, blk[d]]
+    return G

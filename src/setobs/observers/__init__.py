@@ -5,19 +5,21 @@ Gain names
 Constructor arguments keep each paper's symbols, so a design can be checked
 against its paper; the symbols are not shared between observers:
 
-============================  =============================================================
-observer                      gains (all multiply the output innovation)
-============================  =============================================================
-:class:`PIO`                  ``P`` (n, l) into the state, ``L`` (q, l) into the disturbance
-:class:`HigherOrderObserver`  ``P0`` (n, l) into the state, ``L0``, ``L1`` (q, l) into the
-                              disturbance (Fu-Wang eq. (10))
-:class:`ModularObserver`      ``L0`` (n, l) of the disturbance-free observer, ``Lw`` (q, l)
-                              of the disturbance observer
-:class:`MBESO`                ``L`` (n + p, p) on the extended state (from ``omega``)
-:class:`DelayedUIO`           ``K`` on the stacked window ``Y[k:k+tau]`` (eq. (23))
-:class:`DescriptorObserver`   ``L`` on the descriptor state (eq. (18)); its ``F`` is the
-                              sensor-noise matrix, not a gain
-============================  =============================================================
+===================================  =============================================================
+observer                             gains (multiply the output innovation unless stated)
+===================================  =============================================================
+:class:`PIO`                         ``P`` (n, l) into the state, ``L`` (q, l) into the disturbance
+:class:`HigherOrderObserver`         ``P0`` (n, l) into the state, ``L0``, ``L1`` (q, l) into the
+                                     disturbance (Fu-Wang eq. (10))
+:class:`ModularObserver`             ``L0`` (n, l) of the disturbance-free observer, ``Lw`` (q, l)
+                                     of the disturbance observer
+:class:`MBESO`                       ``L`` (n + p, p) on the extended state (from ``omega``)
+:class:`DelayedUIO`                  ``K`` on the stacked window ``Y[k:k+tau]`` (eq. (23))
+:class:`DescriptorObserver`          ``L`` on the descriptor state (eq. (18)); its ``F`` is the
+                                     sensor-noise matrix, not a gain
+:class:`NonlinearModularObserver`    ``A0``, ``B0`` and ``Aw``, ``Bw``: the linear dynamics of the
+                                     linearizing coordinates (eqs. (30), (34)), not output gains
+===================================  =============================================================
 
 ``observer.gains`` (and ``ObserverResult.gains``) holds exactly these, keyed
 by the symbols above: no covariance, transition matrix, eigenvalue or delay.
@@ -38,6 +40,7 @@ from .luenberger import (
     design_pio,
 )
 from .mbeso import MBESO, VariantMBESO, decoupled_gain, mbeso_impulse_response
+from .nonlinear import NonlinearModularObserver, NonlinearObserverResult
 from .uio import DelayedUIO
 
 __all__ = [
@@ -50,6 +53,8 @@ __all__ = [
     "DesignError",
     "HigherOrderObserver",
     "ModularObserver",
+    "NonlinearModularObserver",
+    "NonlinearObserverResult",
     "ObserverResult",
     "PointObserver",
     "StateSpaceObserver",
