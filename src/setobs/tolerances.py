@@ -50,6 +50,7 @@ __all__ = [
     "RANK_RTOL",
     "REDUNDANT_BOUND_MARGIN",
     "RESONANCE_RTOL",
+    "SERIES_TAIL_RTOL",
     "UNBOUNDED_RADIUS",
     "UNBOUNDED_REDUCED_COST_TOL",
     "UNIT_CIRCLE_TOL",
@@ -187,3 +188,6 @@ NEWTON_RTOL: float = 1e-12
 #: modulus, at least 1) of a product of the linearization's eigenvalues is
 #: resonant (Proposition 2, assumption 2).
 RESONANCE_RTOL: float = 1e-9
+#: A truncated series is trusted at a point when its top-degree terms there weigh
+#: at most this fraction of its linear terms (:func:`~setobs.analysis.powerseries.series_tail`).
+SERIES_TAIL_RTOL: float = 1e-2

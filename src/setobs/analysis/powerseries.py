@@ -43,8 +43,8 @@ from ..tolerances import RESONANCE_RTOL
 from ._linalg import rank_decision
 from .observability import observability
 
-__all__ = ["LFEConditions", "LFESolution", "Monomials", "invert", "lfe_conditions", "solve_lfe",
-           "taylor"]
+__all__ = ["LFEConditions", "LFESolution", "Monomials", "invert", "lfe_conditions", "series_tail",
+           "solve_lfe", "taylor"]
 
 
 class Monomials:
@@ -187,6 +187,33 @@ class Monomials:
         v = np.atleast_2d(np.asarray(v, dtype=float))
         mon = np.prod(v[:, None, :] ** self.exponents[None, :, :], axis=2)
         return mon @ np.asarray(C, dtype=float).T
+
+
+def series_tail(C: NDArray[np.float64], basis: Monomials, v: ArrayLike) -> float:
+    """How much the top-degree terms of a truncated series weigh at the point ``v``.
+
+    ``max |C_N v^N| / max |C_1 v|`` (max norms, ``N = basis.order``): small when
+    the series has converged at ``v`` to the truncation's accuracy; of order 1 or
+    more beyond its radius of convergence. 0 for ``order = 1`` (a linear map
+    has no tail to judge by).
+
+    Parameters
+    ----------
+    C : ndarray, shape (r, len(basis))
+    basis : Monomials
+    v : array_like, shape (n_vars,)
+    """
+    if basis.order < 2:
+        return 0.0
+    v = np.asarray(v, dtype=float)
+    mon = np.prod(v[None, :] ** basis.exponents, axis=1)
+    top = basis.block[basis.order]
+    lin = basis.block[1]
+    t_top = float(np.abs(C[:, top] @ mon[top]).max())
+    t_lin = float(np.abs(C[:, lin] @ mon[lin]).max())
+    if t_top == 0.0:
+        return 0.0
+    return t_top / t_lin if t_lin > 0.0 else np.inf
 
 
 def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],

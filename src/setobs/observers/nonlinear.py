@@ -10,8 +10,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
-from ..analysis.modular import ModularDesign, design_modular, radius_estimate
+from ..analysis.modular import ModularDesign, design_modular
+from ..analysis.powerseries import series_tail
 from ..exceptions import DimensionError
+from ..tolerances import SERIES_TAIL_RTOL
 from .base import ObserverResult, PointObserver
 
 __all__ = ["NonlinearModularObserver", "NonlinearObserverResult"]
@@ -21,8 +23,8 @@ COORDINATES = ("linearizing", "original")
 
 @dataclass(frozen=True)
 class NonlinearObserverResult(ObserverResult):
-    """:class:`ObserverResult` with the disturbance-free estimate and the steps read
-    outside the series' estimated radius.
+    """:class:`ObserverResult` with the disturbance-free estimate and the steps whose
+    series had not converged at the point.
 
     Attributes
     ----------
@@ -43,10 +45,11 @@ class NonlinearObserverResult(ObserverResult):
     x_tilde : ndarray, shape (N, n)
         The disturbance-free observer's estimate ``x~`` (eq. (24)).
     untrusted : ndarray of bool, shape (N,)
-        Steps whose estimate came from a series evaluated beyond its estimated
-        radius of convergence (:func:`~setobs.analysis.modular.radius_estimate`;
-        in original coordinates that of ``Psi`` and ``Xi`` at ``(x~, w^)``) or
-        from a Newton solve that did not converge.
+        Steps whose estimate came from a truncated series whose top-degree terms
+        weigh more than :data:`~setobs.tolerances.SERIES_TAIL_RTOL` of its linear
+        terms at the point (:func:`~setobs.analysis.powerseries.series_tail`: the
+        readout at ``z``; in original coordinates ``Psi`` and ``Xi`` at
+        ``(x~, w^)``), or from a Newton solve that did not converge.
     """
 
     x_tilde: NDArray[np.float64] | None = None
@@ -131,9 +134,7 @@ class NonlinearModularObserver(PointObserver):
         self.x0 = np.zeros(n) if x0 is None else as_vector("x0", x0, size=n)
         self.w0 = np.zeros(q) if w0 is None else as_vector("w0", w0, size=q)
         self._R = design.readout()
-        self._rho = radius_estimate(self._R[: n + q], design.basis_v)
-        self._rho_v = min(radius_estimate(design.Psi.C, design.basis_v),
-                          radius_estimate(design.Xi, design.basis_v))
+        self._tail_R = self._R[: n + q]
         self.reset()
 
     @property
@@ -153,7 +154,8 @@ class NonlinearModularObserver(PointObserver):
 
     def _read(self) -> None:
         n, q = self.sys.n, self.sys.q
-        self.trusted = bool(np.abs(self.z).max() <= self._rho)
+        self.trusted = bool(series_tail(self._tail_R, self.design.basis_v, self.z)
+                            <= SERIES_TAIL_RTOL)
         out = self.design.basis_v.evaluate(self._R, self.z)[0]
         self.x_tilde, self.w_hat, self.x_hat = out[:n], out[n:n + q], out[n + q:]
 
@@ -187,7 +189,9 @@ class NonlinearModularObserver(PointObserver):
             wn, ok3 = d.Psi_solve_w(xn, target, sw)
             self.x_tilde, self.w_hat = xn, wn
             self.x_hat = d.Xi_at(xn, wn)                      # eq. (26)
-            inside = np.abs(np.concatenate([xn, wn])).max() <= self._rho_v
+            v = np.concatenate([xn, wn])
+            inside = max(series_tail(d.Psi.C, d.basis_v, v),
+                         series_tail(d.Xi, d.basis_v, v)) <= SERIES_TAIL_RTOL
             self.trusted = bool(ok1 and ok2 and ok3 and inside)
         return w_out
 
@@ -224,8 +228,9 @@ class NonlinearModularObserver(PointObserver):
             D[k] = self.step(Ya[k])
             X[k], Xt[k] = self._xk, self._xtk
         if bad.any():
-            warnings.warn(f"{int(bad.sum())} of {N} estimates came from a series beyond its "
-                          "estimated radius of convergence or an unconverged Newton solve "
+            warnings.warn(f"{int(bad.sum())} of {N} estimates came from a series not converged "
+                          "at the point (its top-degree terms weigh more than SERIES_TAIL_RTOL) "
+                          "or an unconverged Newton solve "
                           "(result.untrusted); a higher order or a design closer to the "
                           "operating point may help", RuntimeWarning, stacklevel=2)
         return NonlinearObserverResult(D, X, 0, self.gains, dt=self.sys.dt,
