@@ -105,7 +105,7 @@ class NonlinearModularObserver(PointObserver):
     >>> X, W, Y = sys.simulate([2.0], [1.0], 60)
     >>> obs = NonlinearModularObserver(sys, 0.4, 1.0, 0.6, 1.0, order=12, x0=[1.0])
     >>> res = obs.run(Y)
-    >>> abs(res.estimate[-1, 0] - 1.0) < 1e-3, abs(res.x_hat[-1, 0] - X[-1, 0]) < 1e-3
+    >>> bool(abs(res.estimate[-1, 0] - 1.0) < 1e-3), bool(abs(res.x_hat[-1, 0] - X[-1, 0]) < 1e-3)
     (True, True)
     """
 
