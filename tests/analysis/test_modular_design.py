@@ -192,3 +192,15 @@ def test_model_validation():
     d = design_modular(m, A0, B0, AW, BW, order=4)
     d2 = pickle.loads(pickle.dumps(d))
     np.testing.assert_allclose(d2.Psi_at([0.1], [0.1]), d.Psi_at([0.1], [0.1]))
+
+
+def test_extension_along_the_observer_map_reaches_beyond_the_radius():
+    """x~ = 1 is on the edge of Phi0's series (pole at x = -1): the truncated series
+    there is 0 or 20, the closed form 10. extend_to_z carries the series outward by
+    eq. (31) (and (35) for Psi) along x -> f(x, 0) and recovers the closed forms."""
+    phi0, _, Psi = _closed_forms()
+    d = design_modular(modular_example(), A0, B0, AW, BW, order=12)
+    assert abs(d.Phi0_at([1.0])[0] - 10.0) > 5.0
+    z = d.extend_to_z([1.0], [0.0])
+    np.testing.assert_allclose(z, [float(phi0.subs(x, 1)), float(Psi.subs({x: 1, w: 0}))],
+                               rtol=1e-5)
