@@ -29,7 +29,6 @@ relates the two and is checked by :meth:`ModularDesign.proposition7_residuals`.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -43,7 +42,7 @@ from ..tolerances import NEWTON_RTOL, RESONANCE_RTOL
 from ._linalg import rank_decision
 from .existence import ExistenceReport
 from .observability import observability
-from .powerseries import LFESolution, Monomials, invert, solve_lfe, taylor
+from .powerseries import LFESolution, Monomials, invert, min_divisor, solve_lfe, taylor
 
 __all__ = ["ModularDesign", "design_modular", "design_simultaneous", "newton",
            "nonlinear_modular_conditions", "radius_estimate"]
@@ -68,16 +67,6 @@ def _as_gain(name: str, B: ArrayLike | None, r: int, p: int) -> NDArray[np.float
     if b.ndim < 2:
         b = b.reshape(r, p)
     return as_matrix(name, b, rows=r, cols=p)
-
-
-def _divisors(targets: NDArray[np.complex128], lam: NDArray[np.complex128], dmin: int,
-              dmax: int) -> float:
-    """Smallest ``|a - prod lam_i^m_i|`` over ``a`` in ``targets``, ``dmin <= sum m <= dmax``."""
-    out = np.inf
-    for d in range(dmin, dmax + 1):
-        for m in itertools.combinations_with_replacement(range(lam.size), d):
-            out = min(out, float(np.abs(targets - np.prod(lam[list(m)])).min()))
-    return out
 
 
 def newton(fun: Any, jac: Any, u0: NDArray[np.float64], target: NDArray[np.float64]
@@ -236,6 +225,14 @@ class ModularDesign:
 
         return newton(fun, jac, np.asarray(guess, float), np.asarray(z, float))
 
+    def _observer_map(self, x: NDArray[np.float64], w: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], ...]:
+        """The map of (28) and (35) at ``(x~, w^)``: ``Xi``, ``y = h(Xi, w^)``,
+        ``phi0(x~, y)`` (eq. (32)) and ``s(w^)``."""
+        xi = self.Xi_at(x, w)
+        y = self.system.h_num(xi, w)
+        return xi, y, self.phi0_at(x, y)[0], self.system.s_num(w)
+
     # the linearizing coordinates z = (Phi0(x~), Psi(x~, w^)) (eqs. (30), (34)) ----------
     def readout(self) -> NDArray[np.float64]:
         """Coefficients, over the basis of ``z = (z0, zw)``, of ``(x~, w^, x^)`` as
@@ -298,14 +295,11 @@ class ModularDesign:
         # Psi along v -> G(v)
         v, offs = (x, w), []
         while (np.abs(np.concatenate(v)).max() > rw and len(offs) < max_steps):
-            xi = self.Xi_at(*v)
-            yv = sys.h_num(xi, v[1])
-            nx, _ = self.phi0_at(v[0], yv)
-            nxt = (nx, sys.s_num(v[1]))
-            if np.abs(np.concatenate(nxt)).max() >= np.abs(np.concatenate(v)).max():
+            _, yv, nx, sw = self._observer_map(*v)
+            if np.abs(np.concatenate([nx, sw])).max() >= np.abs(np.concatenate(v)).max():
                 break
             offs.append(self.Bw @ yv)
-            v = nxt
+            v = (nx, sw)
         zw = self.Psi_at(*v)
         for off in reversed(offs):
             zw = np.linalg.solve(self.Aw, zw - off)
@@ -333,12 +327,9 @@ class ModularDesign:
             x, w = v[:m], v[m:]
             r31 = (self.Phi0_at(sys.f_num(x, w0)) - self.A0 @ self.Phi0_at(x)
                    - self.B0 @ sys.h_num(x, w0))
-            xi = self.Xi_at(x, w)
-            x_next, _ = self.phi0_at(x, sys.h_num(xi, w))
-            sw = sys.s_num(w)
+            xi, yv, x_next, sw = self._observer_map(x, w)
             r28 = self.Xi_at(x_next, sw) - sys.f_num(xi, w)
-            r35 = (self.Psi_at(x_next, sw) - self.Aw @ self.Psi_at(x, w)
-                   - self.Bw @ sys.h_num(xi, w))
+            r35 = self.Psi_at(x_next, sw) - self.Aw @ self.Psi_at(x, w) - self.Bw @ yv
             for key, r in (("31", r31), ("28", r28), ("35", r35)):
                 out[key] = max(out[key], float(np.abs(r).max()))
         return out
@@ -449,9 +440,9 @@ def nonlinear_modular_conditions(system: Any, A0: ArrayLike | None = None,
         a0 = np.linalg.eigvals(_as_square("A0", A0, m))
         aw = np.linalg.eigvals(_as_square("Aw", Aw, mu))
         lamF = np.linalg.eigvals(F)
-        d31 = _divisors(a0, lamF, 1, order)
-        d28 = min(_divisors(a0, lam, 2, order), _divisors(a0, np.linalg.eigvals(S), 1, 1))
-        d35 = _divisors(aw, lam, 1, order)
+        d31 = min_divisor(a0, lamF, 1, order)
+        d28 = min(min_divisor(a0, lam, 2, order), min_divisor(a0, np.linalg.eigvals(S), 1, 1))
+        d35 = min_divisor(aw, lam, 1, order)
         md = min(d31, d28, d35)
         nums["min divisor"] = md
         scale = max(1.0, float(np.abs(np.concatenate([a0, aw])).max()))

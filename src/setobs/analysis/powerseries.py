@@ -43,8 +43,8 @@ from ..tolerances import RESONANCE_RTOL
 from ._linalg import rank_decision
 from .observability import observability
 
-__all__ = ["LFEConditions", "LFESolution", "Monomials", "invert", "lfe_conditions", "series_tail",
-           "solve_lfe", "taylor"]
+__all__ = ["LFEConditions", "LFESolution", "Monomials", "invert", "lfe_conditions", "min_divisor",
+           "series_tail", "solve_lfe", "taylor"]
 
 
 class Monomials:
@@ -329,18 +329,35 @@ def lfe_conditions(F1: ArrayLike, H1: ArrayLike, A: ArrayLike, B: ArrayLike,
     lam, a = np.linalg.eigvals(F1), np.linalg.eigvals(A)
     T = solve_sylvester(-A, F1, B @ H1)
     T_inv = T.shape[0] == T.shape[1] and rank_decision(T).rank == T.shape[0]
-    divisors = []
-    for d in range(1, order + 1):
-        for m in itertools.combinations_with_replacement(range(lam.size), d):
-            prod = np.prod(lam[list(m)])
-            divisors.append(np.abs(a - prod).min())
-    md = float(min(divisors))
+    md = min_divisor(a, lam, 1, order)
     scale = max(1.0, float(np.abs(a).max()))
     inside = np.abs(lam) < 1.0
     outside = np.abs(lam) > 1.0
     observable = observability(F1, H1).n_observable == F1.shape[0]
     return LFEConditions(observable, T_inv, md > RESONANCE_RTOL * scale, md,
                          bool(inside.all() or outside.all()), lam, a)
+
+
+def min_divisor(targets: ArrayLike, lam: ArrayLike, dmin: int, dmax: int) -> float:
+    """Smallest ``|a - prod lam_i^m_i|`` over ``a`` in ``targets`` and exponents with
+    ``dmin <= sum m_i <= dmax`` (the divisors of the degree-by-degree Sylvester
+    equations; 0 at a resonance, Proposition 2's assumption 2).
+
+    Parameters
+    ----------
+    targets : array_like
+        Eigenvalues of the observer matrix.
+    lam : array_like
+        Eigenvalues of the linearization.
+    dmin, dmax : int
+        Range of total degrees.
+    """
+    targets, lam = np.asarray(targets), np.asarray(lam)
+    out = np.inf
+    for d in range(dmin, dmax + 1):
+        for m in itertools.combinations_with_replacement(range(lam.size), d):
+            out = min(out, float(np.abs(targets - np.prod(lam[list(m)])).min()))
+    return out
 
 
 @dataclass(frozen=True)
