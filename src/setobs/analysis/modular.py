@@ -98,19 +98,13 @@ class _Poly:
     def __init__(self, C: NDArray[np.float64], basis: Monomials) -> None:
         self.C = np.asarray(C, dtype=float)
         self.basis = basis
-        self.exponents = basis.exponents
         self.D = np.stack([basis.derivative(self.C, j) for j in range(basis.n_vars)])
 
-    def monomials(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
-        pw = np.power.outer(v, np.arange(self.basis.order + 1))  # (n_vars, order + 1)
-        return np.prod(pw[np.arange(self.basis.n_vars), self.exponents], axis=1)
-
     def __call__(self, v: ArrayLike) -> NDArray[np.float64]:
-        return self.C @ self.monomials(np.asarray(v, dtype=float))
+        return self.C @ self.basis.monomials(v)
 
     def jacobian(self, v: ArrayLike) -> NDArray[np.float64]:
-        mon = self.monomials(np.asarray(v, dtype=float))
-        return (self.D @ mon).T  # (r, n_vars)
+        return (self.D @ self.basis.monomials(v)).T  # (r, n_vars)
 
 
 @dataclass
@@ -152,7 +146,7 @@ class ModularDesign:
     Xi: NDArray[np.float64]
     Psi: LFESolution
     report: ExistenceReport
-    _poly: dict = field(default_factory=dict, repr=False)
+    _cache: dict = field(default_factory=dict, repr=False)
 
     # series bases ---------------------------------------------------------------------
     @property
@@ -166,16 +160,16 @@ class ModularDesign:
         return self.Psi.basis
 
     def _p(self, name: str) -> _Poly:
-        p = self._poly.get(name)
+        p = self._cache.get(name)
         if p is None:
             C, basis = {"Phi0": (self.Phi0.C, self.basis_x), "Xi": (self.Xi, self.basis_v),
                         "Psi": (self.Psi.C, self.basis_v)}[name]
-            p = self._poly[name] = _Poly(C, basis)
+            p = self._cache[name] = _Poly(C, basis)
         return p
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        state["_poly"] = {}
+        state["_cache"] = {}
         return state
 
     # the maps at points ----------------------------------------------------------------
@@ -244,14 +238,14 @@ class ModularDesign:
         ndarray, shape (2 n + q, len(basis_v))
             Rows: ``x~`` (n), ``w^`` (q), ``x^`` (n).
         """
-        R = self._poly.get("readout_C")
+        R = self._cache.get("readout_C")
         if R is None:
             bv, m = self.basis_v, self.system.n
             Z = np.zeros((m + self.system.q, len(bv)))
             Z[:m, self.basis_x.embed(bv, range(m))] = self.Phi0.C
             Z[m:] = self.Psi.C
             Lam = invert(Z, bv)
-            R = self._poly["readout_C"] = np.vstack([Lam, self.Xi @ bv.substitution(Lam)])
+            R = self._cache["readout_C"] = np.vstack([Lam, self.Xi @ bv.substitution(Lam)])
         return R
 
     def extend_to_z(self, x: ArrayLike, w: ArrayLike, *, radius: float | None = None,
@@ -278,31 +272,20 @@ class ModularDesign:
         """
         sys = self.system
         x, w = np.ravel(np.asarray(x, float)), np.ravel(np.asarray(w, float))
-        w0 = np.zeros(sys.q)
+        m, w0 = sys.n, np.zeros(sys.q)
         r0 = 0.5 * radius_estimate(self.Phi0.C, self.basis_x) if radius is None else radius
         rw = 0.5 * radius_estimate(self.Psi.C, self.basis_v) if radius is None else radius
-        # Phi0 along x -> f(x, 0)
-        pts, offs = [x], []
-        while (np.abs(pts[-1]).max() > r0 and len(offs) < max_steps):
-            nxt = sys.f_num(pts[-1], w0)
-            if np.abs(nxt).max() >= np.abs(pts[-1]).max():
-                break
-            offs.append(self.B0 @ sys.h_num(pts[-1], w0))
-            pts.append(nxt)
-        z0 = self.Phi0_at(pts[-1])
-        for off in reversed(offs):
-            z0 = np.linalg.solve(self.A0, z0 - off)
-        # Psi along v -> G(v)
-        v, offs = (x, w), []
-        while (np.abs(np.concatenate(v)).max() > rw and len(offs) < max_steps):
-            _, yv, nx, sw = self._observer_map(*v)
-            if np.abs(np.concatenate([nx, sw])).max() >= np.abs(np.concatenate(v)).max():
-                break
-            offs.append(self.Bw @ yv)
-            v = (nx, sw)
-        zw = self.Psi_at(*v)
-        for off in reversed(offs):
-            zw = np.linalg.solve(self.Aw, zw - off)
+
+        def step0(u):  # (31) along x -> f(x, 0)
+            return sys.f_num(u, w0), self.B0 @ sys.h_num(u, w0)
+
+        def step_w(v):  # (35) along v -> G(v)
+            _, yv, nx, sw = self._observer_map(v[:m], v[m:])
+            return np.concatenate([nx, sw]), self.Bw @ yv
+
+        z0 = _carry_out(x, r0, max_steps, step0, self.Phi0_at, self.A0)
+        zw = _carry_out(np.concatenate([x, w]), rw, max_steps, step_w,
+                        lambda v: self.Psi_at(v[:m], v[m:]), self.Aw)
         return np.concatenate([z0, zw])
 
     # checks ------------------------------------------------------------------------------
@@ -361,6 +344,24 @@ class ModularDesign:
             for key, r in (("i", ri), ("ii", rii), ("iii", riii)):
                 out[key] = max(out[key], float(np.abs(r).max()))
         return out
+
+
+def _carry_out(v: NDArray[np.float64], radius: float, max_steps: int, step: Any,
+               series: Any, A: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``Phi(v)`` for an LFE ``Phi(F(v)) = A Phi(v) + off(v)``: step ``v -> F(v)`` while
+    ``v`` is outside ``radius`` and shrinks (at most ``max_steps``), evaluate the series
+    there and undo the steps, ``Phi(v) = A^{-1}(Phi(F(v)) - off(v))``."""
+    offs = []
+    while np.abs(v).max() > radius and len(offs) < max_steps:
+        nxt, off = step(v)
+        if np.abs(nxt).max() >= np.abs(v).max():
+            break
+        offs.append(off)
+        v = nxt
+    z = series(v)
+    for off in reversed(offs):
+        z = np.linalg.solve(A, z - off)
+    return z
 
 
 def radius_estimate(C: NDArray[np.float64], basis: Monomials) -> float:

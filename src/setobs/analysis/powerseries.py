@@ -174,6 +174,22 @@ class Monomials:
         e[:, list(positions)] = self.exponents
         return np.array([other.index[tuple(r)] for r in e], dtype=int)
 
+    def monomials(self, v: ArrayLike) -> NDArray[np.float64]:
+        """The monomials ``v^alpha`` of this basis at the points ``v``.
+
+        Parameters
+        ----------
+        v : array_like, shape (n_vars,) or (n_points, n_vars)
+            One point or rows of points.
+
+        Returns
+        -------
+        ndarray, shape (len(self),) or (n_points, len(self))
+        """
+        v = np.asarray(v, dtype=float)
+        pw = v[..., :, None] ** np.arange(self.order + 1)       # (..., n_vars, order + 1)
+        return np.prod(pw[..., np.arange(self.n_vars), self.exponents], axis=-1)
+
     def evaluate(self, C: NDArray[np.float64], v: ArrayLike) -> NDArray[np.float64]:
         """The polynomial map with coefficients ``C`` (rows) at the points ``v``.
 
@@ -184,9 +200,27 @@ class Monomials:
         v : array_like, shape (n_points, n_vars)
             Points.
         """
-        v = np.atleast_2d(np.asarray(v, dtype=float))
-        mon = np.prod(v[:, None, :] ** self.exponents[None, :, :], axis=2)
-        return mon @ np.asarray(C, dtype=float).T
+        return self.monomials(np.atleast_2d(np.asarray(v, dtype=float))) @ np.asarray(
+            C, dtype=float).T
+
+    def tail(self, C: NDArray[np.float64], monomials: NDArray[np.float64]) -> float:
+        """:func:`series_tail` from the monomials at the point (:meth:`monomials`).
+
+        Parameters
+        ----------
+        C : ndarray, shape (r, len(self))
+            Coefficients.
+        monomials : ndarray, shape (len(self),)
+            The monomials at the point.
+        """
+        if self.order < 2:
+            return 0.0
+        top, lin = self.block[self.order], self.block[1]
+        t_top = float(np.abs(C[:, top] @ monomials[top]).max())
+        t_lin = float(np.abs(C[:, lin] @ monomials[lin]).max())
+        if t_top == 0.0:
+            return 0.0
+        return t_top / t_lin if t_lin > 0.0 else np.inf
 
 
 def series_tail(C: NDArray[np.float64], basis: Monomials, v: ArrayLike) -> float:
@@ -203,17 +237,7 @@ def series_tail(C: NDArray[np.float64], basis: Monomials, v: ArrayLike) -> float
     basis : Monomials
     v : array_like, shape (n_vars,)
     """
-    if basis.order < 2:
-        return 0.0
-    v = np.asarray(v, dtype=float)
-    mon = np.prod(v[None, :] ** basis.exponents, axis=1)
-    top = basis.block[basis.order]
-    lin = basis.block[1]
-    t_top = float(np.abs(C[:, top] @ mon[top]).max())
-    t_lin = float(np.abs(C[:, lin] @ mon[lin]).max())
-    if t_top == 0.0:
-        return 0.0
-    return t_top / t_lin if t_lin > 0.0 else np.inf
+    return basis.tail(C, basis.monomials(v))
 
 
 def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],

@@ -11,7 +11,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
 from ..analysis.modular import ModularDesign, design_modular
-from ..analysis.powerseries import series_tail
 from ..exceptions import DimensionError
 from ..tolerances import SERIES_TAIL_RTOL
 from .base import ObserverResult, PointObserver
@@ -154,9 +153,10 @@ class NonlinearModularObserver(PointObserver):
 
     def _read(self) -> None:
         n, q = self.sys.n, self.sys.q
-        self.trusted = bool(series_tail(self._tail_R, self.design.basis_v, self.z)
-                            <= SERIES_TAIL_RTOL)
-        out = self.design.basis_v.evaluate(self._R, self.z)[0]
+        basis = self.design.basis_v
+        mon = basis.monomials(self.z)
+        self.trusted = bool(basis.tail(self._tail_R, mon) <= SERIES_TAIL_RTOL)
+        out = self._R @ mon
         self.x_tilde, self.w_hat, self.x_hat = out[:n], out[n:n + q], out[n + q:]
 
     def step(self, y: ArrayLike, u: ArrayLike | None = None) -> NDArray[np.float64]:
@@ -187,11 +187,11 @@ class NonlinearModularObserver(PointObserver):
             sw = sys.s_num(wh)
             target = d.Psi_at(zt, sw) + d.Bw @ (yv - yhat)    # eq. (36)
             wn, ok3 = d.Psi_solve_w(xn, target, sw)
+            mon = d.basis_v.monomials(np.concatenate([xn, wn]))
             self.x_tilde, self.w_hat = xn, wn
-            self.x_hat = d.Xi_at(xn, wn)                      # eq. (26)
-            v = np.concatenate([xn, wn])
-            inside = max(series_tail(d.Psi.C, d.basis_v, v),
-                         series_tail(d.Xi, d.basis_v, v)) <= SERIES_TAIL_RTOL
+            self.x_hat = d.Xi @ mon                           # eq. (26)
+            inside = max(d.basis_v.tail(d.Psi.C, mon), d.basis_v.tail(d.Xi, mon)
+                         ) <= SERIES_TAIL_RTOL
             self.trusted = bool(ok1 and ok2 and ok3 and inside)
         return w_out
 
