@@ -26,6 +26,7 @@ from __future__ import annotations
 __all__ = [
     "CALIBRATION_ATOL",
     "CALIBRATION_RTOL",
+    "CONTAINMENT_RTOL",
     "DATA_RTOL",
     "ELIMINATION_ERR_RTOL",
     "ELIMINATION_PIVOT_TOL",
@@ -45,6 +46,7 @@ __all__ = [
     "IMAG_DISPLAY_RTOL",
     "LP_REFINE_GAP",
     "NEWTON_RTOL",
+    "PONTRYAGIN_MATCH_RTOL",
     "PRODUCT_RTOL",
     "RANK_FLOOR",
     "RANK_RTOL",
@@ -169,6 +171,15 @@ ELIMINATION_ERR_RTOL: float = 1e-12
 #: Smallest pivot, relative to the largest entry of its row, that
 #: :func:`reduce_exact` eliminates with (partial pivoting).
 ELIMINATION_PIVOT_TOL: float = 1e-3
+
+# ---- further set operations (setobs.geometry.operations, .relations, .measure)
+#: Largest equality residual, relative to the data, that the generator matching
+#: of the inner Pontryagin difference accepts (after least-squares refinement).
+PONTRYAGIN_MATCH_RTOL: float = 1e-10
+#: Set containment and equality are decided up to this distance, relative to
+#: ``1 + ||k||_inf`` of the inequality tested (``Z subset P`` holds when every
+#: certified support value is within it of its offset).
+CONTAINMENT_RTOL: float = 1e-9
 
 # ---- noise calibration (setobs.setmembership.calibrate)
 #: Relative margin added to the LP optimum in the recommended bound (outward).

@@ -2,23 +2,65 @@
 
 from .box import Box
 from .lp import EmptinessReport, FactorPolytope, LPResult
+from .measure import (
+    DistanceResult,
+    QPResult,
+    VolumeResult,
+    distance,
+    minimize_quadratic,
+    nearest_point,
+    sample,
+    volume,
+)
+from .operations import (
+    convex_hull,
+    empty_set,
+    from_vertices,
+    intersect_halfspace,
+    intersect_polytope,
+    intersect_strip,
+    interval_matrix_map,
+    pontryagin_difference,
+)
 from .polytope import HRep, cz_from_hpolytope, polygon_2d, to_hrep, vertices
-from .reduction import reduce_exact, reduce_order, remove_redundancy, rescale
+from .reduction import eliminate_constraints, reduce_exact, reduce_order, remove_redundancy, rescale
+from .relations import ContainmentResult, is_equal, is_subset, is_subset_of_polytope
 from .zonotope import ConstrainedZonotope
 
 __all__ = [
     "Box",
     "ConstrainedZonotope",
+    "ContainmentResult",
+    "DistanceResult",
     "EmptinessReport",
     "FactorPolytope",
     "HRep",
     "LPResult",
+    "QPResult",
+    "VolumeResult",
+    "convex_hull",
     "cz_from_hpolytope",
+    "distance",
+    "eliminate_constraints",
+    "empty_set",
+    "from_vertices",
+    "intersect_halfspace",
+    "intersect_polytope",
+    "intersect_strip",
+    "interval_matrix_map",
+    "is_equal",
+    "is_subset",
+    "is_subset_of_polytope",
+    "minimize_quadratic",
+    "nearest_point",
     "polygon_2d",
+    "pontryagin_difference",
     "reduce_exact",
     "reduce_order",
     "remove_redundancy",
     "rescale",
+    "sample",
     "to_hrep",
     "vertices",
+    "volume",
 ]

@@ -134,12 +134,20 @@ class EmptinessReport:
         minimum, up to the solver's accuracy).
     tol : float
         Tolerance used.
+    witness : ndarray or None
+        When not ``empty``: the solver's best point (LazySets'
+        ``isempty(X, witness=true)``), clipped to the factor box, whose
+        normalised violation is ``violation_found``. A factor vector from
+        :meth:`FactorPolytope.emptiness`, a point of the set from
+        :meth:`~setobs.ConstrainedZonotope.emptiness`. ``None`` when the set is
+        empty or no LP solved.
     """
 
     empty: bool
     violation_lower_bound: float
     violation_found: float
     tol: float = field(default=FEASIBILITY_TOL)
+    witness: NDArray[np.float64] | None = None
 
 
 def _split(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -805,7 +813,7 @@ class FactorPolytope:
 
     def _phase1(self, tol: float) -> EmptinessReport:
         if self.n_c == 0:
-            return EmptinessReport(False, 0.0, 0.0, tol)
+            return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
         scale = self._row_scale()
         As = self.A / scale[:, None]
         bs = self.b / scale
@@ -845,4 +853,5 @@ class FactorPolytope:
             lower_inf = 0.0  # no positive certificate
         xc = np.clip(x, -self.h, self.h)
         found = float(np.abs(As @ xc - bs).max())
-        return EmptinessReport(bool(lower_inf > tol), lower_inf, found, tol)
+        empty = bool(lower_inf > tol)
+        return EmptinessReport(empty, lower_inf, found, tol, None if empty else xc)

@@ -17,7 +17,12 @@
   certified instead of an outer approximation), and drops unused factors.
 * :func:`reduce_order` — outer generator-order reduction by Girard's method on
   the lifted zonotope ``{[G; A] xi + [c; -b]}`` (Scott et al. 2016, Sec. 4.3):
-  the smallest bounded generators are replaced by their interval hull.
+  the smallest bounded generators are replaced by their interval hull. When
+  the requested order is below what that can reach (``n + n_c``), constraints
+  are first eliminated by :func:`eliminate_constraints`.
+* :func:`eliminate_constraints` — outer: Scott et al. (2016), Sec. 4.2, with
+  the Hausdorff-error heuristic of their eq. (A.8) choosing the factor whose
+  bound is dropped.
 """
 
 from __future__ import annotations
@@ -37,7 +42,14 @@ from ..tolerances import (
 from .box import box_center_radius
 from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
 
-__all__ = ["reduce_exact", "reduce_order", "remove_redundancy", "rescale"]
+__all__ = [
+    "eliminate_constraints",
+    "hausdorff_heuristic",
+    "reduce_exact",
+    "reduce_order",
+    "remove_redundancy",
+    "rescale",
+]
 
 
 def remove_redundancy(Z: ConstrainedZonotope, tol: float = ZERO_TOL) -> ConstrainedZonotope:
@@ -144,8 +156,15 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     Raises
     ------
     DimensionError
-        If ``max_generators`` is below ``n + n_c + (number of unbounded factors)``,
+        If ``max_generators`` is below ``n + (number of unbounded factors)``,
         the fewest a reduction of this kind can reach in general.
+
+    Notes
+    -----
+    Girard's step keeps ``n + n_c`` generators at least. Below that (a set
+    converted from a polytope has ``n_g = n + n_c``), constraints are first
+    eliminated (:func:`eliminate_constraints`, outer) down to
+    ``max_generators - n - n_unbounded``.
     """
     if int(max_generators) != max_generators or max_generators < 0:
         raise DimensionError(f"max_generators must be a nonnegative integer, got {max_generators}")
@@ -154,11 +173,21 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     n, n_c = Z.dim, Z.n_con
     unb = np.isinf(Z.h)
     n_unb = int(unb.sum())
-    floor = n + n_c + n_unb
-    if max_generators < floor:
+    if max_generators < n + n_unb:
         raise DimensionError(
-            f"max_generators must be at least n + n_c + n_unbounded = {floor}, got {max_generators}"
+            f"max_generators must be at least n + n_unbounded = {n + n_unb}, got {max_generators}"
         )
+    if max_generators < n + n_c + n_unb:
+        Z = eliminate_constraints(Z, max_generators - n - n_unb)
+        if Z.n_gen <= max_generators:
+            return Z
+        n_c = Z.n_con
+        unb = np.isinf(Z.h)
+        n_unb = int(unb.sum())
+        if max_generators < n + n_c + n_unb:
+            raise DimensionError(
+                f"could not eliminate enough constraints to reach {max_generators} generators "
+                f"(n = {n}, n_c = {n_c} left, {n_unb} unbounded factors)")
     bnd = np.flatnonzero(~unb)
     L = np.vstack([Z.G[:, bnd], Z.A[:, bnd]]) * Z.h[bnd]
     score = np.abs(L).sum(axis=0) - np.abs(L).max(axis=0, initial=0.0)
@@ -286,13 +315,44 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
             raise EmptySetError("the set is empty")
     # 2. eliminate free factors with constraint rows, while the tracked rounding
     # of c and b stays within its budget
+    G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, free,
+                                                   _budgets(G, c, A, b, h, cerr, berr))
+    # 3. unused parts
+    zero_r = ~A.any(axis=1)
+    if zero_r.any():
+        if (np.abs(b[zero_r]) > berr[zero_r]).any():
+            raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
+        A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
+    keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
+    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius,
+                                        cerr, berr)
+
+
+def _budgets(G, c, A, b, h, cerr, berr) -> tuple[float, float]:
+    """Rounding budgets of ``c`` and ``b`` for a chain of eliminations."""
     fin = np.where(np.isfinite(h), h, 0.0)
     c_budget = max(float(cerr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
         1.0 + float(np.abs(c).max(initial=0.0)) + float((np.abs(G) @ fin).max(initial=0.0))))
     b_budget = max(float(berr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
         1.0 + float(np.abs(b).max(initial=0.0)) + float((np.abs(A) @ fin).max(initial=0.0))))
+    return c_budget, b_budget
+
+
+def _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets, max_steps: int | None = None):
+    """Eliminate factors flagged ``free`` with constraint rows (Scott et al. 2016, Sec. 4.2).
+
+    Each step solves a constraint row for one free factor,
+    ``xi_j = (b_i - sum_(k != j) A_ik xi_k) / A_ij``, and substitutes it into
+    ``G``, ``c``, ``A``, ``b`` (partial pivoting, no pivot below
+    :data:`ELIMINATION_PIVOT_TOL` of its row), carrying the rounding of ``c``
+    and ``b`` (and the uncertainty of the pivot row) into ``cerr`` and
+    ``berr``; it stops before that rounding exceeds ``budgets``. Returns the
+    new arrays and the number of steps taken.
+    """
+    c_budget, b_budget = budgets
     g2 = 2.0 * gamma(4)
-    while A.shape[0]:
+    steps = 0
+    while A.shape[0] and (max_steps is None or steps < max_steps):
         unb = np.flatnonzero(free)
         if not unb.size:
             break
@@ -324,12 +384,138 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
         keep_c = np.arange(G.shape[1]) != j
         G, A, h, free = G[:, keep_c], A[keep_r][:, keep_c], h[keep_c], free[keep_c]
         b, berr = b[keep_r], berr[keep_r]
-    # 3. unused parts
-    zero_r = ~A.any(axis=1)
-    if zero_r.any():
-        if (np.abs(b[zero_r]) > berr[zero_r]).any():
-            raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
-        A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
-    keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius,
-                                        cerr, berr)
+        steps += 1
+    return G, c, A, b, h, cerr, berr, steps
+
+
+def _overshoot(Z: ConstrainedZonotope, j: int) -> float:
+    """Relative overshoot ``r_j = max(0, max|xi_j| / h_j - 1)`` of factor ``j`` when its
+    bound is dropped (certified outer range of ``xi_j`` over the relaxed factor set)."""
+    h = Z.h.copy()
+    hj = h[j]
+    h[j] = np.inf
+    R = trusted_cz(Z.G, Z.c, Z.A, Z.b, h, Z.unbounded_radius, Z.c_err, Z.b_err)
+    fp = factor_polytope(R)
+    e = np.zeros(Z.n_gen)
+    e[j] = 1.0
+    lo = fp.minimize(e).bound
+    hi = -fp.minimize(-e).bound
+    reach = max(-lo, hi)
+    return float(max(0.0, reach / hj - 1.0)) if np.isfinite(reach) else np.inf
+
+
+def hausdorff_heuristic(Z: ConstrainedZonotope, j: int, r: float) -> float:
+    """Hausdorff-error heuristic of dropping factor ``j``'s bound (Scott et al. 2016, eq. (A.8)).
+
+    ``min ||G D d||^2 + ||d||^2`` subject to ``A D d = 0`` and ``d_j = r``, with
+    ``D = diag(h)`` (the factors in units of their bounds), solved through its
+    KKT system.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set (bounded factors).
+    j : int
+        The factor whose bound would be dropped.
+    r : float
+        Its relative overshoot (see :func:`eliminate_constraints`).
+    """
+    D = np.where(np.isfinite(Z.h), Z.h, 1.0)
+    GD = Z.G * D
+    AD = Z.A * D
+    ng, nc = Z.n_gen, Z.n_con
+    Q = GD.T @ GD + np.eye(ng)
+    C = np.vstack([AD, np.eye(ng)[j]])
+    K = np.block([[Q, C.T], [C, np.zeros((nc + 1, nc + 1))]])
+    rhs = np.concatenate([np.zeros(ng + nc), [r]])
+    sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
+    d = sol[:ng]
+    return float(np.sum((GD @ d) ** 2) + np.sum(d**2))
+
+
+def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int) -> ConstrainedZonotope:
+    """Outer constraint elimination down to ``max_constraints`` (Scott et al. 2016, Sec. 4.2).
+
+    First :func:`reduce_exact` removes what can be removed without loss. Then,
+    while there are too many constraints, for every bounded factor ``xi_j``
+    that appears in a constraint the *overshoot* ``r_j`` is computed: the
+    certified range of ``xi_j`` over the factor set with its own bound
+    dropped (two LPs), as a multiple of ``h_j``, minus one. Dropping that bound
+    enlarges the set by at most what ``xi_j`` gains beyond ``h_j``; the factor
+    with the smallest Hausdorff-error heuristic of Scott et al. (2016),
+    eq. (A.8) (``min ||G D d||^2 + ||d||^2`` with ``A D d = 0``,
+    ``d_j = r_j``; an infinite ``r_j`` is never chosen) loses its bound and is
+    eliminated with one constraint row (exactly, as in :func:`reduce_exact`).
+    The result is an outer approximation (exact where ``r_j = 0``).
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+    max_constraints : int
+        Largest number of constraints of the result.
+
+    Returns
+    -------
+    ConstrainedZonotope
+        A superset of ``Z`` with at most ``max_constraints`` constraints, or
+        with as few as could be reached when every remaining candidate has an
+        infinite overshoot, too small a pivot, or would exceed the rounding
+        budget (check ``n_con``; :func:`reduce_order` raises in that case).
+
+    Raises
+    ------
+    EmptySetError
+        If ``Z`` is certified empty.
+
+    Notes
+    -----
+    Cost per eliminated constraint: two LPs per candidate factor plus one
+    ``(n_g + n_c + 1)``-square least-squares solve each. CORA's
+    ``reduceConstraints`` follows the same paper with interval ranges of the
+    factors (Scott et al.'s iterative method) instead of LPs.
+
+    Examples
+    --------
+    A square written as a polytope (four slack factors, two constraints after
+    exact reduction) shrinks to a zonotope, which is a superset:
+
+    >>> from setobs.geometry import cz_from_hpolytope
+    >>> Z = cz_from_hpolytope([[1.0, 1.0], [-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0]],
+    ...                       [1.0, 1.0, 1.0, 1.0])
+    >>> R = eliminate_constraints(Z, 0)
+    >>> R.n_con, bool(R.contains([0.5, 0.5]))
+    (0, True)
+    """
+    if int(max_constraints) != max_constraints or max_constraints < 0:
+        raise DimensionError(
+            f"max_constraints must be a nonnegative integer, got {max_constraints!r}")
+    Z = reduce_exact(Z)
+    budgets = _budgets(Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err)
+    while Z.n_con > max_constraints:
+        cand = np.flatnonzero(np.isfinite(Z.h) & (Z.h > 0) & Z.A.any(axis=0))
+        scored = []
+        for j in cand:
+            r = _overshoot(Z, int(j))
+            if np.isfinite(r):
+                scored.append((hausdorff_heuristic(Z, int(j), r), int(j)))
+        done = False
+        for _, j in sorted(scored):
+            h = Z.h.copy()
+            h[j] = np.inf
+            free = np.zeros(Z.n_gen, dtype=bool)
+            free[j] = True
+            G, c, A, b, h, cerr, berr, steps = _eliminate_free(
+                Z.G, Z.c, Z.A, Z.b, h, Z.c_err, Z.b_err, free, budgets, max_steps=1)
+            if steps:
+                zero_r = ~A.any(axis=1)
+                if zero_r.any():
+                    if (np.abs(b[zero_r]) > berr[zero_r]).any():
+                        raise EmptySetError("the set is empty (a constraint 0 = b_i != 0)")
+                    A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
+                Z = trusted_cz(G, c, A, b, h, Z.unbounded_radius, cerr, berr)
+                done = True
+                break
+        if not done:
+            break
+    return Z

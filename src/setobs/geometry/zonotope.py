@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -307,6 +308,33 @@ class ConstrainedZonotope:
                             np.full(n, np.inf))
 
     @classmethod
+    def empty(cls, n: int) -> ConstrainedZonotope:
+        """The empty set of ``R^n``; see :func:`setobs.geometry.operations.empty_set`.
+
+        Parameters
+        ----------
+        n : int
+            Dimension.
+        """
+        from .operations import empty_set
+
+        return empty_set(n)
+
+    @classmethod
+    def from_vertices(cls, V: ArrayLike) -> ConstrainedZonotope:
+        """The convex hull of points (exact); see
+        :func:`setobs.geometry.operations.from_vertices`.
+
+        Parameters
+        ----------
+        V : array_like, shape (m, n)
+            The points, one per row.
+        """
+        from .operations import from_vertices
+
+        return from_vertices(V)
+
+    @classmethod
     def affine_set(cls, C: ArrayLike, y: ArrayLike) -> ConstrainedZonotope:
         """The affine set ``{z : C z = y}`` (``R^n`` intersected with ``C z = y``).
 
@@ -469,10 +497,20 @@ class ConstrainedZonotope:
 
     def __sub__(self, other: Any) -> ConstrainedZonotope:
         if isinstance(other, ConstrainedZonotope):
-            raise TypeError("Minkowski (Pontryagin) difference is not supported; "
-                            "use Z + (-1 * I) @ W for Z + (-W)")
+            raise TypeError("Z - W is ambiguous for sets: use Z + (-W) for the Minkowski sum "
+                            "with the reflection, or Z.pontryagin_difference(W)")
         if np.ndim(other) == 1:
             return self.minkowski_sum(-as_vector("vector", other, size=self.dim))
+        return NotImplemented
+
+    def __neg__(self) -> ConstrainedZonotope:
+        """``-Z``: the reflection ``linear_map(-I)`` (exact: only signs change)."""
+        return self._same_factors(-self._G, -self._c, self._cerr)
+
+    def __and__(self, other: Any) -> ConstrainedZonotope:
+        """``Z & W``: :meth:`intersect` (exact)."""
+        if isinstance(other, ConstrainedZonotope):
+            return self.intersect(other)
         return NotImplemented
 
     def linear_map(self, M: ArrayLike) -> ConstrainedZonotope:
@@ -742,14 +780,21 @@ class ConstrainedZonotope:
         return self._G @ out.point + self._c
 
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
-        """Certified emptiness report (see :meth:`FactorPolytope.emptiness`).
+        """Certified emptiness report with a witness (see :meth:`FactorPolytope.emptiness`).
+
+        When the set is not reported empty, ``witness`` is a point ``G xi + c``
+        of the set (``xi`` the phase-1 LP's point, within ``violation_found``
+        of the normalised constraints).
 
         Parameters
         ----------
         tol : float
             Feasibility tolerance of the phase-1 LP (normalised constraint violation).
         """
-        return self._lp().emptiness(tol)
+        rep = self._lp().emptiness(tol)
+        if rep.witness is None:
+            return rep
+        return dataclasses.replace(rep, witness=self._G @ rep.witness + self._c)
 
     def is_empty(self, tol: float = FEASIBILITY_TOL) -> bool:
         """Whether the set is empty.
@@ -782,6 +827,174 @@ class ConstrainedZonotope:
         xv = as_vector("x", x, size=self.dim)
         return not self.intersect_affine(np.eye(self.dim), xv).is_empty(tol)
 
+    # ------------------------------------------------------------------ more operations
+    def intersect_halfspace(self, a: ArrayLike, beta: float) -> ConstrainedZonotope:
+        """``{z in Z : a^T z <= beta}`` (exact); see
+        :func:`setobs.geometry.operations.intersect_halfspace`.
+
+        Parameters
+        ----------
+        a : array_like, shape (n,)
+            Normal.
+        beta : float
+            Offset.
+        """
+        from .operations import intersect_halfspace
+
+        return intersect_halfspace(self, a, beta)
+
+    def intersect_strip(self, C: ArrayLike, y: ArrayLike, radius: ArrayLike
+                        ) -> ConstrainedZonotope:
+        """``{z in Z : |C z - y| <= radius}`` (exact); see
+        :func:`setobs.geometry.operations.intersect_strip`.
+
+        Parameters
+        ----------
+        C : array_like, shape (m, n)
+            Strip normals.
+        y : array_like, shape (m,)
+            Strip centres.
+        radius : array_like, shape (m,) or float
+            Half-widths.
+        """
+        from .operations import intersect_strip
+
+        return intersect_strip(self, C, y, radius)
+
+    def intersect_polytope(self, H: ArrayLike, k: ArrayLike, E: ArrayLike | None = None,
+                           f: ArrayLike | None = None) -> ConstrainedZonotope:
+        """``{z in Z : H z <= k, E z = f}`` (exact); see
+        :func:`setobs.geometry.operations.intersect_polytope`.
+
+        Parameters
+        ----------
+        H : array_like, shape (m, n)
+            Inequality normals.
+        k : array_like, shape (m,)
+            Inequality offsets.
+        E : array_like, shape (p, n), optional
+            Equality rows.
+        f : array_like, shape (p,), optional
+            Equality right-hand sides.
+        """
+        from .operations import intersect_polytope
+
+        return intersect_polytope(self, H, k, E, f)
+
+    def convex_hull(self, other: ConstrainedZonotope) -> ConstrainedZonotope:
+        """Convex hull with ``other`` (exact); see
+        :func:`setobs.geometry.operations.convex_hull`.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope
+            The second set.
+        """
+        from .operations import convex_hull
+
+        return convex_hull(self, other)
+
+    def pontryagin_difference(self, other: Any, method: str = "exact") -> ConstrainedZonotope:
+        """``{z : z + other subset Z}``; see
+        :func:`setobs.geometry.operations.pontryagin_difference`.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope, Box or array_like
+            A zonotope, a box or a vector.
+        method : {"exact", "inner"}
+            Exact (vertex intersection) or inner (generator matching).
+        """
+        from .operations import pontryagin_difference
+
+        return pontryagin_difference(self, other, method)
+
+    def interval_matrix_map(self, M_lo: ArrayLike, M_hi: ArrayLike) -> ConstrainedZonotope:
+        """Outer bound of ``{M z : M_lo <= M <= M_hi, z in Z}``; see
+        :func:`setobs.geometry.operations.interval_matrix_map`.
+
+        Parameters
+        ----------
+        M_lo, M_hi : array_like, shape (m, n)
+            Elementwise bounds of the matrix.
+        """
+        from .operations import interval_matrix_map
+
+        return interval_matrix_map(self, M_lo, M_hi)
+
+    def is_subset(self, other: ConstrainedZonotope) -> Any:
+        """Whether ``Z subset other`` (three-valued); see
+        :func:`setobs.geometry.relations.is_subset`.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope
+            The container.
+        """
+        from .relations import is_subset
+
+        return is_subset(self, other)
+
+    def is_equal(self, other: ConstrainedZonotope) -> Any:
+        """Whether the two sets are equal (three-valued); see
+        :func:`setobs.geometry.relations.is_equal`.
+
+        Parameters
+        ----------
+        other : ConstrainedZonotope
+            The other set.
+        """
+        from .relations import is_equal
+
+        return is_equal(self, other)
+
+    def nearest_point(self, p: ArrayLike) -> NDArray[np.float64]:
+        """Euclidean projection of ``p`` onto the set; see
+        :func:`setobs.geometry.measure.nearest_point`.
+
+        Parameters
+        ----------
+        p : array_like, shape (n,)
+            The point.
+        """
+        from .measure import nearest_point
+
+        return nearest_point(self, p)
+
+    def distance(self, p: ArrayLike) -> Any:
+        """Distance from ``p`` with a certified lower bound; see
+        :func:`setobs.geometry.measure.distance`.
+
+        Parameters
+        ----------
+        p : array_like, shape (n,)
+            The point.
+        """
+        from .measure import distance
+
+        return distance(self, p)
+
+    def sample(self, n: int, rng: np.random.Generator | int | None = None) -> NDArray[np.float64]:
+        """Uniform random points by hit-and-run; see :func:`setobs.geometry.measure.sample`.
+
+        Parameters
+        ----------
+        n : int
+            Number of points.
+        rng : numpy.random.Generator, int or None
+            Random source.
+        """
+        from .measure import sample
+
+        return sample(self, n, rng)
+
+    def volume(self) -> Any:
+        """Volume (exact up to 3-D, Monte Carlo with a CI above); see
+        :func:`setobs.geometry.measure.volume`."""
+        from .measure import volume
+
+        return volume(self)
+
     # ------------------------------------------------------------------ reduction
     def remove_redundancy(self, tol: float | None = None) -> ConstrainedZonotope:
         """Remove zero/duplicate/dependent constraints and unused factors; see
@@ -810,6 +1023,19 @@ class ConstrainedZonotope:
         from .reduction import reduce_exact
 
         return reduce_exact(self)
+
+    def eliminate_constraints(self, max_constraints: int) -> ConstrainedZonotope:
+        """Outer constraint elimination (Scott et al. 2016, Sec. 4.2); see
+        :func:`setobs.geometry.reduction.eliminate_constraints`.
+
+        Parameters
+        ----------
+        max_constraints : int
+            Largest number of constraints of the result.
+        """
+        from .reduction import eliminate_constraints
+
+        return eliminate_constraints(self, max_constraints)
 
     def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
         """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`.
