@@ -155,7 +155,7 @@ def _hull_witness(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> NDArray[np.
                 continue
             p = _support_point(Z, d)
             if p is not None and d @ p > sw + CONTAINMENT_RTOL * (1.0 + abs(sw)) \
-                    and not W.contains(p):
+                    and not W.contains(p) and Z.contains(p):
                 return p
     return None
 

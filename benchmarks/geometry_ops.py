@@ -1,0 +1,187 @@
+"""Benchmark: the LP/QP-based set operations of issue 17 vs the straightforward cvxpy formulation.
+
+For random non-empty constrained zonotopes ``(n, n_gen, n_con)`` in
+{(3, 20, 10), (5, 60, 40)} and a polytope ``P`` of ``m = 20`` random
+half-spaces, time in the same run:
+
+* ``subset_of_polytope``: ``is_subset_of_polytope(Z, H, k)`` (m certified
+  support LPs on one warm HiGHS model) vs one fresh ``cvxpy.Problem`` per row
+  (``max H_i (G xi + c)`` over the factor set, Clarabel);
+* ``intersect_polytope``: ``intersect_polytope(Z, H, k)`` (up to 2m certified
+  LPs: redundancy and the slack bounds) vs the same 2m LPs in cvxpy;
+* ``distance``: ``distance(Z, p)`` (a Clarabel QP called directly, plus one
+  certified support LP for the lower bound) vs the QP written in cvxpy
+  (Clarabel);
+* ``convex_hull`` + ``interval_hull``: the hull of two sets, then its 2n LPs,
+  vs the 2n LPs of the lambda-formulation of the hull written in cvxpy
+  (``z = z1 + z2``, ``z1`` in ``lam Z``, ``z2`` in ``(1 - lam) W``).
+
+The disagreement columns compare the values (supports, distances, bounds):
+setobs' LP values are certified outer bounds, so differences are outward and of
+the order of Clarabel's accuracy.
+
+Run: ``python benchmarks/geometry_ops.py [--repeats N]``; writes
+``benchmarks/results/geometry_ops.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+from importlib import metadata
+from pathlib import Path
+
+import cvxpy as cp
+import numpy as np
+
+import setobs
+from setobs import ConstrainedZonotope
+from setobs.geometry import convex_hull, distance, intersect_polytope, is_subset_of_polytope
+
+SIZES = [(3, 20, 10), (5, 60, 40)]
+M_ROWS = 20
+
+
+def make_cz(n: int, n_g: int, n_c: int, rng: np.random.Generator) -> ConstrainedZonotope:
+    G = rng.normal(size=(n, n_g))
+    c = rng.normal(size=n)
+    A = rng.normal(size=(n_c, n_g))
+    xi0 = rng.uniform(-0.5, 0.5, size=n_g)
+    return ConstrainedZonotope(G, c, A, A @ xi0)
+
+
+def fresh(Z: ConstrainedZonotope) -> ConstrainedZonotope:
+    return ConstrainedZonotope(Z.G, Z.c, Z.A, Z.b, Z.h)
+
+
+def cvx_support(Z: ConstrainedZonotope, d: np.ndarray) -> float:
+    xi = cp.Variable(Z.n_gen)
+    cons = [cp.abs(xi) <= Z.h] + ([Z.A @ xi == Z.b] if Z.n_con else [])
+    prob = cp.Problem(cp.Maximize((d @ Z.G) @ xi), cons)
+    prob.solve(solver=cp.CLARABEL)
+    if prob.status != cp.OPTIMAL:
+        raise RuntimeError(prob.status)
+    return float(prob.value + d @ Z.c)
+
+
+def subset_cvxpy(Z, H, k):
+    s = np.array([cvx_support(Z, h) for h in H])
+    return bool((s <= k).all()), s
+
+
+def intersect_cvxpy(Z, H, k):
+    up = np.array([cvx_support(Z, h) for h in H])
+    lo = np.array([-cvx_support(Z, -h) for h in H])
+    return up, lo
+
+
+def distance_cvxpy(Z, p):
+    xi = cp.Variable(Z.n_gen)
+    cons = [cp.abs(xi) <= Z.h] + ([Z.A @ xi == Z.b] if Z.n_con else [])
+    prob = cp.Problem(cp.Minimize(cp.norm(Z.G @ xi + Z.c - p)), cons)
+    prob.solve(solver=cp.CLARABEL)
+    return float(prob.value)
+
+
+def hull_cvxpy(Z, W):
+    """Interval hull of conv(Z u W) by the lambda formulation, one problem per bound."""
+    lo, hi = np.empty(Z.dim), np.empty(Z.dim)
+    for i in range(Z.dim):
+        for sgn in (1.0, -1.0):
+            x1, x2, lam = cp.Variable(Z.n_gen), cp.Variable(W.n_gen), cp.Variable()
+            cons = [cp.abs(x1) <= lam * Z.h, cp.abs(x2) <= (1 - lam) * W.h,
+                    Z.A @ x1 == lam * Z.b, W.A @ x2 == (1 - lam) * W.b, lam >= 0, lam <= 1]
+            z = Z.G @ x1 + lam * Z.c + W.G @ x2 + (1 - lam) * W.c
+            prob = cp.Problem(cp.Minimize(sgn * z[i]), cons)
+            prob.solve(solver=cp.CLARABEL)
+            if sgn > 0:
+                lo[i] = prob.value
+            else:
+                hi[i] = -prob.value
+    return lo, hi
+
+
+def timeit(fn, *args, repeats: int):
+    out = fn(*args)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn(*args)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "geometry_ops.json"))
+    args = ap.parse_args()
+    rng = np.random.default_rng(2026)
+    rows = []
+    r_cvx = max(2, args.repeats // 2)
+    for n, n_g, n_c in SIZES:
+        Z = make_cz(n, n_g, n_c, rng)
+        W = make_cz(n, n_g, n_c, rng) + rng.normal(size=n) * 3.0
+        H = rng.normal(size=(M_ROWS, n))
+        box = Z.interval_hull()
+        k = H @ box.center + 0.5 * np.abs(H) @ box.half_width
+        p = box.center + 3.0 * box.half_width
+
+        t1, res = timeit(lambda Z=Z, H=H, k=k: is_subset_of_polytope(fresh(Z), H, k),
+                         repeats=args.repeats)
+        t1c, (_, s_cvx) = timeit(subset_cvxpy, Z, H, k, repeats=r_cvx)
+        s_ours = np.array([fresh(Z).support(h) for h in H])
+        t2, _ = timeit(lambda Z=Z, H=H, k=k: intersect_polytope(fresh(Z), H, k),
+                       repeats=args.repeats)
+        t2c, _ = timeit(intersect_cvxpy, Z, H, k, repeats=r_cvx)
+        t3, dres = timeit(lambda Z=Z, p=p: distance(fresh(Z), p), repeats=args.repeats)
+        t3c, d_cvx = timeit(distance_cvxpy, Z, p, repeats=r_cvx)
+        t4, hbox = timeit(lambda Z=Z, W=W: convex_hull(fresh(Z), fresh(W)).interval_hull(),
+                          repeats=args.repeats)
+        t4c, (lo_c, hi_c) = timeit(hull_cvxpy, Z, W, repeats=r_cvx)
+        row = {
+            "n": n, "n_gen": n_g, "n_con": n_c, "m_rows": M_ROWS,
+            "subset_of_polytope": {"setobs_s": t1, "cvxpy_s": t1c, "speedup": t1c / t1,
+                                   "verdict": res.holds,
+                                   "max_outward_support_diff": float((s_ours - s_cvx).max()),
+                                   "min_outward_support_diff": float((s_ours - s_cvx).min())},
+            "intersect_polytope": {"setobs_s": t2, "cvxpy_s": t2c, "speedup": t2c / t2},
+            "distance": {"setobs_s": t3, "cvxpy_s": t3c, "speedup": t3c / t3,
+                         "distance_diff": dres.distance - d_cvx,
+                         "certified_lower_gap": dres.distance - dres.lower},
+            "convex_hull_interval_hull": {
+                "setobs_s": t4, "cvxpy_s": t4c, "speedup": t4c / t4,
+                "max_outward_diff": float(np.concatenate([lo_c - hbox.lo, hbox.hi - hi_c]).max()),
+                "min_outward_diff": float(np.concatenate([lo_c - hbox.lo, hbox.hi - hi_c]).min())},
+        }
+        rows.append(row)
+        print(f"(n, n_gen, n_con) = ({n}, {n_g}, {n_c}):")
+        for key in ("subset_of_polytope", "intersect_polytope", "distance",
+                    "convex_hull_interval_hull"):
+            r = row[key]
+            print(f"  {key:27s} setobs {1e3 * r['setobs_s']:8.2f} ms  "
+                  f"cvxpy {1e3 * r['cvxpy_s']:8.1f} ms  x{r['speedup']:5.1f}")
+    result = {
+        "benchmark": "geometry_ops",
+        "description": " ".join(__doc__.split("\n\n")[1:3]).replace("\n", " "),
+        "setobs": setobs.__version__,
+        "highspy": metadata.version("highspy"),
+        "clarabel": metadata.version("clarabel"),
+        "cvxpy": cp.__version__,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "repeats": args.repeats,
+        "results": rows,
+    }
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
