@@ -426,3 +426,31 @@ def test_witness_fraction_free_example():
                             A=[[1.0, 1.0, 1.0]], b=[1.0])
     w = T.emptiness().witness
     assert w[0] >= -1e-9 and w[1] >= -1e-9 and w.sum() <= 2 + 1e-9
+
+
+# ---------------------------------------------------------------- bad input
+def test_bad_input_names_the_argument():
+    from setobs.geometry import sample, volume
+
+    Z = ConstrainedZonotope.from_box([0.0, 0.0], [1.0, 1.0])
+    cases = [
+        (lambda: intersect_strip(Z, [[1.0, 0.0]], [0.0], -1.0), DimensionError, "radius"),
+        (lambda: intersect_strip(Z, [[1.0, 0.0]], [0.0, 1.0], 1.0), DimensionError, "y"),
+        (lambda: intersect_polytope(Z, [[1.0, 0.0]], [0.0], E=[[1.0, 0.0]]), DimensionError,
+         "E and f"),
+        (lambda: intersect_halfspace(Z, [1.0], 0.0), DimensionError, "a"),
+        (lambda: intersect_halfspace(Z, [1.0, 0.0], np.nan), DimensionError, "beta"),
+        (lambda: interval_matrix_map(Z, np.eye(2), np.eye(3)), DimensionError, "M_hi"),
+        (lambda: eliminate_constraints(Z, -1), DimensionError, "max_constraints"),
+        (lambda: sample(Z, -1), DimensionError, "n must be"),
+        (lambda: sample(Z, 3, thin=0), DimensionError, "thin must be"),
+        (lambda: sample(Z, 3, method="gibbs"), ValueError, "method must be"),
+        (lambda: volume(Z, confidence=1.5), DimensionError, "confidence"),
+        (lambda: from_vertices([1.0, 2.0]), DimensionError, "V"),
+        (lambda: convex_hull(Z, np.eye(2)), TypeError, "ConstrainedZonotope"),
+    ]
+    for fn, exc, msg in cases:
+        with pytest.raises(exc, match=msg):
+            fn()
+    with pytest.raises(UnboundedSetError, match="bounded"):
+        sample(ConstrainedZonotope.full_space(2), 3)

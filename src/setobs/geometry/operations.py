@@ -464,9 +464,11 @@ def pontryagin_difference(Z: ConstrainedZonotope, W: ConstrainedZonotope | Box |
     D, cw = _zonotope_data(W)
     if method == "exact":
         pts = _zonotope_vertices(D, cw)
-        out = Z.minkowski_sum(-pts[0])
+        # the vertices' rounding (sums of up to m generators) is carried in c_err
+        verr = gamma(D.shape[1] + 2) * (np.abs(cw) + np.abs(D).sum(axis=1)) * 2.0
+        out = Z.minkowski_sum(-pts[0], err=verr)
         for v in pts[1:]:
-            out = out.intersect(Z.minkowski_sum(-v))
+            out = out.intersect(Z.minkowski_sum(-v, err=verr))
         return out
     return _inner_difference(Z, D, cw)
 
