@@ -44,6 +44,7 @@ __all__ = [
     "HREP_FLAT_RTOL",
     "HREP_SNAP_TOL",
     "IMAG_DISPLAY_RTOL",
+    "KALMAN_MEASUREMENT_FLOOR",
     "LP_REFINE_GAP",
     "NEWTON_RTOL",
     "PONTRYAGIN_MATCH_RTOL",
@@ -171,6 +172,11 @@ ELIMINATION_ERR_RTOL: float = 1e-12
 #: Smallest pivot, relative to the largest entry of its row, that
 #: :func:`reduce_exact` eliminates with (partial pivoting).
 ELIMINATION_PIVOT_TOL: float = 1e-3
+
+# ---- studies (setobs.studies.baselines)
+#: Measurement covariance of the Kalman baseline on noise-free scenarios, relative
+#: to the squared increment radius (a Kalman gain needs a positive definite one).
+KALMAN_MEASUREMENT_FLOOR: float = 1e-6
 
 # ---- further set operations (setobs.geometry.operations, .relations, .measure)
 #: Largest equality residual, relative to the data, that the generator matching

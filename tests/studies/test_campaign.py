@@ -87,7 +87,7 @@ def test_bad_scenarios():
     with pytest.raises(DimensionError, match="unknown generator"):
         Scenario(generator="chirp")
     with pytest.raises(DimensionError, match="unknown observer kind"):
-        ObserverSpec("x", "kalman")
+        ObserverSpec("x", "particle_filter")
 
 
 def test_paper_claims_fig1b_small_campaign():

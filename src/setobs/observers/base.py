@@ -40,6 +40,9 @@ class ObserverResult:
         The disturbance names.
     observer : str
         The observer's name (row label of :meth:`summary`).
+    information : str
+        The measurements ``estimate[k]`` uses: ``"y_0..y_(k-1)"`` (the papers'
+        observers, a one-step prediction) or ``"y_0..y_k"`` (as the SMFDO).
     """
 
     estimate: NDArray[np.float64]
@@ -49,6 +52,7 @@ class ObserverResult:
     dt: float | None = None
     names: tuple[str, ...] = ()
     observer: str = "observer"
+    information: str = "y_0..y_(k-1)"
 
     d_hat = renamed("d_hat", "estimate", "the same name as SMFDOResult's")
 
@@ -142,6 +146,13 @@ class PointObserver:
                  disturbance_inputs: DisturbanceInputs = None) -> None:
         self.sys = require_system(sys, disturbance_inputs=disturbance_inputs)
         self.delay = 0
+        self.information = "predicted"
+
+    @property
+    def information_pattern(self) -> str:
+        """The measurements the estimate of ``d_k`` uses: ``"y_0..y_(k-1)"`` or ``"y_0..y_k"``."""
+        return ("y_0..y_k" if getattr(self, "information", "predicted") == "filtered"
+                else "y_0..y_(k-1)")
 
     @property
     def gains(self) -> dict[str, Any]:
@@ -224,7 +235,8 @@ class PointObserver:
                     X = np.full((N, self.sys.n), np.nan)
                 X[k] = xh
         return ObserverResult(D, X, self.delay, self.gains, dt=self.sys.dt,
-                              names=tuple(self.sys.disturbance_names), observer=self.name)
+                              names=tuple(self.sys.disturbance_names), observer=self.name,
+                              information=self.information_pattern)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.sys!r})"
@@ -275,6 +287,10 @@ class StateSpaceObserver(PointObserver):
         self._xk = self.xi.copy()
         self.xi = (self.transition @ self.xi + self.output_gain @ yv
                    + (self.input_matrix @ uv if uv.size else 0.0))
+        if self.information == "filtered":
+            # with the disturbance model d_(k+1) = d_k the updated disturbance state is
+            # the estimate of d_k from y_0..y_k (see PIO's ``information``)
+            d = self.disturbance_map @ self.xi
         if self.channel_delays is not None:
             self._buf.append(d)
             out = np.full(d.shape, np.nan)

@@ -56,6 +56,7 @@ class DescriptorObserver(PointObserver):
                  R_w: ArrayLike | None = None,
                  *, disturbance_inputs: DisturbanceInputs = None) -> None:
         super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        self.information = "filtered"  # step k uses y_(k-1) and y_k (eq. of the augmentation)
         sys = self.sys
         n, q, ly, p = sys.n, sys.q, sys.l, sys.p
         F_a = as_matrix("F", F, rows=ly)

@@ -113,6 +113,15 @@ class PIO(StateSpaceObserver):
     process_cov, increment_cov, measurement_cov : float, array_like, optional
         Covariances for ``design="lqe"``: scalars (times ``I``), vectors (diagonal) or
         matrices.
+    information : {"predicted", "filtered"}
+        Which measurements ``d_hat(k)`` uses. ``"predicted"`` (the papers'
+        form): ``q_hat(k)``, from ``y_0..y_(k-1)``. ``"filtered"``:
+        ``q_hat(k+1)``, from ``y_0..y_k``, the information of the SMFDO's
+        estimate at ``k``. The model ``d(k+1) = d(k)`` makes ``q_hat(k+1)``
+        the observer's estimate of ``d(k)`` as well as of ``d(k+1)`` (for the
+        Kalman gain, ``d_hat(k|k) = d_hat(k+1|k)`` exactly: the increment is
+        independent of ``y_0..y_k``); the error dynamics are unchanged. The
+        state estimate stays ``x_hat(k)`` (from ``y_0..y_(k-1)``).
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
@@ -125,8 +134,13 @@ class PIO(StateSpaceObserver):
                  design: str = "poles", process_cov: ArrayLike | None = None,
                  increment_cov: ArrayLike | None = None,
                  measurement_cov: ArrayLike | None = None,
+                 information: str = "predicted",
                  disturbance_inputs: DisturbanceInputs = None) -> None:
         super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        if information not in ("predicted", "filtered"):
+            raise DesignError(f"information must be 'predicted' or 'filtered', got "
+                              f"{information!r}", "information")
+        self.information = information
         sys = self.sys
         n, q = sys.n, sys.q
         _check_design(design, poles, P is not None or L is not None)
@@ -160,7 +174,7 @@ class PIO(StateSpaceObserver):
         return {"P": self.P, "L": self.L}
 
     @classmethod
-    def chang2006_baseline(cls, sys: LinearSystem) -> PIO:
+    def chang2006_baseline(cls, sys: LinearSystem, information: str = "predicted") -> PIO:
         """The SFODO baseline of Li-Cong-Dong Fig. 1(b): the PIO with the gains printed
         in Fu-Wang (``P0'``, ``L0'``). Its error system is unstable (pole near -1.37).
 
@@ -168,8 +182,11 @@ class PIO(StateSpaceObserver):
         ----------
         sys : LinearSystem
             The Chang 2006 example (:func:`setobs.examples.chang2006`).
+        information : {"predicted", "filtered"}
+            See :class:`PIO`.
         """
-        return cls(sys, CHANG2006_PIO_GAINS["P"], CHANG2006_PIO_GAINS["L"])
+        return cls(sys, CHANG2006_PIO_GAINS["P"], CHANG2006_PIO_GAINS["L"],
+                   information=information)
 
 
 def _check_design(design: str, poles, gains_given: bool) -> None:

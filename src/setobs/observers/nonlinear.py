@@ -41,6 +41,8 @@ class NonlinearObserverResult(ObserverResult):
         The disturbance names.
     observer : str
         The observer's name.
+    information : str
+        ``"y_0..y_(k-1)"``: ``w^`` at ``k`` uses the measurements before ``k``.
     x_tilde : ndarray, shape (N, n)
         The disturbance-free observer's estimate ``x~`` (eq. (24)).
     untrusted : ndarray of bool, shape (N,)

@@ -19,12 +19,17 @@ from .._lazy import progress_bar
 from ..exceptions import DimensionError
 from .scenarios import Scenario, rng_for_run
 
-__all__ = ["OBSERVER_KINDS", "SMFDO_PARAMS", "CampaignResult", "ObserverSpec", "run_campaign",
-           "run_one"]
+__all__ = ["FILTERED_KINDS", "OBSERVER_KINDS", "SMFDO_PARAMS", "CampaignResult", "Improvement",
+           "ObserverSpec", "run_campaign", "run_one"]
 
 #: Observer kinds a campaign can run (built inside the worker from plain data).
-OBSERVER_KINDS = ("smfdo", "pio", "pio_printed", "higher_order", "modular", "mbeso",
+OBSERVER_KINDS = ("smfdo", "pio", "pio_printed", "kalman", "higher_order", "modular", "mbeso",
                   "variant_mbeso", "delayed_uio")
+
+#: Point-observer kinds that can use ``y_k`` for the estimate at ``k``: a campaign runs
+#: them with ``information="filtered"`` (the SMFDO's information) unless a spec says
+#: otherwise. The others use ``y_0..y_(k-1)`` and the table says so.
+FILTERED_KINDS = ("pio", "pio_printed", "kalman")
 
 
 #: SMFDO keywords an ObserverSpec may set (the scenario gives the initial state
@@ -45,7 +50,9 @@ def _accepted_params(kind: str) -> tuple[str, ...]:
     if kind == "smfdo":
         return SMFDO_PARAMS
     if kind == "pio_printed":
-        return ()
+        return ("information",)
+    if kind == "kalman":
+        return ("information", "measurement_cov")
     sig = inspect.signature(_point_ctor(kind).__init__)
     return tuple(p for p in sig.parameters if p not in ("self", "sys"))
 
@@ -57,8 +64,15 @@ class ObserverSpec:
     ``kind="smfdo"`` takes the SMFDO keywords in :data:`SMFDO_PARAMS`
     (``window``: int, or ``None`` for exact mode; ``increment_set``: a radius or
     per-channel radii, default the scenario's); point observers take their
-    constructor keywords (e.g. ``omega`` for the MB-ESO). Every parameter is
+    constructor keywords (e.g. ``omega`` for the MB-ESO). ``kind="kalman"`` is
+    the steady-state Kalman filter of :func:`setobs.studies.kalman_baseline`
+    (parameters ``information``, ``measurement_cov``). Every parameter is
     honoured or refused: an unknown name raises at construction.
+
+    *Information.* The SMFDO's estimate at ``k`` uses ``y_0..y_k``; the papers'
+    point observers use ``y_0..y_(k-1)``. Kinds in :data:`FILTERED_KINDS` are
+    run with ``information="filtered"`` (equal information) unless ``params``
+    sets it; the table's ``information`` column states what each row used.
 
     Attributes
     ----------
@@ -98,12 +112,21 @@ class ObserverSpec:
                 raise DimensionError(f"observer {self.name!r}: {exc}") from None
 
 
-def _point_observer(spec: ObserverSpec, sys):
+def _point_observer(spec: ObserverSpec, sys, scenario: Scenario | None = None):
     from .. import observers as obs
 
+    params = dict(spec.params)
+    if spec.kind in FILTERED_KINDS:
+        params.setdefault("information", "filtered")
     if spec.kind == "pio_printed":
-        return obs.PIO.chang2006_baseline(sys)
-    return _point_ctor(spec.kind)(sys, **spec.params)
+        return obs.PIO.chang2006_baseline(sys, **params)
+    if spec.kind == "kalman":
+        from .baselines import kalman_baseline
+
+        if scenario is None:
+            raise DimensionError("the Kalman baseline needs the scenario (its covariances)")
+        return kalman_baseline(scenario, sys, **params)
+    return _point_ctor(spec.kind)(sys, **params)
 
 
 def _smfdo_for(spec_params: dict[str, Any], scenario: Scenario, sys, on_inconsistent: str):
@@ -129,7 +152,9 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
     approximation, so worst-case scores are upper bounds).
 
     Returns tidy rows ``(run, observer, k, error_inf, error_2, worst_case_error,
-    optimal, error_bound, truth_inside)`` (the metric names of :mod:`setobs.results`):
+    optimal, error_bound, truth_inside, information)`` (the metric names of
+    :mod:`setobs.results`; ``information`` is the measurements the estimate at
+    ``k`` used, see :class:`ObserverSpec`):
     actual errors, worst-case infinity-norm error over the consistent set, the
     optimal worst-case error (the reference's ``error_bound``), the observer's own
     ``error_bound`` (SMFDO only) and whether the truth lies in that interval
@@ -165,8 +190,10 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
                                                               reset).run(traj.Y, traj.U)
             est, bound = res.estimate, res.error_bound
             inside = np.all((traj.D >= res.lo) & (traj.D <= res.hi), axis=1)
+            info = "y_0..y_k"
         else:
-            est = _point_observer(spec, sys).run(traj.Y, traj.U).estimate
+            pres = _point_observer(spec, sys, scenario).run(traj.Y, traj.U)
+            est, info = pres.estimate, pres.information
             bound = np.full(scenario.horizon, np.nan)
             inside = np.full(scenario.horizon, np.nan)
         err = est - traj.D
@@ -178,8 +205,36 @@ def run_one(scenario: Scenario, specs: Sequence[ObserverSpec], run: int, base_se
             rows.append({"run": int(run), "observer": spec.name, "k": k,
                          "error_inf": float(e_inf[k]), "error_2": float(e_2[k]),
                          "worst_case_error": float(worst[k]), "optimal": float(ref.error_bound[k]),
-                         "error_bound": float(bound[k]), "truth_inside": float(inside[k])})
+                         "error_bound": float(bound[k]), "truth_inside": float(inside[k]),
+                         "information": info})
     return rows
+
+
+@dataclass(frozen=True)
+class Improvement:
+    """Relative improvement ``1 - mean_A / mean_B`` with a bootstrap interval over runs.
+
+    Attributes
+    ----------
+    value : float
+        The point estimate.
+    lo, hi : float
+        The percentile bootstrap interval.
+    runs : int
+        Runs resampled.
+    confidence : float
+        Level of the interval.
+    """
+
+    value: float
+    lo: float
+    hi: float
+    runs: int
+    confidence: float
+
+    def __str__(self) -> str:
+        return (f"{self.value:.1%} [{self.lo:.1%}, {self.hi:.1%}] "
+                f"({self.confidence:.0%} CI over {self.runs} runs)")
 
 
 @dataclass
@@ -190,7 +245,8 @@ class CampaignResult:
     ----------
     table : pandas.DataFrame
         One row per run, observer and step: ``run, observer, k, error_inf,
-        error_2, worst_case_error, optimal, error_bound, truth_inside``.
+        error_2, worst_case_error, optimal, error_bound, truth_inside,
+        information``.
     metadata : dict
         The request, versions, machine and timing (also in ``metadata.json``).
     """
@@ -220,12 +276,62 @@ class CampaignResult:
         -------
         pandas.DataFrame
             Columns ``error_inf, error_2, worst_case_error, optimal, error_bound,
-            truth_inside``.
+            truth_inside``, and ``information`` (the measurements each observer's
+            estimate at ``k`` used) when the table has it.
         """
         t = self.table[self.table["k"] >= start]
         cols = ["error_inf", "error_2", "worst_case_error", "optimal", "error_bound",
                 "truth_inside"]
-        return t.groupby("observer", sort=False)[cols].mean()
+        out = t.groupby("observer", sort=False)[cols].mean()
+        if "information" in t.columns:
+            out["information"] = t.groupby("observer", sort=False)["information"].first()
+        return out
+
+    def improvement(self, better: str, baseline: str, *, start: int = 10,
+                    metric: str = "error_inf", confidence: float = 0.95, n_boot: int = 4000,
+                    rng: np.random.Generator | int | None = 0) -> Improvement:
+        """``1 - mean(better) / mean(baseline)`` of ``metric``, with a bootstrap interval.
+
+        The per-run means over ``k >= start`` are resampled by run (paired: both
+        observers ran on the same records), ``n_boot`` times; the interval is
+        the percentile interval at ``confidence``.
+
+        Parameters
+        ----------
+        better, baseline : str
+            Observer names.
+        start : int
+            First step counted.
+        metric : str
+            A metric column of :attr:`table`.
+        confidence : float
+            Level of the interval, in ``(0, 1)``.
+        n_boot : int
+            Bootstrap resamples.
+        rng : numpy.random.Generator, int or None
+            Random source of the resampling.
+
+        Returns
+        -------
+        Improvement
+        """
+        t = self.table[self.table["k"] >= start]
+        names = set(t["observer"])
+        for nm in (better, baseline):
+            if nm not in names:
+                raise DimensionError(f"no observer named {nm!r} in the campaign")
+        if not 0 < confidence < 1:
+            raise DimensionError(f"confidence must be in (0, 1), got {confidence}")
+        per = t.groupby(["observer", "run"])[metric].mean()
+        a = per.loc[better].to_numpy()
+        b = per.loc[baseline].to_numpy()
+        gen = np.random.default_rng(rng)
+        idx = gen.integers(0, a.size, size=(int(n_boot), a.size))
+        boot = 1.0 - a[idx].mean(axis=1) / b[idx].mean(axis=1)
+        alpha = 1.0 - confidence
+        lo, hi = np.quantile(boot, [alpha / 2, 1 - alpha / 2])
+        return Improvement(float(1.0 - a.mean() / b.mean()), float(lo), float(hi),
+                           int(a.size), float(confidence))
 
     def plot(self, ax: Any = None, metric: str = "error_inf", logy: bool = True) -> Any:
         """Mean of ``metric`` over runs, per step and observer
@@ -352,7 +458,7 @@ def run_campaign(
         if spec.kind == "smfdo":
             _smfdo_for({"window": 10, **spec.params}, scenario, sys0, "raise")
         else:
-            _point_observer(spec, sys0)
+            _point_observer(spec, sys0, scenario)
     out = Path(out_dir) if out_dir is not None else None
     request = {"scenario": scenario.to_dict(), "observers": [asdict(s) for s in specs],
                "base_seed": int(base_seed), "reference_window": reference_window}
