@@ -10,6 +10,7 @@ Ackermann's formula on the observable part (single output) or spread apart.
 
 from __future__ import annotations
 
+import threading
 import warnings
 from collections.abc import Sequence
 
@@ -22,6 +23,9 @@ from ..analysis import observability, observability_matrix
 from .base import DesignError
 
 __all__ = ["default_poles", "lqe_gain", "place_gain"]
+
+# Serialises the warning-filter swap around scipy's place_poles (see _place).
+_PLACE_LOCK = threading.Lock()
 
 #: Relative size of the spread used for repeated poles that the output rank
 #: cannot place exactly (several outputs).
@@ -65,8 +69,11 @@ def _place_observable(A, C, poles, check):
             raise DesignError(f"poles repeated {mult} times cannot be placed with "
                               f"{rank_c} independent outputs", "poles")
         poles = poles + POLE_SPREAD * max(1.0, float(np.abs(poles).max())) * np.arange(n)
-    with warnings.catch_warnings():
-        # YT's robustness iteration may stop early; accuracy is checked by the caller.
+    # YT's robustness iteration may stop early; accuracy is checked by the caller.
+    # ``catch_warnings`` swaps process-global filters: the lock keeps two threads
+    # (Dask's threaded workers) from restoring each other's filters mid-call, which
+    # let the warning through in a threaded campaign.
+    with _PLACE_LOCK, warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         from scipy.signal import place_poles  # scipy.signal is slow to import
 
