@@ -24,7 +24,7 @@ from .base import DesignError
 
 __all__ = ["default_poles", "lqe_gain", "place_gain"]
 
-# Serialises the warning-filter swap around scipy's place_poles (see _place).
+# Serialises the warning-filter swap around scipy's place_poles (_place_observable).
 _PLACE_LOCK = threading.Lock()
 
 #: Relative size of the spread used for repeated poles that the output rank
