@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix
 from ..analysis import observability
 from ..systems import DisturbanceInputs, LinearSystem
-from ._gains import lqe_gain
+from ._gains import lqe_gain, place_gain
 from .base import DesignError, PointObserver
 
 __all__ = ["DescriptorObserver"]
@@ -45,6 +47,13 @@ class DescriptorObserver(PointObserver):
         Sensor-noise matrix of full column rank.
     Q_w, R_w : array_like, optional
         DARE weights (default identities).
+    poles : sequence of complex, optional
+        Place the ``n + l_n + q`` error poles of ``A_w - L C_w`` instead of
+        solving the DARE ("the conventional pole assignment method" of the
+        fragment, before eq. (18)). Theorem 1's ``O(T^2)`` bound assumes the
+        error system's contraction stays bounded away from 1 as ``T`` shrinks:
+        fixed discrete poles do that, a DARE with fixed weights does not
+        (its poles drift towards 1; see ``tests/observers/test_chang_fragment.py``).
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
@@ -54,7 +63,8 @@ class DescriptorObserver(PointObserver):
 
     def __init__(self, sys: LinearSystem, F: ArrayLike, Q_w: ArrayLike | None = None,
                  R_w: ArrayLike | None = None,
-                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+                 *, poles: Sequence[complex] | None = None,
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
         super().__init__(sys, disturbance_inputs=disturbance_inputs)
         self.information = "filtered"  # step k uses y_(k-1) and y_k (eq. of the augmentation)
         sys = self.sys
@@ -80,9 +90,17 @@ class DescriptorObserver(PointObserver):
         if not rep.detectable:
             raise DesignError("the augmented descriptor pair (A_w, C_w) is not detectable "
                               "(Assumptions 2-3 of the fragment fail)", "Assumptions 2-3")
-        Qw = np.eye(nz + q) if Q_w is None else as_matrix("Q_w", Q_w, nz + q, nz + q)
-        Rw = np.eye(ly) if R_w is None else as_matrix("R_w", R_w, ly, ly)
-        L, P = lqe_gain(A_w, C_w, Qw, Rw, return_solution=True)  # eqs. (18)-(19)
+        if poles is not None:
+            if Q_w is not None or R_w is not None:
+                raise DesignError("give poles or the DARE weights Q_w, R_w, not both", "design")
+            if len(poles) != nz + q:
+                raise DesignError(f"poles: {nz + q} error poles are needed (n + l_n + q), "
+                                  f"got {len(poles)}", "poles")
+            L, P = place_gain(A_w, C_w, poles), None
+        else:
+            Qw = np.eye(nz + q) if Q_w is None else as_matrix("Q_w", Q_w, nz + q, nz + q)
+            Rw = np.eye(ly) if R_w is None else as_matrix("R_w", R_w, ly, ly)
+            L, P = lqe_gain(A_w, C_w, Qw, Rw, return_solution=True)  # eqs. (18)-(19)
         self.A_w, self.B_w, self.C_w, self.L, self.P_dare = A_w, B_w, C_w, L, P
         self.noise_matrix, self.n_noise = F_a, ln
         self.reset()
