@@ -38,6 +38,7 @@ from .luenberger import (
     ModularObserver,
     design_higher_order,
     design_pio,
+    modular_paper_gains,
 )
 from .mbeso import MBESO, VariantMBESO, decoupled_gain, mbeso_impulse_response
 from .nonlinear import NonlinearModularObserver, NonlinearObserverResult
@@ -63,4 +64,5 @@ __all__ = [
     "design_higher_order",
     "design_pio",
     "mbeso_impulse_response",
+    "modular_paper_gains",
 ]

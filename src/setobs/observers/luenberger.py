@@ -14,10 +14,12 @@ from ..analysis import (
     higher_order_conditions,
     higher_order_error_poles,
     modular_conditions,
+    observability,
     pio_conditions,
     pio_error_poles,
 )
-from ..systems import DisturbanceInputs, LinearSystem
+from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..tolerances import RESONANCE_RTOL
 from ._gains import default_poles, lqe_gain, place_gain
 from .base import DesignError, StateSpaceObserver
 
@@ -29,6 +31,7 @@ __all__ = [
     "ModularObserver",
     "design_higher_order",
     "design_pio",
+    "modular_paper_gains",
 ]
 
 #: PIO gains printed in Fu-Wang, Sec. IV (the "optimal parameters of Chang 2006",
@@ -315,8 +318,11 @@ class ModularObserver(StateSpaceObserver):
     Disturbance-free observer ``x0^+ = F x0^ + L0 (y - H x0^)``, disturbance
     observer ``w^+ = S w^ + Lw (y - H x0^ - (H V + Q) w^)`` and state corrector
     ``x^ = x0^ + V w^``, with ``V`` from the Sylvester equation (48)
-    ``V S - (F - L0 H) V = P - L0 Q``. Here ``F = Phi``, ``P = G``, ``H = Xi``,
-    ``Q = 0``, ``S = I`` (constant-disturbance exosystem, eq. (46)).
+    ``V S - (F - L0 H) V = P - L0 Q``, for the plant (45)
+    ``x+ = F x + P w``, ``y = H x + Q w`` and the exosystem (46) ``w+ = S w``.
+    Here ``F = Phi``, ``P = G``, ``H = Xi``; by default ``S = I`` (constant
+    disturbance) and ``Q = 0``; ``S`` and ``Q`` give the general form. The
+    paper's own gains (49)-(52) come from :func:`modular_paper_gains`.
 
     Parameters
     ----------
@@ -328,6 +334,11 @@ class ModularObserver(StateSpaceObserver):
         at ``w_poles``).
     w_poles : sequence, optional
         Eigenvalues of the disturbance observer (default 0.5 each, spread slightly).
+    S : array_like, shape (q, q), optional
+        Exosystem matrix of eq. (46) (default ``I``).
+    Q : array_like, shape (l, q), optional
+        Direct effect of ``w`` on the output, eq. (45) (default 0). The
+        measurements passed to :meth:`run` are then ``y = H x + Q w``.
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
@@ -343,33 +354,42 @@ class ModularObserver(StateSpaceObserver):
 
     def __init__(self, sys: LinearSystem, L0: ArrayLike | None = None, Lw: ArrayLike | None = None,
                  *, w_poles: Sequence[complex] | None = None,
+                 S: ArrayLike | None = None, Q: ArrayLike | None = None,
                  disturbance_inputs: DisturbanceInputs = None) -> None:
         super().__init__(sys, disturbance_inputs=disturbance_inputs)
         sys = self.sys
-        cond = modular_conditions(sys)
-        if not cond.exists:
-            raise DesignError(f"modular observer: {cond.reason}", cond.condition)
         n, q, l = sys.n, sys.q, sys.l
+        general = S is not None or Q is not None
+        S_a = np.eye(q) if S is None else as_matrix("S", S, rows=q, cols=q)
+        Q_a = np.zeros((l, q)) if Q is None else as_matrix("Q", Q, rows=l, cols=q)
+        if not general:
+            cond = modular_conditions(sys)
+            if not cond.exists:
+                raise DesignError(f"modular observer: {cond.reason}", cond.condition)
+        elif not observability(sys.Phi, sys.Xi).detectable:
+            raise DesignError("modular observer: (F, H) is not detectable: no stabilising L0",
+                              "(F, H) detectable")
         F, P, H = sys.Phi, sys.G, sys.Xi
-        S = np.eye(q)
         if L0 is None:
             L0_a = lqe_gain(F, H, np.eye(n), np.eye(l))
         else:
             L0_a = as_matrix("L0", L0, rows=n, cols=l)
         Fc = F - L0_a @ H
-        # eq. (48): V S - Fc V = P  <=>  (-Fc) V + V S = P
-        V = solve_sylvester(-Fc, S, P)
-        HV = H @ V
+        V = _modular_V(Fc, S_a, P - L0_a @ Q_a)
+        HVQ = H @ V + Q_a
+        if general and not observability(S_a, HVQ).detectable:
+            raise DesignError("modular observer: (S, H V + Q) is not detectable: the "
+                              "disturbance module has no stabilising gain", "(S, HV+Q) detectable")
         if Lw is None:
             if w_poles is None:
                 w_poles = list(0.5 + 0.01 * np.arange(q))
-            Lw_a = place_gain(S, HV, w_poles)
+            Lw_a = place_gain(S_a, HVQ, w_poles)
         else:
             Lw_a = as_matrix("Lw", Lw, rows=q, cols=l)
-        self.L0, self.Lw, self.V = L0_a, Lw_a, V
+        self.L0, self.Lw, self.V, self.S, self.Q = L0_a, Lw_a, V, S_a, Q_a
         # Combined state (x0^, w^): x0^+ = Fc x0^ + L0 y (+ Gamma u)
-        # w^+ = S w^ + Lw (y - H x0^ - H V w^)
-        Fm = np.block([[Fc, np.zeros((n, q))], [-Lw_a @ H, S - Lw_a @ HV]])
+        # w^+ = S w^ + Lw (y - H x0^ - (H V + Q) w^)
+        Fm = np.block([[Fc, np.zeros((n, q))], [-Lw_a @ H, S_a - Lw_a @ HVQ]])
         K = np.vstack([L0_a, Lw_a])
         B = np.vstack([sys.Gamma, np.zeros((q, sys.p))])
         # The state corrector must also carry the known input: x0^ absorbs Gamma u.
@@ -379,3 +399,79 @@ class ModularObserver(StateSpaceObserver):
     @property
     def gains(self) -> dict:
         return {"L0": self.L0, "Lw": self.Lw}
+
+
+def _modular_V(Fc: NDArray[np.float64], S: NDArray[np.float64],
+               rhs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``V`` of eq. (48): ``V S - Fc V = rhs``; refused when ``eig(S)`` meets ``eig(Fc)``."""
+    ev_f, ev_s = np.linalg.eigvals(Fc), np.linalg.eigvals(S)
+    gap = float(np.abs(ev_f[:, None] - ev_s[None, :]).min(initial=np.inf))
+    if not gap > RESONANCE_RTOL * max(1.0, float(np.abs(ev_s).max(initial=0.0))):
+        raise DesignError(f"eq. (48) has no unique solution: eig(S) and eig(F - L0 H) meet "
+                          f"(gap {gap:.1e})", "eig(S) disjoint from eig(F - L0 H)")
+    return solve_sylvester(-Fc, S, rhs)
+
+
+def modular_paper_gains(sys: LinearSystem, A0: ArrayLike, B0: ArrayLike, Aw: ArrayLike,
+                        Bw: ArrayLike, *, S: ArrayLike | None = None,
+                        Q: ArrayLike | None = None) -> dict[str, NDArray[np.float64]]:
+    """The gains of the modular observer by the paper's construction, eqs. (49)-(52).
+
+    With ``F = Phi``, ``P = G``, ``H = Xi`` and the chosen stable ``A0`` (n x n),
+    ``B0`` (n x l), ``Aw`` (q x q), ``Bw`` (q x l):
+
+    * (50) ``T0 F - A0 T0 = B0 H``, (49) ``L0 = T0^-1 B0`` (so ``F - L0 H = T0^-1 A0 T0``);
+    * (48) ``V S - (F - L0 H) V = P - L0 Q``;
+    * (52) ``Tw F - Aw Tw = Bw H`` and ``R S - Aw R = (Bw - Tw L0)(H V + Q)``,
+      (51) ``Lw = R^-1 (Bw - Tw L0)`` (so ``S - Lw (H V + Q) = R^-1 Aw R``).
+
+    The observer's eigenvalues are then those of ``diag(A0, Aw)`` (reconstructed
+    from the damaged text of Sec. VIII; the two similarity relations above are
+    what the construction must give, and the tests check them).
+
+    Parameters
+    ----------
+    sys : LinearSystem
+        The plant (45).
+    A0, B0 : array_like
+        Dynamics of the disturbance-free observer, shapes (n, n) and (n, l).
+    Aw, Bw : array_like
+        Dynamics of the disturbance observer, shapes (q, q) and (q, l).
+    S : array_like, shape (q, q), optional
+        Exosystem (46) (default ``I``).
+    Q : array_like, shape (l, q), optional
+        Direct effect of ``w`` on ``y`` (default 0).
+
+    Returns
+    -------
+    dict
+        ``L0, Lw, T0, Tw, R, V``.
+
+    Raises
+    ------
+    DesignError
+        If ``T0`` or ``R`` is singular (the chosen ``(A0, B0)`` or ``(Aw, Bw)``
+        does not give an invertible transformation), or eq. (48) is resonant.
+    """
+    sys = require_system(sys)
+    n, q, l = sys.n, sys.q, sys.l
+    A0_a = as_matrix("A0", A0, rows=n, cols=n)
+    B0_a = as_matrix("B0", B0, rows=n, cols=l)
+    Aw_a = as_matrix("Aw", Aw, rows=q, cols=q)
+    Bw_a = as_matrix("Bw", Bw, rows=q, cols=l)
+    S_a = np.eye(q) if S is None else as_matrix("S", S, rows=q, cols=q)
+    Q_a = np.zeros((l, q)) if Q is None else as_matrix("Q", Q, rows=l, cols=q)
+    F, P, H = sys.Phi, sys.G, sys.Xi
+    T0 = solve_sylvester(-A0_a, F, B0_a @ H)                       # eq. (50)
+    if np.linalg.cond(T0) > 1.0 / RESONANCE_RTOL:
+        raise DesignError("T0 of eq. (50) is singular: choose (A0, B0) controllable with "
+                          "eig(A0) disjoint from eig(F)", "T0 invertible")
+    L0 = np.linalg.solve(T0, B0_a)                                 # eq. (49)
+    V = _modular_V(F - L0 @ H, S_a, P - L0 @ Q_a)                  # eq. (48)
+    Tw = solve_sylvester(-Aw_a, F, Bw_a @ H)                       # eq. (52), first
+    R = solve_sylvester(-Aw_a, S_a, (Bw_a - Tw @ L0) @ (H @ V + Q_a))   # eq. (52), second
+    if np.linalg.cond(R) > 1.0 / RESONANCE_RTOL:
+        raise DesignError("R of eq. (52) is singular: choose (Aw, Bw) so that the "
+                          "disturbance module is observable through H V + Q", "R invertible")
+    Lw = np.linalg.solve(R, Bw_a - Tw @ L0)                        # eq. (51)
+    return {"L0": L0, "Lw": Lw, "T0": T0, "Tw": Tw, "R": R, "V": V}
