@@ -33,7 +33,7 @@ from .._rounding import gamma, round_down, round_up
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import PONTRYAGIN_MATCH_RTOL
-from .box import Box
+from .box import Box, box_center_radius
 from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
@@ -358,9 +358,7 @@ def _zonotope_data(W: ConstrainedZonotope | Box) -> tuple[NDArray[np.float64], N
     if isinstance(W, Box):
         if not W.is_bounded:
             raise UnboundedSetError("the subtrahend box must be bounded")
-        lo, hi = W.lo, W.hi
-        c = (lo + hi) / 2.0
-        r = round_up(np.maximum(hi - c, c - lo))
+        c, r = box_center_radius(W.lo, W.hi)
         keep = r > 0
         return np.diag(r)[:, keep], c
     if not isinstance(W, ConstrainedZonotope):
@@ -422,13 +420,13 @@ def pontryagin_difference(Z: ConstrainedZonotope, W: ConstrainedZonotope | Box |
     ``{G xi + c - c_W : A xi = b, |xi| <= h - |Gamma| 1}`` is inside the
     difference (for ``|eta| <= 1``, ``xi + Gamma eta`` is a factor of ``Z``
     that gives ``z + D eta``; the generator matching of Vinod et al.,
-    CORA's ``'inner:Vinod'``). ``Gamma`` is refined by least squares so that
-    the residual ``[G; A] Gamma - [D; 0]`` is at rounding level, and that
-    residual is added to the shrinkage (it is the part of ``W`` the matching
-    does not cover, bounded by ``|Gamma|``'s rows in ``G``'s own units); if no
-    matching exists, or the shrunk factor box is empty, the result is
-    :func:`empty_set` (the inner approximation may be empty when the
-    difference is not).
+    CORA's ``'inner:Vinod'``). ``Gamma`` is refined by least squares and
+    accepted only if the residual ``[G; A] Gamma - [D; 0]`` is below
+    :data:`~setobs.tolerances.PONTRYAGIN_MATCH_RTOL` of the data: the inner
+    claim holds up to that residual (the part of ``W`` the matching misses),
+    which is not absorbed. If no matching exists, or the shrunk factor box is
+    empty, the result is :func:`empty_set` (the inner approximation may be
+    empty when the difference is not).
 
     Parameters
     ----------
@@ -476,7 +474,7 @@ def pontryagin_difference(Z: ConstrainedZonotope, W: ConstrainedZonotope | Box |
 def _inner_difference(Z: ConstrainedZonotope, D: NDArray[np.float64],
                       cw: NDArray[np.float64]) -> ConstrainedZonotope:
     from scipy.optimize import linprog
-    from scipy.sparse import csr_matrix, hstack, identity, kron, vstack
+    from scipy.sparse import csr_matrix, hstack, identity, kron
 
     m = D.shape[1]
     if m == 0:
@@ -497,7 +495,7 @@ def _inner_difference(Z: ConstrainedZonotope, D: NDArray[np.float64],
     weight = np.where(fin, 1.0 / np.where(fin, Z.h, 1.0), 1e-6)
     weight[Z.h == 0] = 1e6
     cost = np.concatenate([np.zeros(2 * ng * m), weight])
-    res = linprog(cost, A_ub=A_ub, b_ub=np.zeros(ng), A_eq=vstack([A_eq]), b_eq=b_eq,
+    res = linprog(cost, A_ub=A_ub, b_ub=np.zeros(ng), A_eq=A_eq, b_eq=b_eq,
                   bounds=(0, None), method="highs")
     if res.status == 2:  # infeasible: W's generators are not all matched
         return empty_set(Z.dim)
@@ -518,12 +516,7 @@ def _inner_difference(Z: ConstrainedZonotope, D: NDArray[np.float64],
     if (new_h < 0).any():
         return empty_set(Z.dim)
     new_h = round_down(np.maximum(new_h, 0.0))
-    # The residual R (rounding level) is the part of each generator of W the
-    # matching misses: the result keeps its inner claim for W shrunk by it; it is
-    # reported through c_err being *not* widened (an inner set must not grow).
-    out = trusted_cz(Z.G, Z.c - cw, Z.A, Z.b, new_h, Z.unbounded_radius,
-                     Z.c_err, Z.b_err)
-    return out
+    return trusted_cz(Z.G, Z.c - cw, Z.A, Z.b, new_h, Z.unbounded_radius, Z.c_err, Z.b_err)
 
 
 def interval_matrix_map(Z: ConstrainedZonotope, M_lo: ArrayLike, M_hi: ArrayLike
@@ -561,8 +554,7 @@ def interval_matrix_map(Z: ConstrainedZonotope, M_lo: ArrayLike, M_hi: ArrayLike
     hi = as_matrix("M_hi", M_hi, rows=lo.shape[0], cols=Z.dim)
     if (lo > hi).any():
         raise DimensionError("M_lo must be elementwise <= M_hi")
-    Mc = (lo + hi) / 2.0
-    Mr = round_up(np.maximum(hi - Mc, Mc - lo))
+    Mc, Mr = box_center_radius(lo, hi)  # elementwise: |M - Mc| <= Mr for every M in [lo, hi]
     box, _ = hull_with_status(Z)
     zmax = np.maximum(np.abs(box.lo), np.abs(box.hi))
     with np.errstate(invalid="ignore"):
