@@ -318,14 +318,21 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, free,
                                                    _budgets(G, c, A, b, h, cerr, berr))
     # 3. unused parts
-    zero_r = ~A.any(axis=1)
-    if zero_r.any():
-        if (np.abs(b[zero_r]) > berr[zero_r]).any():
-            raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
-        A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
+    A, b, berr = _drop_zero_rows(A, b, berr)
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
     return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius,
                                         cerr, berr)
+
+
+def _drop_zero_rows(A, b, berr):
+    """Drop exactly zero constraint rows (``0 = b_i``); a right-hand side certified
+    nonzero (beyond its uncertainty ``berr``) makes the set empty."""
+    zero_r = ~A.any(axis=1)
+    if not zero_r.any():
+        return A, b, berr
+    if (np.abs(b[zero_r]) > berr[zero_r]).any():
+        raise EmptySetError("the set is empty (a constraint 0 = b_i with b_i != 0)")
+    return A[~zero_r], b[~zero_r], berr[~zero_r]
 
 
 def _budgets(G, c, A, b, h, cerr, berr) -> tuple[float, float]:
@@ -499,7 +506,6 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int) -> Const
             r = _overshoot(Z, int(j))
             if np.isfinite(r):
                 scored.append((hausdorff_heuristic(Z, int(j), r), int(j)))
-        done = False
         for _, j in sorted(scored):
             h = Z.h.copy()
             h[j] = np.inf
@@ -508,14 +514,9 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int) -> Const
             G, c, A, b, h, cerr, berr, steps = _eliminate_free(
                 Z.G, Z.c, Z.A, Z.b, h, Z.c_err, Z.b_err, free, budgets, max_steps=1)
             if steps:
-                zero_r = ~A.any(axis=1)
-                if zero_r.any():
-                    if (np.abs(b[zero_r]) > berr[zero_r]).any():
-                        raise EmptySetError("the set is empty (a constraint 0 = b_i != 0)")
-                    A, b, berr = A[~zero_r], b[~zero_r], berr[~zero_r]
+                A, b, berr = _drop_zero_rows(A, b, berr)
                 Z = trusted_cz(G, c, A, b, h, Z.unbounded_radius, cerr, berr)
-                done = True
                 break
-        if not done:
-            break
+        else:
+            break  # no candidate could be eliminated
     return Z
