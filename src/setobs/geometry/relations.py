@@ -207,20 +207,14 @@ def is_subset(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResu
         from .polytope import to_hrep
 
         try:
-            hr = to_hrep(W) if W.dim > 1 else None
+            hr = to_hrep(W)
         except SolverError:
             hr = None
-        if W.dim == 1:
-            box = W.interval_hull()
-            res = is_subset_of_polytope(Z, [[1.0], [-1.0]], [box.hi[0], -box.lo[0]])
-        elif hr is not None:
+        if hr is not None:
             res = is_subset_of_polytope(Z, hr.H, hr.k, hr.E if hr.E.size else None,
                                         hr.f if hr.E.size else None)
-        else:
-            res = None
-        if res is not None:
-            if res.holds is False and res.witness is not None and W.contains(res.witness):
-                res = ContainmentResult(None, None, "facets", res.margin, res.tol)
+            if res.holds is False and W.contains(res.witness):
+                return ContainmentResult(None, None, "facets", res.margin, res.tol)
             return ContainmentResult(res.holds, res.witness, "facets", res.margin, res.tol)
     ok = _matching_certificate(Z, W)
     return ContainmentResult(True if ok else None, None, "matching")
