@@ -24,8 +24,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._lazy import optional_import
 from .._rounding import gamma, round_down
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import DimensionError, SolverError, UnboundedSetError
-from .zonotope import ConstrainedZonotope, hull_with_status, support_unwarned
+from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from .zonotope import ConstrainedZonotope, factor_polytope, hull_with_status, support_unwarned
 
 __all__ = ["DistanceResult", "QPResult", "VolumeResult", "distance", "minimize_quadratic",
            "nearest_point", "sample", "volume"]
@@ -141,11 +141,11 @@ def minimize_quadratic(Z: ConstrainedZonotope, P: ArrayLike, q: ArrayLike) -> QP
         raise DimensionError("P must be symmetric")
     q_a = as_vector("q", q, size=n)
     if Z.is_empty():
-        from ..exceptions import EmptySetError
-
         raise EmptySetError("the set is empty")
-    cl = _clarabel()
     G, c = Z.G, Z.c
+    if Z.n_gen == 0:  # a point: nothing to solve
+        return QPResult(c.copy(), float(0.5 * c @ P_a @ c + q_a @ c), "Solved")
+    cl = _clarabel()
     Pq = G.T @ P_a @ G
     Pq = (Pq + Pq.T) / 2.0
     lin = G.T @ (P_a @ c + q_a)
@@ -153,13 +153,11 @@ def minimize_quadratic(Z: ConstrainedZonotope, P: ArrayLike, q: ArrayLike) -> QP
     ng = Z.n_gen
     rows = [Z.A, np.eye(ng)[fin], -np.eye(ng)[fin]]
     rhs = np.concatenate([Z.b, Z.h[fin], Z.h[fin]])
-    Acon = sparse.csc_matrix(np.vstack(rows)) if ng else sparse.csc_matrix((rhs.size, 0))
-    cones = [cl.ZeroConeT(Z.n_con), cl.NonnegativeConeT(2 * fin.size)]
-    cones = [k for k, m in zip(cones, (Z.n_con, 2 * fin.size), strict=True) if m]
+    Acon = sparse.csc_matrix(np.vstack(rows))
+    cones = ([cl.ZeroConeT(Z.n_con)] if Z.n_con else []) + \
+        ([cl.NonnegativeConeT(2 * fin.size)] if fin.size else [])
     settings = cl.DefaultSettings()
     settings.verbose = False
-    if ng == 0:
-        return QPResult(c.copy(), float(0.5 * c @ P_a @ c + q_a @ c), "Solved")
     solver = cl.DefaultSolver(sparse.triu(sparse.csc_matrix(Pq)).tocsc(), lin, Acon, rhs,
                               cones, settings)
     sol = solver.solve()
@@ -265,8 +263,6 @@ class _LPChords:
         self.Z = Z
 
     def chord(self, x: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, float]:
-        from .zonotope import factor_polytope
-
         T = ConstrainedZonotope.full_space(1).intersect(self.Z - x, u[:, None])
         fp = factor_polytope(T)
         w = np.zeros(T.n_gen)
