@@ -1,9 +1,15 @@
-"""Shared pieces of the benchmarks: the straightforward cvxpy path used as the baseline."""
+"""Shared pieces of the benchmarks: random sets, timing, and the straightforward cvxpy path
+used as the baseline."""
 
 from __future__ import annotations
 
+import statistics
+import time
+
 import cvxpy as cp
 import numpy as np
+
+from setobs import ConstrainedZonotope
 
 
 def hull_cvxpy(Z) -> tuple[np.ndarray, np.ndarray]:
@@ -23,3 +29,21 @@ def hull_cvxpy(Z) -> tuple[np.ndarray, np.ndarray]:
             else:
                 hi[i] = val
     return lo, hi
+
+
+def make_cz(n: int, n_g: int, n_c: int, rng: np.random.Generator) -> ConstrainedZonotope:
+    G = rng.normal(size=(n, n_g))
+    c = rng.normal(size=n)
+    A = rng.normal(size=(n_c, n_g))
+    xi0 = rng.uniform(-0.5, 0.5, size=n_g)
+    return ConstrainedZonotope(G, c, A, A @ xi0)
+
+
+def timeit(fn, *args, repeats: int) -> tuple[float, list[float], object]:
+    out = fn(*args)  # warm-up (imports, first-call overhead)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn(*args)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), times, out

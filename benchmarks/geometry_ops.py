@@ -30,8 +30,6 @@ import argparse
 import json
 import os
 import platform
-import statistics
-import time
 from importlib import metadata
 from pathlib import Path
 
@@ -39,19 +37,12 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
+from _common import make_cz, timeit
 from setobs import ConstrainedZonotope
 from setobs.geometry import convex_hull, distance, intersect_polytope, is_subset_of_polytope
 
 SIZES = [(3, 20, 10), (5, 60, 40)]
 M_ROWS = 20
-
-
-def make_cz(n: int, n_g: int, n_c: int, rng: np.random.Generator) -> ConstrainedZonotope:
-    G = rng.normal(size=(n, n_g))
-    c = rng.normal(size=n)
-    A = rng.normal(size=(n_c, n_g))
-    xi0 = rng.uniform(-0.5, 0.5, size=n_g)
-    return ConstrainedZonotope(G, c, A, A @ xi0)
 
 
 def fresh(Z: ConstrainedZonotope) -> ConstrainedZonotope:
@@ -105,16 +96,6 @@ def hull_cvxpy(Z, W):
     return lo, hi
 
 
-def timeit(fn, *args, repeats: int):
-    out = fn(*args)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn(*args)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=5)
@@ -131,18 +112,18 @@ def main() -> None:
         k = H @ box.center + 0.5 * np.abs(H) @ box.half_width
         p = box.center + 3.0 * box.half_width
 
-        t1, res = timeit(lambda Z=Z, H=H, k=k: is_subset_of_polytope(fresh(Z), H, k),
+        t1, _, res = timeit(lambda Z=Z, H=H, k=k: is_subset_of_polytope(fresh(Z), H, k),
                          repeats=args.repeats)
-        t1c, (_, s_cvx) = timeit(subset_cvxpy, Z, H, k, repeats=r_cvx)
+        t1c, _, (_, s_cvx) = timeit(subset_cvxpy, Z, H, k, repeats=r_cvx)
         s_ours = np.array([fresh(Z).support(h) for h in H])
-        t2, _ = timeit(lambda Z=Z, H=H, k=k: intersect_polytope(fresh(Z), H, k),
+        t2, _, _ = timeit(lambda Z=Z, H=H, k=k: intersect_polytope(fresh(Z), H, k),
                        repeats=args.repeats)
-        t2c, _ = timeit(intersect_cvxpy, Z, H, k, repeats=r_cvx)
-        t3, dres = timeit(lambda Z=Z, p=p: distance(fresh(Z), p), repeats=args.repeats)
-        t3c, d_cvx = timeit(distance_cvxpy, Z, p, repeats=r_cvx)
-        t4, hbox = timeit(lambda Z=Z, W=W: convex_hull(fresh(Z), fresh(W)).interval_hull(),
+        t2c, _, _ = timeit(intersect_cvxpy, Z, H, k, repeats=r_cvx)
+        t3, _, dres = timeit(lambda Z=Z, p=p: distance(fresh(Z), p), repeats=args.repeats)
+        t3c, _, d_cvx = timeit(distance_cvxpy, Z, p, repeats=r_cvx)
+        t4, _, hbox = timeit(lambda Z=Z, W=W: convex_hull(fresh(Z), fresh(W)).interval_hull(),
                           repeats=args.repeats)
-        t4c, (lo_c, hi_c) = timeit(hull_cvxpy, Z, W, repeats=r_cvx)
+        t4c, _, (lo_c, hi_c) = timeit(hull_cvxpy, Z, W, repeats=r_cvx)
         row = {
             "n": n, "n_gen": n_g, "n_con": n_c, "m_rows": M_ROWS,
             "subset_of_polytope": {"setobs_s": t1, "cvxpy_s": t1c, "speedup": t1c / t1,

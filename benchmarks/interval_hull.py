@@ -23,8 +23,6 @@ import argparse
 import json
 import os
 import platform
-import statistics
-import time
 from importlib import metadata
 from pathlib import Path
 
@@ -32,34 +30,16 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
-from _common import hull_cvxpy
+from _common import hull_cvxpy, make_cz, timeit
 from setobs import ConstrainedZonotope
 
 SIZES = [(5, 45, 40), (5, 100, 90), (10, 200, 150)]
-
-
-def make_cz(n: int, n_g: int, n_c: int, rng: np.random.Generator) -> ConstrainedZonotope:
-    G = rng.normal(size=(n, n_g))
-    c = rng.normal(size=n)
-    A = rng.normal(size=(n_c, n_g))
-    xi0 = rng.uniform(-0.5, 0.5, size=n_g)
-    return ConstrainedZonotope(G, c, A, A @ xi0)
 
 
 def hull_setobs(Z: ConstrainedZonotope) -> tuple[np.ndarray, np.ndarray]:
     fresh = ConstrainedZonotope(Z.G, Z.c, Z.A, Z.b, Z.h)  # no cached model or hull
     box = fresh.interval_hull()
     return box.lo, box.hi
-
-
-def timeit(fn, *args, repeats: int) -> tuple[float, list[float], object]:
-    out = fn(*args)  # warm-up (imports, first-call overhead)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn(*args)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), times, out
 
 
 def main() -> None:
