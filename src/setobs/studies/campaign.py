@@ -52,9 +52,12 @@ def _accepted_params(kind: str) -> tuple[str, ...]:
     if kind == "pio_printed":
         return ("information",)
     if kind == "kalman":
-        return ("information", "measurement_cov")
-    sig = inspect.signature(_point_ctor(kind).__init__)
-    return tuple(p for p in sig.parameters if p not in ("self", "sys"))
+        from .baselines import kalman_baseline
+
+        sig = inspect.signature(kalman_baseline)
+    else:
+        sig = inspect.signature(_point_ctor(kind).__init__)
+    return tuple(p for p in sig.parameters if p not in ("self", "sys", "scenario"))
 
 
 @dataclass(frozen=True)
