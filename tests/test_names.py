@@ -30,6 +30,9 @@ def _designs():
     yield DescriptorObserver(desc, np.ones((desc.l, 1))), desc
     yield MBESO(so.examples.chen_gao_lin_example4()), so.examples.chen_gao_lin_example4()
     yield DelayedUIO(so.examples.chen_gao_lin_example4()), so.examples.chen_gao_lin_example4()
+    yield so.observers.EHGSO(so.examples.chen_gao_lin_example4(), 0.4), \
+        so.examples.chen_gao_lin_example4()
+    yield so.observers.GESO(so.examples.chen_gao_lin_example5()), so.examples.chen_gao_lin_example5()
 
 
 def test_gains_hold_only_gains_on_the_measurements():

@@ -96,6 +96,12 @@ def test_point_observers_round_trip_and_run_identically():
         ref = o.run(Y, U).estimate
         for c in _roundtrips(o):
             assert np.array_equal(c.run(Y, U).estimate, ref, equal_nan=True)
+    ex4, ex5 = so.examples.chen_gao_lin_example4(), so.examples.chen_gao_lin_example5()
+    for o, s in ((obs.EHGSO(ex4, 0.4), ex4), (obs.GESO(ex5), ex5)):
+        Y = np.random.default_rng(1).normal(size=(20, s.l))
+        ref = o.run(Y).estimate
+        for c in _roundtrips(o):
+            assert np.array_equal(c.run(Y).estimate, ref, equal_nan=True)
 
 
 def test_exceptions_round_trip_with_their_attributes():

@@ -8,12 +8,12 @@ against its paper; the symbols are not shared between observers:
 ===================================  =============================================================
 observer                             gains (multiply the output innovation unless stated)
 ===================================  =============================================================
-:class:`PIO`                         ``P`` (n, l) into the state, ``L`` (q, l) into the disturbance
+:class:`PIO`, :class:`GESO`           ``P`` (n, l) into the state, ``L`` (q, l) into the disturbance
 :class:`HigherOrderObserver`         ``P0`` (n, l) into the state, ``L0``, ``L1`` (q, l) into the
                                      disturbance (Fu-Wang eq. (10))
 :class:`ModularObserver`             ``L0`` (n, l) of the disturbance-free observer, ``Lw`` (q, l)
                                      of the disturbance observer
-:class:`MBESO`                       ``L`` (n + p, p) on the extended state (from ``omega``)
+:class:`MBESO`, :class:`EHGSO`        ``L`` (n + p, p) on the extended state (from ``omega``)
 :class:`DelayedUIO`                  ``K`` on the stacked window ``Y[k:k+tau]`` (eq. (23))
 :class:`DescriptorObserver`          ``L`` on the descriptor state (eq. (18)); its ``F`` is the
                                      sensor-noise matrix, not a gain
@@ -33,6 +33,7 @@ from .descriptor import DescriptorObserver
 from .luenberger import (
     CHANG2006_PIO_GAINS,
     FU_WANG_HO_GAINS,
+    GESO,
     PIO,
     HigherOrderObserver,
     ModularObserver,
@@ -40,13 +41,23 @@ from .luenberger import (
     design_pio,
     modular_paper_gains,
 )
-from .mbeso import MBESO, VariantMBESO, decoupled_gain, mbeso_impulse_response
+from .mbeso import (
+    EHGSO,
+    MBESO,
+    VariantMBESO,
+    decoupled_gain,
+    mbeso_error_bound,
+    mbeso_impulse_response,
+    mbeso_l1_norm,
+)
 from .nonlinear import NonlinearModularObserver, NonlinearObserverResult
 from .uio import DelayedUIO
 
 __all__ = [
     "CHANG2006_PIO_GAINS",
+    "EHGSO",
     "FU_WANG_HO_GAINS",
+    "GESO",
     "MBESO",
     "PIO",
     "DelayedUIO",
@@ -63,6 +74,8 @@ __all__ = [
     "decoupled_gain",
     "design_higher_order",
     "design_pio",
+    "mbeso_error_bound",
     "mbeso_impulse_response",
+    "mbeso_l1_norm",
     "modular_paper_gains",
 ]

@@ -26,6 +26,7 @@ from .base import DesignError, StateSpaceObserver
 __all__ = [
     "CHANG2006_PIO_GAINS",
     "FU_WANG_HO_GAINS",
+    "GESO",
     "PIO",
     "HigherOrderObserver",
     "ModularObserver",
@@ -310,6 +311,49 @@ class HigherOrderObserver(StateSpaceObserver):
     @property
     def gains(self) -> dict:
         return {"P0": self.P0, "L0": self.L0, "L1": self.L1}
+
+
+class GESO(PIO):
+    """Generalized extended state observer (Li, Yang, Chen and Chen 2012; Chen-Gao-Lin's [27]).
+
+    The GESO is the Luenberger observer of the system augmented with the
+    disturbance as an extended state, ``d(k+1) = d(k)``, which is the
+    :class:`PIO`'s realisation; it is defined by its gain (the
+    eigenvalues of the augmented error dynamics) and does not need
+    Chen-Gao-Lin's Assumption 1. Chen-Gao-Lin's Example 5 (Figs. 10-11) places
+    all ``n + q`` eigenvalues at one value ``omega``; with a single output the
+    gain is then unique (Ackermann's formula). With ``l`` independent outputs a pole
+    can be placed at most ``l`` times (pole placement's limit; a :class:`DesignError`
+    says so): give ``poles`` instead.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system.
+    omega : float
+        The common eigenvalue of the ``n + q`` error poles (default 0.3, the paper's
+        Fig. 10), in ``[0, 1)``.
+    poles : sequence of complex, optional
+        All ``n + q`` error poles instead of ``omega``.
+    information : {"predicted", "filtered"}
+        See :class:`PIO`.
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+    """
+
+    name = "GESO"
+
+    def __init__(self, sys: LinearSystem, omega: float = 0.3, *,
+                 poles: Sequence[complex] | None = None, information: str = "predicted",
+                 disturbance_inputs: DisturbanceInputs = None) -> None:
+        if poles is None:
+            if not 0.0 <= float(omega) < 1.0:
+                raise DesignError(f"omega must lie in [0, 1), got {omega}", "poles")
+            s = require_system(sys, disturbance_inputs=disturbance_inputs)
+            poles = [float(omega)] * (s.n + s.q)
+        super().__init__(sys, poles=poles, information=information,
+                         disturbance_inputs=disturbance_inputs)
 
 
 class ModularObserver(StateSpaceObserver):

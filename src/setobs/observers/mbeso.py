@@ -1,4 +1,5 @@
-"""Model-based extended state observers (Chen-Gao-Lin): MB-ESO (16) and variant MB-ESO (20)-(22)."""
+"""Model-based extended state observers (Chen-Gao-Lin): MB-ESO (16), variant MB-ESO (20)-(22),
+the error bound of Theorem 4 and the per-channel EHGSO baseline of their Example 4."""
 
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ from scipy.linalg import block_diag, lstsq
 from .._format import format_complex_list
 from ..analysis import invariant_zeros, relative_degrees
 from ..systems import DisturbanceInputs, LinearSystem
+from ._gains import place_gain
 from .base import DesignError, StateSpaceObserver
 
-__all__ = ["MBESO", "VariantMBESO", "decoupled_gain", "mbeso_impulse_response"]
+__all__ = ["EHGSO", "MBESO", "VariantMBESO", "decoupled_gain", "mbeso_error_bound",
+           "mbeso_impulse_response", "mbeso_l1_norm"]
 
 
 def mbeso_impulse_response(k: int, r: int, omega: float) -> float:
@@ -40,6 +43,64 @@ def mbeso_impulse_response(k: int, r: int, omega: float) -> float:
             prod *= k + j
         total += prod / factorial(i - 1) * (1 - omega) ** (i - 1) * omega ** (k - i)
     return total
+
+
+def mbeso_l1_norm(r: int, omega: float) -> float:
+    """``||h_i||_L1 = sum_k h_i(k) = (r_i + 1) / (1 - omega_i)``: the L1 norm of eq. (54).
+
+    Chen-Gao-Lin, Theorem 4(iv), prove this sum finite by a ratio test, eqs.
+    (65)-(68). Its value follows from eq. (62) at ``z = 1`` (``h_i >= 0``, so the
+    L1 norm is the DC gain): ``sum_iota (1 - omega)^(iota-1) / (1 - omega)^iota``
+    over ``iota = 1..r+1``.
+
+    Parameters
+    ----------
+    r : int
+        Relative degree ``r_i`` of the channel.
+    omega : float
+        Observer eigenvalue ``omega_i`` of the channel (in ``[0, 1)``).
+
+    Examples
+    --------
+    >>> mbeso_l1_norm(2, 0.0), mbeso_l1_norm(2, 0.5)
+    (3.0, 6.0)
+    """
+    if not 0.0 <= omega < 1.0:
+        raise ValueError(f"omega must lie in [0, 1), got {omega}")
+    return (int(r) + 1) / (1.0 - float(omega))
+
+
+def mbeso_error_bound(degrees: Sequence[int], omega: float | Sequence[float],
+                      increment_bound: float | Sequence[float]) -> NDArray[np.float64]:
+    """Bound on ``|f_i(k) - f_hat_i(k)|`` of the MB-ESO (16) for ``|Delta f_i| <= delta_i``.
+
+    By eq. (53) the error is ``h_i * Delta f_i``, so (Theorem 4(iv), Remark 5)
+    ``|f_i - f_hat_i| <= ||h_i||_L1 delta_i = (r_i + 1) delta_i / (1 - omega_i)``
+    (:func:`mbeso_l1_norm`). The bound is attained: a ramp ``Delta f_i = delta_i``
+    drives the error to it. It holds once the initial error has been absorbed (the
+    initial error counts as the increment ``Delta f(-1) = f(0) - f_hat(0)``).
+
+    Parameters
+    ----------
+    degrees : sequence of int
+        Relative degrees ``r_i``.
+    omega : float or sequence of float
+        Observer eigenvalues ``omega_i``.
+    increment_bound : float or sequence of float
+        ``delta_i >= sup_k |Delta f_i(k)|``.
+
+    Returns
+    -------
+    ndarray, shape (p,)
+        The per-channel bounds.
+    """
+    p = len(degrees)
+    om = _omegas(omega, p)
+    delta = np.broadcast_to(np.asarray(increment_bound, float), (p,))
+    if np.any(delta < 0) or not np.all(np.isfinite(delta)):
+        raise ValueError(f"increment_bound must be finite and nonnegative, got {delta}")
+    return np.array([mbeso_l1_norm(r, w) * d for r, w, d in zip(degrees, om, delta,
+                                                                   strict=True)])
 
 
 def decoupled_gain(A: NDArray[np.float64], E: NDArray[np.float64], C: NDArray[np.float64],
@@ -123,6 +184,24 @@ def _omegas(omega: float | Sequence[float], p: int) -> list[float]:
     return om
 
 
+def _bandwidth_omega(sys: LinearSystem, omega, bandwidth):
+    """``omega = exp(-bandwidth dt)``: a continuous-time bandwidth (rad/s) as the discrete
+    eigenvalue (the conversion of Chen-Gao-Lin's Fig. 6)."""
+    if bandwidth is None:
+        return omega
+    if np.any(np.asarray(omega, float) != 0.0):
+        raise DesignError("give omega (discrete eigenvalues) or bandwidth (rad/s), not both",
+                          "omega")
+    if sys.dt is None:
+        raise DesignError("bandwidth (rad/s) needs the system's sampling time dt", "dt")
+    bw = np.asarray(bandwidth, float)
+    if np.any(bw <= 0) or not np.all(np.isfinite(bw)):
+        raise DesignError(f"bandwidth must be positive and finite (rad/s), got {bandwidth}",
+                          "omega")
+    om = np.exp(-bw * sys.dt)
+    return float(om) if om.ndim == 0 else [float(w) for w in om]
+
+
 def _check_assumption1(sys: LinearSystem, name: str):
     if sys.q != sys.l:
         raise DesignError(f"{name} needs as many disturbances as outputs (q = {sys.q}, "
@@ -152,6 +231,9 @@ class MBESO(StateSpaceObserver):
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
+    bandwidth : float or sequence of float, optional
+        Observer bandwidth ``omega_o`` in rad/s instead of ``omega``: the eigenvalue
+        is ``exp(-bandwidth dt)`` (needs ``sys.dt``; Chen-Gao-Lin, Fig. 6).
 
     Raises
     ------
@@ -169,9 +251,11 @@ class MBESO(StateSpaceObserver):
 
     def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
                  x0: ArrayLike | None = None, d0: ArrayLike | None = None,
-                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+                 *, disturbance_inputs: DisturbanceInputs = None,
+                 bandwidth: float | Sequence[float] | None = None) -> None:
         super().__init__(sys, disturbance_inputs=disturbance_inputs)
         sys = self.sys
+        omega = _bandwidth_omega(sys, omega, bandwidth)
         rd = _check_assumption1(sys, "MB-ESO")
         if not rd.diagonal:
             raise DesignError("MB-ESO (16) needs a diagonal V0 (Theorem 2); V0 = "
@@ -222,15 +306,26 @@ class VariantMBESO(MBESO):
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances.
+    bandwidth : float or sequence of float, optional
+        Observer bandwidth in rad/s instead of ``omega`` (see :class:`MBESO`).
+
+    Notes
+    -----
+    Theorem 5 / Remark 4: the error of the scaled disturbance ``f_new = V0 f``
+    is ``h_i * Delta f_new_i`` (eq. (73)), monotone in ``omega`` and ``k``;
+    the error of ``f`` itself is ``V0^-1`` times it (eq. (69)) and need not be.
+    :meth:`scaled_estimate` returns ``V0 f_hat``.
     """
 
     name = "variant MB-ESO"
 
     def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
                  x0: ArrayLike | None = None, d0: ArrayLike | None = None,
-                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+                 *, disturbance_inputs: DisturbanceInputs = None,
+                 bandwidth: float | Sequence[float] | None = None) -> None:
         StateSpaceObserver.__init__(self, sys, disturbance_inputs=disturbance_inputs)
         sys = self.sys
+        omega = _bandwidth_omega(sys, omega, bandwidth)
         rd = _check_assumption1(sys, "variant MB-ESO")
         V0inv = np.linalg.inv(rd.V0)
         r = rd.degrees
@@ -242,3 +337,114 @@ class VariantMBESO(MBESO):
         self.V0 = rd.V0
         self.channel_delays = delays
         self.delay = int(rmax) + 1 if all(w == 0 for w in self.omegas) else 0
+
+    def scaled_estimate(self, estimate: ArrayLike) -> NDArray[np.float64]:
+        """``V0 f_hat``: the estimate of the scaled disturbance ``f_new = V0 f`` (eq. (18)).
+
+        Parameters
+        ----------
+        estimate : array_like, shape (N, q)
+            ``run(Y).estimate`` of this observer.
+
+        Returns
+        -------
+        ndarray, shape (N, q)
+            The delayed estimate of ``f_new`` of eq. (21), row by row.
+        """
+        return np.asarray(estimate, float) @ self.V0.T
+
+
+class EHGSO(StateSpaceObserver):
+    """Extended high-gain state observers, one per output channel (Chen-Gao-Lin, Example 4).
+
+    The EHGSO of Freidovich and Khalil (2008; Chen-Gao-Lin's [28]) observes a
+    single-output system in normal form ``xi_1+ = xi_2, ..., xi_r+ = phi0(x) +
+    sigma`` through the chain ``xi`` and the extended state ``sigma``; the observer
+    runs the nominal model ``phi0`` and its gains are those of the bare chain of
+    ``r + 1`` integrators (``xi_1 .. xi_r, sigma``), here with characteristic
+    polynomial ``(z - omega)^(r+1)``. Applied to a MIMO system channel by channel
+    (Chen-Gao-Lin's [41]) with all model information and measurements (their
+    Fig. 9), in the coordinates
+
+    ``xi_ij = c_i Phi^(j-1) x`` (``j = 1..r_i``), ``sigma_i = V0_i f``
+
+    (a basis under Assumption 1, where ``sum r_i = n``): channel ``i`` injects only
+    ``y_i - xi_hat_i1``, into its own chain and ``sigma_i``. The model terms
+    ``c_i Phi^(r_i) x`` are not cancelled by the gain, so the error dynamics are
+    coupled and their eigenvalues are not at ``omega`` (``error_poles``);
+    ``sigma_hat_i`` estimates ``V0_i f`` plus a state-error term. The MB-ESO's
+    gain (:func:`decoupled_gain`) differs exactly in cancelling those terms.
+    ``f_hat = V0^-1 sigma_hat``, the ``f`` part of the augmented estimate.
+
+    Parameters
+    ----------
+    sys : LinearSystem or control.StateSpace
+        The system (Assumption 1: ``q = l``, no invariant zeros).
+    omega : float or sequence of float
+        The root of each channel's chain polynomial ``(z - omega_i)^(r_i+1)``, in
+        ``[0, 1)``.
+    x0, d0 : array_like, optional
+        Initial state and disturbance estimates (default zero).
+    disturbance_inputs : sequence of int or str, optional
+        When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
+        names) that are disturbances.
+
+    Attributes
+    ----------
+    error_poles : ndarray
+        Eigenvalues of the coupled error dynamics ``A - L C``.
+
+    Raises
+    ------
+    DesignError
+        If Assumption 1 fails, or the channel designs are unstable once coupled
+        (on Chen-Gao-Lin's Example 4: for ``omega`` below 0.4 or above 0.6).
+    """
+
+    name = "EHGSO"
+
+    def __init__(self, sys: LinearSystem, omega: float | Sequence[float] = 0.0,
+                 x0: ArrayLike | None = None, d0: ArrayLike | None = None,
+                 *, disturbance_inputs: DisturbanceInputs = None) -> None:
+        super().__init__(sys, disturbance_inputs=disturbance_inputs)
+        sys = self.sys
+        rd = _check_assumption1(sys, "EHGSO")
+        n, q = sys.n, sys.q
+        om = _omegas(omega, q)
+        A = np.block([[sys.Phi, sys.G], [np.zeros((q, n)), np.eye(q)]])
+        C = np.hstack([sys.Xi, np.zeros((q, q))])
+        # normal-form coordinates z = T [x; f], channel by channel (xi_i1..xi_ir_i, sigma_i)
+        T = np.zeros((n + q, n + q))
+        blocks, row = [], 0
+        for i, r in enumerate(rd.degrees):
+            for j in range(r):
+                T[row + j, :n] = sys.Xi[i] @ np.linalg.matrix_power(sys.Phi, j)
+            T[row + r, n:] = rd.V0[i]
+            blocks.append((row, r + 1))
+            row += r + 1
+        if row != n + q or np.linalg.matrix_rank(T) < n + q:
+            raise DesignError("the normal-form coordinates of the channels are not a basis "
+                              "(Assumption 1)", "Assumption 1")
+        Tinv = np.linalg.inv(T)
+        Lz = np.zeros((n + q, q))
+        for i, (o, m) in enumerate(blocks):
+            chain = np.eye(m, k=1)  # xi_1 -> ... -> xi_r -> sigma, sigma+ = sigma
+            chain[-1, -1] = 1.0
+            e1 = np.eye(1, m)
+            Lz[o : o + m, i] = place_gain(chain, e1, [om[i]] * m)[:, 0]
+        L = Tinv @ Lz
+        self.L, self.omegas, self.degrees, self.V0 = L, om, tuple(rd.degrees), rd.V0
+        self.error_poles = np.linalg.eigvals(A - L @ C)
+        rho = float(np.abs(self.error_poles).max())
+        if rho >= 1.0:
+            raise DesignError(f"the per-channel EHGSO designs are unstable once coupled "
+                              f"(spectral radius {rho:.4g})", "stable gains")
+        xi0 = np.concatenate([np.zeros(n) if x0 is None else np.asarray(x0, float),
+                              np.zeros(q) if d0 is None else np.asarray(d0, float)])
+        self._init_state_space(A - L @ C, L, np.vstack([sys.Gamma, np.zeros((q, sys.p))]),
+                               np.hstack([np.zeros((q, n)), np.eye(q)]),
+                               np.hstack([np.eye(n), np.zeros((n, q))]), xi0)
+
+    @property
+    def gains(self) -> dict:
+        return {"L": self.L}

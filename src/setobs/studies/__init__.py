@@ -11,7 +11,14 @@ from .campaign import (
     run_one,
 )
 from .sampling import ErrorOrders, error_orders
-from .scenarios import EXAMPLE_SYSTEMS, GENERATORS, Scenario, Trajectory, rng_for_run
+from .scenarios import (
+    EXAMPLE_SYSTEMS,
+    GENERATORS,
+    Scenario,
+    Trajectory,
+    band_limited_noise,
+    rng_for_run,
+)
 
 __all__ = [
     "EXAMPLE_SYSTEMS",
@@ -25,6 +32,7 @@ __all__ = [
     "PoleSweep",
     "Scenario",
     "Trajectory",
+    "band_limited_noise",
     "cluster_poles",
     "error_orders",
     "kalman_baseline",

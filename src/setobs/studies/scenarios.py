@@ -16,7 +16,8 @@ from ..exceptions import DimensionError
 from ..geometry import ConstrainedZonotope
 from ..systems import LinearSystem
 
-__all__ = ["EXAMPLE_SYSTEMS", "GENERATORS", "Scenario", "Trajectory", "rng_for_run"]
+__all__ = ["EXAMPLE_SYSTEMS", "GENERATORS", "Scenario", "Trajectory", "band_limited_noise",
+           "rng_for_run"]
 
 #: Example systems by name (used by configuration files and the command line).
 EXAMPLE_SYSTEMS: dict[str, Callable[[], LinearSystem]] = {
@@ -46,6 +47,41 @@ def rng_for_run(base_seed: int, run: int) -> np.random.Generator:
         The run index.
     """
     return np.random.default_rng(np.random.SeedSequence(base_seed, spawn_key=(int(run),)))
+
+
+def band_limited_noise(power: float | Any, dt: float, size: int,
+                       rng: np.random.Generator) -> NDArray[np.float64]:
+    """Samples of Simulink's *Band-Limited White Noise* block held at the sampling time.
+
+    The block draws Gaussian samples of variance ``power / dt`` (``power`` is the
+    height of the power spectral density, ``dt`` the block's sample time), so that
+    the sampled sequence has the PSD of continuous white noise of that power. This
+    is how Chen-Gao-Lin's Example 2 specifies its measurement noise (powers
+    ``2e-8`` and ``2e-1``); at ``dt = 1 ms`` the second output's standard deviation
+    is ``sqrt(0.2 / 0.001) ~ 14``.
+
+    Parameters
+    ----------
+    power : float or array_like, shape (l,)
+        Noise power per channel (nonnegative).
+    dt : float
+        Sample time of the block (positive).
+    size : int
+        Number of samples.
+    rng : numpy.random.Generator
+        The random generator.
+
+    Returns
+    -------
+    ndarray, shape (size, l)
+        The noise samples (one column per channel; a scalar power gives one column).
+    """
+    pw = np.atleast_1d(np.asarray(power, float))
+    if pw.ndim != 1 or np.any(pw < 0) or not np.all(np.isfinite(pw)):
+        raise ValueError(f"power must be nonnegative and finite per channel, got {power!r}")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be positive, got {dt!r}")
+    return rng.standard_normal((int(size), pw.size)) * np.sqrt(pw / dt)
 
 
 @dataclass(frozen=True)
