@@ -32,7 +32,8 @@ def _designs():
     yield DelayedUIO(so.examples.chen_gao_lin_example4()), so.examples.chen_gao_lin_example4()
     yield so.observers.EHGSO(so.examples.chen_gao_lin_example4(), 0.4), \
         so.examples.chen_gao_lin_example4()
-    yield so.observers.GESO(so.examples.chen_gao_lin_example5()), so.examples.chen_gao_lin_example5()
+    ex5 = so.examples.chen_gao_lin_example5()
+    yield so.observers.GESO(ex5), ex5
 
 
 def test_gains_hold_only_gains_on_the_measurements():

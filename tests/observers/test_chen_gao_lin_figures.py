@@ -341,3 +341,14 @@ def test_theorem3_necessity_variant_with_nonzero_eigenvalues():
     assert np.abs(VariantMBESO(sys, omega=0.3).run(Y).estimate[k] - F[k - 5]).max() > 0.1
     with pytest.raises(DesignError, match="Assumption 1"):
         VariantMBESO(so.examples.chen_gao_lin_example5((0.8, 0.4)))
+
+
+def test_bound_helpers_refuse_bad_input():
+    with pytest.raises(ValueError, match="omega"):
+        mbeso_l1_norm(2, 1.0)
+    with pytest.raises(ValueError, match="increment_bound"):
+        mbeso_error_bound((2, 2), 0.5, -1.0)
+    with pytest.raises(DesignError, match="omega"):
+        mbeso_error_bound((2, 2), [0.5], 1.0)
+    with pytest.raises(DesignError, match="bandwidth must be positive"):
+        MBESO(so.examples.chen_gao_lin_example2("1ms"), bandwidth=-40.0)
