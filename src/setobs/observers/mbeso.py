@@ -214,7 +214,22 @@ def _check_assumption1(sys: LinearSystem, name: str):
     return relative_degrees(sys)
 
 
-class MBESO(StateSpaceObserver):
+class _ExtendedStateObserver(StateSpaceObserver):
+    """A Luenberger observer of the extended state ``X = [x; f]`` (MB-ESO, EHGSO)."""
+
+    def _init_extended(self, A, L, C, B, x0, d0, channel_delays=None,
+                       output_map=None) -> None:
+        """Realise ``X_hat+ = (A - L C) X_hat + L y + B u``, ``d_hat`` the ``f`` part of
+        ``X_hat``, from ``[x0; d0]``."""
+        n, q = self.sys.n, self.sys.q
+        xi0 = np.concatenate([np.zeros(n) if x0 is None else np.asarray(x0, float),
+                              np.zeros(q) if d0 is None else np.asarray(d0, float)])
+        self._init_state_space(A - L @ C, L, B, np.hstack([np.zeros((q, n)), np.eye(q)]),
+                               np.hstack([np.eye(n), np.zeros((n, q))]), xi0, channel_delays,
+                               output_map)
+
+
+class MBESO(_ExtendedStateObserver):
     """MB-ESO of Chen-Gao-Lin, eq. (16): Luenberger observer of the augmented system (14).
 
     ``X_hat(k+1) = A X_hat(k) + B u(k) + L (y(k) - C X_hat(k))`` with the
@@ -275,11 +290,7 @@ class MBESO(StateSpaceObserver):
                               "decoupling")
         self.L, self.omegas, self.degrees, self.V0 = L, omegas, tuple(degrees), V0
         self.residual = res
-        xi0 = np.concatenate([np.zeros(n) if x0 is None else np.asarray(x0, float),
-                              np.zeros(q) if d0 is None else np.asarray(d0, float)])
-        self._init_state_space(A - L @ C, L, B, np.hstack([np.zeros((q, n)), np.eye(q)]),
-                               np.hstack([np.eye(n), np.zeros((n, q))]), xi0, channel_delays,
-                               output_map)
+        self._init_extended(A, L, C, B, x0, d0, channel_delays, output_map)
 
     @property
     def gains(self) -> dict:
@@ -354,7 +365,7 @@ class VariantMBESO(MBESO):
         return np.asarray(estimate, float) @ self.V0.T
 
 
-class EHGSO(StateSpaceObserver):
+class EHGSO(_ExtendedStateObserver):
     """Extended high-gain state observers, one per output channel (Chen-Gao-Lin, Example 4).
 
     The EHGSO of Freidovich and Khalil (2008; Chen-Gao-Lin's [28]) observes a
@@ -411,8 +422,8 @@ class EHGSO(StateSpaceObserver):
         rd = _check_assumption1(sys, "EHGSO")
         n, q = sys.n, sys.q
         om = _omegas(omega, q)
-        A = np.block([[sys.Phi, sys.G], [np.zeros((q, n)), np.eye(q)]])
-        C = np.hstack([sys.Xi, np.zeros((q, q))])
+        a = sys.augmented()
+        A, C = a.A, a.C
         # normal-form coordinates z = T [x; f], channel by channel (xi_i1..xi_ir_i, sigma_i)
         T = np.zeros((n + q, n + q))
         blocks, row = [], 0
@@ -439,11 +450,7 @@ class EHGSO(StateSpaceObserver):
         if rho >= 1.0:
             raise DesignError(f"the per-channel EHGSO designs are unstable once coupled "
                               f"(spectral radius {rho:.4g})", "stable gains")
-        xi0 = np.concatenate([np.zeros(n) if x0 is None else np.asarray(x0, float),
-                              np.zeros(q) if d0 is None else np.asarray(d0, float)])
-        self._init_state_space(A - L @ C, L, np.vstack([sys.Gamma, np.zeros((q, sys.p))]),
-                               np.hstack([np.zeros((q, n)), np.eye(q)]),
-                               np.hstack([np.eye(n), np.zeros((n, q))]), xi0)
+        self._init_extended(A, L, C, a.Gamma, x0, d0)
 
     @property
     def gains(self) -> dict:
