@@ -3,7 +3,8 @@
 Copies the notebook into a fresh temporary directory (so its resumable campaigns
 start from nothing), sets ``FULL = True`` in its first code cell, executes it in a
 Jupyter kernel (nbclient) and records the wall time of every code cell and the
-total. The notebook budget is the test suite's cell timeout (600 s per cell).
+total, with what each cell printed (the full-size numbers the README quotes). The
+notebook budget is the test suite's cell timeout (600 s per cell).
 
 Writes ``benchmarks/results/notebook_<stem>_full.json``.
 
@@ -52,8 +53,10 @@ def main() -> None:
                 t0 = time.perf_counter()
                 client.execute_cell(cell, i)
                 first_line = cell.source.splitlines()[0] if cell.source else ""
+                printed = "".join(o.get("text", "") for o in cell.get("outputs", [])
+                                  if o.get("output_type") == "stream")
                 cells.append({"cell": i, "seconds": round(time.perf_counter() - t0, 2),
-                              "first_line": first_line[:80]})
+                              "first_line": first_line[:80], "printed": printed.splitlines()})
                 print(f"cell {i:3d}: {cells[-1]['seconds']:8.1f} s  {first_line[:60]}",
                       flush=True)
         total = time.perf_counter() - t_all
