@@ -25,6 +25,7 @@ from __future__ import annotations
 
 __all__ = [
     "CALIBRATION_ATOL",
+    "CALIBRATION_CHECK_TOL",
     "CALIBRATION_RTOL",
     "CONTAINMENT_RTOL",
     "DATA_RTOL",
@@ -190,9 +191,14 @@ CONTAINMENT_RTOL: float = 1e-9
 # ---- noise calibration (setobs.setmembership.calibrate)
 #: Relative margin added to the LP optimum in the recommended bound (outward).
 CALIBRATION_RTOL: float = 1e-6
-#: Absolute margin (data units) added to the recommended bound: HiGHS's primal
-#: feasibility tolerance, by which its optimum may undercut the true minimum.
-CALIBRATION_ATOL: float = 1e-7
+#: Margin added to the recommended bound, relative to the record's spread (the
+#: largest deviation of an output from the record's equilibrium): the accuracy of
+#: the interior-point solve on the centred, scaled LP (tolerances 1e-10), by which
+#: its optimum may undercut the true minimum. A noise-free record gets this, not 0.
+CALIBRATION_ATOL: float = 1e-9
+#: A solver's answer to the calibration LP is accepted when no row of the centred,
+#: scaled LP is violated by more than this times ``1 + max |variable|``.
+CALIBRATION_CHECK_TOL: float = 1e-7
 
 # ---- nonlinear modular observer (setobs.nonlinear, setobs.analysis.modular)
 #: Largest ``|f(0, 0)|``, ``|s(0)|``, ``|h(0, 0)|`` accepted as an equilibrium at

@@ -404,7 +404,10 @@ class FactorPolytope:
     # -- model construction ------------------------------------------------
     @staticmethod
     def new_highs() -> highspy.Highs:
-        hs = highspy.Highs()
+        # highspy's Python class (1.8+) registers its logging callback in __init__,
+        # and HiGHS prints its banner on stdout right there, before any option can
+        # be set; the compiled class underneath prints nothing and is all we use.
+        hs = getattr(highspy, "_Highs", highspy.Highs)()
         hs.setOptionValue("output_flag", False)
         hs.setOptionValue("presolve", "off")
         hs.setOptionValue("threads", 1)

@@ -10,13 +10,15 @@ for given increment and process-noise boxes exactly when some trajectory
 ``(x_k, d_k)`` satisfies all these (in)equalities: a linear feasibility problem
 in ``(x, d)``. The smallest consistent noise scale ``alpha`` (or per-channel
 radii) is therefore one linear program over the whole record, sparse and
-banded, solved by HiGHS. This is the same consistency the exact SMFDO decides
+banded, solved on centred, scaled data by an interior-point method (Clarabel)
+with checked answers and a fallback chain. This is the same consistency the exact SMFDO decides
 step by step (its set becomes empty exactly when no trajectory exists), which
 the tests check by bisection.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -25,10 +27,10 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector
-from ..exceptions import DimensionError, SolverError
+from ..exceptions import DimensionError, SolverError, SolverWarning
 from ..geometry import Box
 from ..systems import DisturbanceInputs, LinearSystem, require_system
-from ..tolerances import CALIBRATION_ATOL, CALIBRATION_RTOL
+from ..tolerances import CALIBRATION_ATOL, CALIBRATION_CHECK_TOL, CALIBRATION_RTOL
 
 __all__ = ["NoiseCalibration", "NoiseTradeoff", "calibrate_noise", "noise_tradeoff"]
 
@@ -41,9 +43,10 @@ class NoiseCalibration:
     ----------
     radii : ndarray, shape (l,)
         Recommended per-channel measurement-noise radii: the LP optimum moved
-        outward by ``CALIBRATION_RTOL`` (relative) and ``CALIBRATION_ATOL``
-        (absolute, the solver's feasibility tolerance), so that the record is
-        consistent with them.
+        outward by ``CALIBRATION_RTOL`` (relative) and ``CALIBRATION_ATOL`` times
+        the record's spread (``info["data_scale"]``, the solver's accuracy), so
+        that the record is consistent with them. A noise-free record therefore
+        gets about ``1e-9`` times its spread, not 0.
     minimal : ndarray, shape (l,)
         The LP optimum itself (the smallest consistent radii, to solver accuracy).
     scale : float or None
@@ -57,9 +60,12 @@ class NoiseCalibration:
     samples : int
         Measured samples used (rows with at least one finite entry).
     status : str
-        HiGHS's model status.
+        ``"optimal"``, or ``"almost optimal"`` when the chain's robust attempt
+        answered at reduced accuracy (then a ``SolverWarning`` is raised).
     info : dict
-        Solver details (``objective``: the LP's optimal value).
+        Solver details: ``objective`` (the LP's optimal value), ``lower_bound``
+        (the solver's dual bound on it), ``solver``, ``failed_attempts``,
+        ``data_scale`` (the record's spread, which scales ``CALIBRATION_ATOL``).
     """
 
     radii: NDArray[np.float64]
@@ -145,40 +151,71 @@ def _radii(name: str, value: Any, dim: int) -> NDArray[np.float64]:
 
 
 class _RecordLP:
-    """The LP data of one record; re-solved for several increment scales."""
+    """The LP data of one record, centred and scaled; re-solved for several increments.
+
+    Centring: the trajectory is written as ``x_k = x_bar + x~_k``, ``d_k = d_bar + d~_k``
+    with ``(x_bar, d_bar)`` the least-squares equilibrium at the record's mean input
+    and output, an exact substitution (the dynamics' right-hand side takes the
+    constant ``(Phi - I) x_bar + G d_bar``). Scaling: every datum (outputs, inputs,
+    increment and process-noise radii) is divided by ``sigma``, the largest centred
+    output, which divides the whole solution by it (the LP is homogeneous in data and
+    variables). On the heat-exchanger record of the regression suite (outputs near
+    100, noise near 2) this turns variables of size 100 into variables of size 1.
+    """
 
     def __init__(self, sys: LinearSystem, Y: NDArray, U: NDArray | None,
                  process_noise: NDArray | None) -> None:
         self.sys = sys
-        n, q = sys.n, sys.q
+        n, q, l = sys.n, sys.q, sys.l
         N = Y.shape[0]
         self.N = N
         nx = (n + q) * N
         self.nx = nx
+        # ---- outputs: residual r_k = y_k - Du u_k - Xi x_k for measured entries
+        feed = U is not None and sys.p and np.any(sys.Du != 0)
+        Yc = Y - (U[:N] @ sys.Du.T if feed else 0.0)
+        mask = np.isfinite(Yc)
+        kk, ii = np.nonzero(mask)
+        self.kk, self.ii = kk, ii
+        yout = Yc[kk, ii]
+        self.samples = int(mask.any(axis=1).sum())
+        bu = (U[:N - 1] @ sys.Gamma.T if (U is not None and N > 1)
+              else np.zeros((max(N - 1, 0), n)))
+        # ---- centring: the least-squares equilibrium at the mean input and output
+        ybar = np.array([yout[ii == i].mean() if np.any(ii == i) else 0.0 for i in range(l)])
+        ubar = bu.mean(axis=0) if N > 1 else np.zeros(n)
+        K = np.block([[sys.Phi - np.eye(n), sys.G], [sys.Xi, np.zeros((l, q))]])
+        z = np.linalg.lstsq(K, np.concatenate([-ubar, ybar]), rcond=None)[0]
+        if not np.isfinite(z).all():  # pragma: no cover - lstsq of finite data is finite
+            z = np.zeros(n + q)
+        self.x_bar, self.d_bar = z[:n], z[n:]
+        yout = yout - (sys.Xi @ self.x_bar)[ii]
+        bu = bu + ((sys.Phi - np.eye(n)) @ self.x_bar + sys.G @ self.d_bar)
+        # ---- scaling: the largest centred output (1 for a record the equilibrium explains)
+        spread = float(np.max(np.abs(yout))) if yout.size else 0.0
+        self.sigma = spread if spread > 0.0 and np.isfinite(spread) else 1.0
+        if not np.isfinite(self.sigma) or not np.isfinite(bu).all():
+            raise DimensionError("the record's outputs or inputs are too large to calibrate "
+                                 "in double precision")
+        self.yout = yout / self.sigma
+        self.bu = bu.reshape(-1) / self.sigma
+        self.w = None if process_noise is None else process_noise / self.sigma
         # x_k at columns k*(n+q) .. +n, d_k at +n .. +n+q
-        # ---- dynamics: x_{k+1} - Phi x_k - G d_k = Gamma u_k (+ w_k)
         if N > 1:
+            # ---- dynamics: x_{k+1} - Phi x_k - G d_k = Gamma u_k (+ w_k)
             base = sp.kron(sp.eye(N - 1), sp.hstack([sp.csr_matrix(-sys.Phi),
                                                       sp.csr_matrix(-sys.G)]), format="csr")
             left = sp.hstack([base, sp.csr_matrix((n * (N - 1), n + q))], format="csr")
             shift = sp.kron(sp.eye(N - 1), sp.hstack([sp.eye(n), sp.csr_matrix((n, q))]))
             right = sp.hstack([sp.csr_matrix((n * (N - 1), n + q)), shift], format="csr")
             self.Mdyn = (left + right).tocsr()
-            self.bu = (U[:N - 1] @ sys.Gamma.T).reshape(-1) if U is not None else np.zeros(
-                n * (N - 1))
             # ---- increments: d_{k+1} - d_k
             dsel = sp.kron(sp.eye(N - 1), sp.hstack([sp.csr_matrix((q, n)), sp.eye(q)]))
-            Minc = (sp.hstack([sp.csr_matrix((q * (N - 1), n + q)), dsel])
-                    - sp.hstack([dsel, sp.csr_matrix((q * (N - 1), n + q))])).tocsr()
-            self.Minc = Minc
+            self.Minc = (sp.hstack([sp.csr_matrix((q * (N - 1), n + q)), dsel])
+                         - sp.hstack([dsel, sp.csr_matrix((q * (N - 1), n + q))])).tocsr()
         else:
+            self.Mdyn = sp.csr_matrix((0, nx))
             self.Minc = sp.csr_matrix((0, nx))
-        self.w = process_noise
-        # ---- outputs: residual r_k = y_k - Du u_k - Xi x_k for measured entries
-        Yc = Y - (U[:N] @ sys.Du.T if (U is not None and sys.p) else 0.0)
-        mask = np.isfinite(Yc)
-        kk, ii = np.nonzero(mask)
-        self.kk, self.ii = kk, ii
         cols, data, rr = [], [], []
         for j in range(n):
             cols.append(kk * (n + q) + j)
@@ -186,81 +223,155 @@ class _RecordLP:
             rr.append(np.arange(kk.size))
         self.Mout = sp.csr_matrix((np.concatenate(data), (np.concatenate(rr),
                                    np.concatenate(cols))), shape=(kk.size, nx))
-        self.yout = Yc[kk, ii]
-        self.samples = int(mask.any(axis=1).sum())
 
-    def solve(self, inc: NDArray, weights: NDArray, per_channel: bool) -> _LPSolution:
-        """Minimise ``alpha`` (``|r_ki| <= alpha weights_i``) or, per channel,
-        ``sum_i s_i / weights_i`` (``|r_ki| <= s_i``).
-
-        Columns: the trajectory ``z`` (``nx``), the increments ``dd`` as bounded
-        columns (``|dd| <= inc``: bounds cost the dual simplex nothing, rows
-        would), then the noise variables; rows: dynamics (ranged with process
-        noise), ``d_(k+1) - d_k - dd_k = 0``, and two output rows per measured
-        entry. HiGHS's dual simplex with Dantzig pricing: on the 20 000-sample
-        motor record 5.8 s against 10.3 s for scipy.linprog with increment rows and
-        pricing (``benchmarks/calibration.py``).
-        """
-        import highspy
-
-        sys, N = self.sys, self.N
-        l = sys.l
-        nv = 1 if not per_channel else l
-        m = self.yout.size
-        n_dd = self.Minc.shape[0]
-        inf = highspy.kHighsInf
+    # ------------------------------------------------------------------ the LP
+    def _conic(self, inc: NDArray, weights: NDArray, per_channel: bool):
+        """The LP as ``min c^T z, A z + s = b, s in {0}^m_eq x R_+^m``: variables the
+        centred, scaled trajectory, then the noise variables ``a`` (scalar mode:
+        ``|r_ki| <= a w_i / max w``) or ``s_i`` (per channel: ``|r_ki| <= s_i``)."""
+        l, m = self.sys.l, self.yout.size
+        nv = l if per_channel else 1
+        wn = weights / np.max(weights)
         if per_channel:
             S = sp.csr_matrix((np.ones(m), (np.arange(m), self.ii)), shape=(m, l))
         else:
-            S = sp.csr_matrix(weights[self.ii].reshape(-1, 1))
-        Zo = sp.csr_matrix((m, n_dd))
-        blocks = [sp.hstack([self.Mout, Zo, S]), sp.hstack([self.Mout, Zo, -S])]
-        lo = [self.yout, np.full(m, -inf)]
-        hi = [np.full(m, inf), self.yout]
+            S = sp.csr_matrix(wn[self.ii].reshape(-1, 1))
+        Z = sp.csr_matrix
+        eq_A, eq_b, in_A, in_b = [], [], [], []
+        N = self.N
         if N > 1:
-            blocks.append(sp.hstack([self.Minc, -sp.eye(n_dd), sp.csr_matrix((n_dd, nv))]))
-            lo.append(np.zeros(n_dd))
-            hi.append(np.zeros(n_dd))
-            Mdyn, bu = self.Mdyn, self.bu
-            blocks.append(sp.hstack([Mdyn, sp.csr_matrix((Mdyn.shape[0], n_dd + nv))]))
-            rw = 0.0 if self.w is None else np.tile(self.w, N - 1)
-            lo.append(bu - rw)
-            hi.append(bu + rw)
-        A = sp.vstack(blocks).tocsc()
-        ncol = self.nx + n_dd + nv
-        c = np.zeros(ncol)
-        c[self.nx + n_dd:] = 1.0 if not per_channel else 1.0 / np.maximum(weights, 1e-300)
-        col_lo = np.full(ncol, -inf)
-        col_hi = np.full(ncol, inf)
-        r = np.tile(inc, N - 1) if N > 1 else np.zeros(0)
-        col_lo[self.nx:self.nx + n_dd], col_hi[self.nx:self.nx + n_dd] = -r, r
-        col_lo[self.nx + n_dd:] = 0.0
-        lp = highspy.HighsLp()
-        lp.num_col_, lp.num_row_ = ncol, A.shape[0]
-        lp.col_cost_, lp.col_lower_, lp.col_upper_ = c, col_lo, col_hi
-        lp.row_lower_, lp.row_upper_ = np.concatenate(lo), np.concatenate(hi)
-        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = (A.indptr, A.indices,
-                                                                          A.data)
-        h = highspy.Highs()
-        h.setOptionValue("output_flag", False)
-        h.setOptionValue("solver", "simplex")
-        h.setOptionValue("simplex_dual_edge_weight_strategy", 0)  # Dantzig pricing
-        h.passModel(lp)
-        h.run()
-        status = h.getModelStatus()
-        message = h.modelStatusToString(status)
-        if status != highspy.HighsModelStatus.kOptimal:
-            raise SolverError(f"the calibration LP failed: {message}", message)
-        x = np.asarray(h.getSolution().col_value)
-        return _LPSolution(np.concatenate([x[:self.nx], x[self.nx + n_dd:]]),
-                           float(h.getInfo().objective_function_value), message)
+            Mdyn, nd = self.Mdyn, self.Mdyn.shape[0]
+            if self.w is None or not np.any(self.w):
+                eq_A.append(sp.hstack([Mdyn, Z((nd, nv))]))
+                eq_b.append(self.bu)
+            else:
+                rw = np.tile(self.w, N - 1)
+                in_A += [sp.hstack([Mdyn, Z((nd, nv))]), sp.hstack([-Mdyn, Z((nd, nv))])]
+                in_b += [self.bu + rw, rw - self.bu]
+            ni = self.Minc.shape[0]
+            r = np.tile(inc / self.sigma, N - 1)
+            in_A += [sp.hstack([self.Minc, Z((ni, nv))]), sp.hstack([-self.Minc, Z((ni, nv))])]
+            in_b += [r, r]
+        in_A += [sp.hstack([self.Mout, -S]), sp.hstack([-self.Mout, -S]),
+                 sp.hstack([Z((nv, self.nx)), -sp.eye(nv)])]
+        in_b += [self.yout, -self.yout, np.zeros(nv)]
+        m_eq = sum(a.shape[0] for a in eq_A)
+        A = sp.vstack(eq_A + in_A, format="csc")
+        b = np.concatenate(eq_b + in_b)
+        c = np.zeros(self.nx + nv)
+        c[self.nx:] = 1.0 / wn if per_channel else 1.0
+        return A, b, c, m_eq
+
+    def solve(self, inc: NDArray, weights: NDArray, per_channel: bool,
+              time_limit: float = 120.0) -> _LPSolution:
+        """The smallest consistent noise: ``alpha`` (``|r_ki| <= alpha weights_i``) or,
+        per channel, ``s`` minimising ``sum_i s_i / weights_i`` (``|r_ki| <= s_i``).
+
+        The solver chain ends in an answer or a :class:`SolverError`, never a crash:
+        Clarabel (interior point) at tight tolerances, then Clarabel with robust
+        settings, then HiGHS's interior point through scipy. Each answer is checked
+        on the centred, scaled LP (every row within ``CALIBRATION_CHECK_TOL``, the
+        noise variables at least the largest residual of the returned trajectory)
+        before it is accepted. HiGHS's dual simplex, which this function used
+        before, segfaulted or stopped with "Not Set" on real records (the
+        heat-exchanger LP of the regression suite) and took 10-15 s on the
+        20 000-sample motor record, where Clarabel takes about 1 s.
+        """
+        A, b, c, m_eq = self._conic(inc, weights, per_channel)
+        tried = []
+        for name, attempt in _CHAIN:
+            try:
+                z, lower, status = attempt(A, b, c, m_eq, time_limit)
+            except Exception as exc:
+                tried.append(f"{name}: {type(exc).__name__}: {exc}")
+                continue
+            if z is None:
+                tried.append(f"{name}: {status}")
+                continue
+            ok, why, v = self._accept(z, A, b, m_eq, weights, per_channel)
+            if ok:
+                return _LPSolution(z[:self.nx], v, lower, status, name, tuple(tried))
+            tried.append(f"{name}: {status}, rejected: {why}")
+        raise SolverError("the calibration LP failed under every solver (" + "; ".join(tried)
+                          + "); check the record for non-finite or extreme values, or "
+                          "shorten it", "; ".join(tried))
+
+    def _accept(self, z: NDArray, A, b: NDArray, m_eq: int, weights: NDArray,
+                per_channel: bool) -> tuple[bool, str, NDArray]:
+        """Check a solver's point on the scaled LP; return the noise variables it proves."""
+        if not np.isfinite(z).all():
+            return False, "non-finite solution", z
+        res = A @ z - b
+        scale = 1.0 + np.max(np.abs(z[:self.nx]), initial=0.0)
+        viol = max(np.max(np.abs(res[:m_eq]), initial=0.0),
+                   np.max(res[m_eq:], initial=0.0))
+        if viol > CALIBRATION_CHECK_TOL * scale:
+            return False, f"constraint violation {viol:.3g}", z
+        # the noise the returned trajectory needs (outward: at least the solver's value)
+        r = np.abs(self.yout - self.Mout @ z[:self.nx])
+        wn = weights / np.max(weights)
+        if per_channel:
+            need = np.array([np.max(r[self.ii == i], initial=0.0) for i in range(self.sys.l)])
+            v = np.maximum(z[self.nx:], need)
+        else:
+            v = np.array([max(float(z[self.nx]), float(np.max(r / wn[self.ii], initial=0.0)))])
+        return True, "", np.maximum(v, 0.0)
+
+
+def _clarabel_attempt(robust: bool):
+    def attempt(A, b, c, m_eq, time_limit):
+        import clarabel
+
+        st = clarabel.DefaultSettings()
+        st.verbose = False
+        st.time_limit = float(time_limit)
+        if robust:
+            st.max_iter = 1000
+            st.static_regularization_constant = 1e-7
+            st.iterative_refinement_max_iter = 50
+            st.tol_gap_abs = st.tol_gap_rel = st.tol_feas = 1e-8
+        else:
+            st.max_iter = 300
+            st.tol_gap_abs = st.tol_gap_rel = st.tol_feas = 1e-10
+        P = sp.csc_matrix((A.shape[1], A.shape[1]))
+        cones = [clarabel.ZeroConeT(m_eq), clarabel.NonnegativeConeT(A.shape[0] - m_eq)]
+        if m_eq == 0:
+            cones = cones[1:]
+        sol = clarabel.DefaultSolver(P, c, A.tocsc(), b, cones, st).solve()
+        S = clarabel.SolverStatus
+        good = (S.Solved, S.AlmostSolved) if robust else (S.Solved,)
+        name = str(sol.status).rsplit(".", 1)[-1]
+        if sol.status not in good:
+            return None, np.nan, name
+        status = "optimal" if sol.status == S.Solved else "almost optimal"
+        return np.asarray(sol.x, dtype=float), float(sol.obj_val_dual), status
+    return attempt
+
+
+def _highs_ipm_attempt(A, b, c, m_eq, time_limit):
+    from scipy.optimize import linprog
+
+    r = linprog(c, A_ub=A[m_eq:], b_ub=b[m_eq:], A_eq=A[:m_eq] if m_eq else None,
+                b_eq=b[:m_eq] if m_eq else None, bounds=(None, None), method="highs-ipm",
+                options={"time_limit": float(time_limit), "presolve": False})
+    if r.status != 0 or r.x is None:
+        return None, np.nan, f"HiGHS status {r.status} ({r.message})"
+    lower = getattr(r, "fun", np.nan)
+    return np.asarray(r.x, dtype=float), float(lower), "optimal"
+
+
+_CHAIN = (("clarabel", _clarabel_attempt(False)),
+          ("clarabel (robust settings)", _clarabel_attempt(True)),
+          ("HiGHS interior point (scipy)", _highs_ipm_attempt))
 
 
 class _LPSolution(NamedTuple):
-    x: NDArray[np.float64]   # trajectory, then the noise variables
-    fun: float
-    message: str
+    x: NDArray[np.float64]       # the centred, scaled trajectory
+    v: NDArray[np.float64]       # the noise variables (scaled), proved by the trajectory
+    lower: float                 # the solver's dual objective (scaled; NaN if unknown)
+    status: str                  # "optimal" or "almost optimal"
+    solver: str
+    failed: tuple[str, ...]      # earlier attempts of the chain and why they were passed over
 
 
 def _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs):
@@ -294,7 +405,8 @@ def _prepare(sys, Y, U, disturbance_inputs):
 def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, *,
                     increment: Any, shape: Any = None, per_channel: bool = False,
                     process_noise: Any = None,
-                    disturbance_inputs: DisturbanceInputs = None) -> NoiseCalibration:
+                    disturbance_inputs: DisturbanceInputs = None,
+                    time_limit: float = 120.0) -> NoiseCalibration:
     """The smallest measurement-noise bound that makes a record consistent.
 
     Parameters
@@ -320,6 +432,8 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances; the others are control inputs.
+    time_limit : float
+        Seconds each solver of the chain may take (a hard limit; default 120).
 
     Returns
     -------
@@ -330,7 +444,13 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     Raises
     ------
     SolverError
-        If HiGHS does not report an optimum (never a silent answer).
+        If no solver of the chain returns a checked optimum (never a silent answer).
+
+    Warns
+    -----
+    SolverWarning
+        When the answer comes from a solve at reduced accuracy (``status`` is
+        ``"almost optimal"``): the bound is still consistent, perhaps not the smallest.
 
     Notes
     -----
@@ -339,6 +459,17 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     is empty exactly when no trajectory ``(x_k, d_k)`` explains the data within
     the sets, which is the LP's feasibility. A windowed SMFDO forgets old data
     and may accept a smaller bound.
+
+    The LP is solved on centred, scaled data (see ``_RecordLP``) by a solver chain
+    that ends in a checked answer or a :class:`SolverError` (Clarabel, then
+    Clarabel with robust settings, then HiGHS's interior point); ``info`` names
+    the solver, the dual lower bound and the attempts passed over.
+
+    The recommended ``radii`` are ``minimal (1 + CALIBRATION_RTOL) +
+    CALIBRATION_ATOL * spread``, with ``spread`` the largest deviation of a
+    measured output from the record's equilibrium (``info["data_scale"]``): a
+    record that the model explains exactly (no noise at all) gets radii of about
+    ``1e-9 spread``, not 0 -- the solver's accuracy, not a noise level.
 
     Examples
     --------
@@ -349,22 +480,40 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     0.5
     """
     sys, lp, inc, r_v = _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs)
-    res = lp.solve(inc, r_v, per_channel)
+    limit = _time_limit(time_limit)
+    res = lp.solve(inc, r_v, per_channel, limit)
+    wmax = float(np.max(r_v))
     if per_channel:
-        minimal = np.maximum(res.x[lp.nx:], 0.0)
+        minimal = res.v * lp.sigma
         scale = None
     else:
-        scale = max(float(res.x[lp.nx]), 0.0)
+        scale = float(res.v[0]) * lp.sigma / wmax
         minimal = scale * r_v
-    pad = CALIBRATION_RTOL * minimal + CALIBRATION_ATOL
-    resid = np.abs(lp.yout - lp.Mout @ res.x[:lp.nx])
+    pad = CALIBRATION_RTOL * minimal + CALIBRATION_ATOL * lp.sigma
+    resid = np.abs(lp.yout - lp.Mout @ res.x)
     worst = np.zeros(sys.l, dtype=np.int64)
     for i in range(sys.l):
         sel = lp.ii == i
         if sel.any():
             worst[i] = int(lp.kk[sel][np.argmax(resid[sel])])
+    lower = res.lower * lp.sigma / (1.0 if per_channel else wmax)
+    info = {"objective": float(np.sum(minimal / r_v)) if per_channel else scale,
+            "lower_bound": float(lower), "solver": res.solver, "failed_attempts": res.failed,
+            "data_scale": lp.sigma}
+    if res.status != "optimal":
+        warnings.warn(f"calibrate_noise: {res.solver} returned an inaccurate optimum "
+                      f"({res.status}); the bound is checked against the returned trajectory "
+                      "and stays consistent, but may not be the smallest", SolverWarning,
+                      stacklevel=2)
     return NoiseCalibration(minimal + pad, minimal, scale, inc, worst, lp.samples,
-                            str(res.message), {"objective": float(res.fun)})
+                            res.status, info)
+
+
+def _time_limit(value: float) -> float:
+    t = float(value)
+    if not (t > 0.0):
+        raise DimensionError(f"time_limit must be positive (seconds), got {value!r}")
+    return t
 
 
 def noise_tradeoff(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, *,
@@ -403,5 +552,13 @@ def noise_tradeoff(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, 
     b = np.logspace(-3, 3, 13) if betas is None else np.asarray(betas, dtype=float).reshape(-1)
     if b.size == 0 or (b < 0).any() or not np.isfinite(b).all():
         raise DimensionError(f"betas must be finite and nonnegative, got {b}")
-    alpha = np.array([max(float(lp.solve(beta * inc, r_v, False).x[lp.nx]), 0.0) for beta in b])
+    wmax = float(np.max(r_v))
+    order = np.argsort(b, kind="stable")
+    alpha = np.empty(b.size)
+    alpha[order] = [float(lp.solve(beta * inc, r_v, False).v[0]) * lp.sigma / wmax
+                    for beta in b[order]]
+    # A trajectory consistent at one increment scale is consistent at every larger one,
+    # so the running minimum over increasing beta is still a proved consistent noise
+    # level; it removes the solver-accuracy wiggle where the true curve is flat at 0.
+    alpha[order] = np.minimum.accumulate(alpha[order])
     return NoiseTradeoff(b, alpha, inc, r_v, tuple(sys.output_names))
