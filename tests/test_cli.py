@@ -231,16 +231,81 @@ def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
     noise = float(text.split("calibrated noise: theta ")[1].split()[0])
     assert 0 < noise <= 2e-4 * (1 + 1e-6) + 1e-7
     assert "first inconsistent step: none" in text
-    assert main([*args, "--noise", "1e-6", "--out", str(tmp_path / "b")]) == 0
-    summary = json.loads((tmp_path / "b" / "summary.json").read_text())
-    assert summary["first_inconsistent_step"] is not None
-    assert summary["statuses"].get("skipped", 0) > 0
+    # too small a bound: by default the run stops at the first inconsistent sample,
+    # exit 1, with the step, its time and what to do (it used to skip silently)
+    assert main([*args, "--noise", "1e-6", "--out", str(tmp_path / "b")]) == 1
+    err = capsys.readouterr().err
+    step = int(err.split("at step ")[1].split()[0])
+    assert f"(t = {step * 1e-3:g} s)" in err
+    assert "--calibrate" in err and "--on-inconsistent skip" in err
+    assert not (tmp_path / "b" / "summary.json").exists()
+    # skipping is explicit, and a run that skips more than 1 % says so on stderr
+    assert main([*args, "--noise", "1e-6", "--on-inconsistent", "skip",
+                 "--out", str(tmp_path / "c")]) == 0
+    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    assert summary["first_inconsistent_step"] == step
+    skipped = summary["statuses"].get("skipped", 0)
+    assert skipped > 0.01 * 400
+    err = capsys.readouterr().err
+    assert f"warning: {skipped} of 400 samples" in err and "--calibrate" in err
+
+
+def test_estimate_help_states_the_inconsistency_policy(capsys):
+    with pytest.raises(SystemExit):
+        main(["estimate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "'raise' (default) stops at the first one with exit code 1" in text
+    assert "'skip' drops such samples" in text and "'reset' restarts" in text
+
+
+def test_estimate_takes_the_time_axis_from_the_models_Ts(tmp_path, capsys):
+    """A record without a time column and no --dt: the model file's Ts gives the
+    time axis (CSV, summary, plot); without any sampling time the CSV has steps."""
+    import pandas as pd
+
+    rec, _ = _motor_record(tmp_path, N=60)
+    raw = np.loadtxt(rec, delimiter=",", skiprows=1)
+    notime = tmp_path / "notime.csv"
+    np.savetxt(notime, raw[:, 1:], delimiter=",", header="theta,tau", comments="")
+    sys_ = so.examples.servo_motor()
+    model = tmp_path / "d.yaml"
+    model.write_text(yaml.safe_dump({"Phi": sys_.Phi.tolist(), "G": sys_.G.tolist(),
+                                     "Xi": sys_.Xi.tolist(), "Gamma": sys_.Gamma.tolist(),
+                                     "Ts": 1e-3}))
+    args = ["estimate", str(notime), "--model", str(model), "--outputs", "theta",
+            "--inputs", "tau", "--increment", "1e-3", "--noise", "1e-4", "--no-progress",
+            "--unit", "N m"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    df = pd.read_csv(tmp_path / "a" / "estimate.csv")
+    np.testing.assert_allclose(df["time"], np.arange(60) * 1e-3, rtol=0, atol=1e-15)
+    assert json.loads((tmp_path / "a" / "summary.json").read_text())["sampling_time"] == 0.001
+    no_ts = tmp_path / "n.yaml"
+    no_ts.write_text(yaml.safe_dump({"Phi": sys_.Phi.tolist(), "G": sys_.G.tolist(),
+                                     "Xi": sys_.Xi.tolist(), "Gamma": sys_.Gamma.tolist()}))
+    args[args.index(str(model))] = str(no_ts)
+    assert main([*args, "--out", str(tmp_path / "b"), "--no-plot"]) == 0
+    df = pd.read_csv(tmp_path / "b" / "estimate.csv")
+    assert "time" not in df.columns and list(df["step"]) == list(range(60))
+    assert json.loads((tmp_path / "b" / "summary.json").read_text())["sampling_time"] is None
+
+
+def test_sampling_time_from_a_time_column_is_rounded(tmp_path):
+    """Steps of a time column printed in ms average to 0.0009999999999998899 in
+    floating point; the record's sampling time is 0.001."""
+    from setobs.io import load_record
+
+    t = np.arange(2000) * 1e-3 + 0.123456789
+    f = tmp_path / "r.csv"
+    np.savetxt(f, np.column_stack([t, np.sin(t)]), delimiter=",", header="t,y", comments="")
+    rec = load_record(f, outputs="y", time="t")
+    assert rec.dt == 0.001
 
 
 @pytest.mark.parametrize(("extra", "match"), [
     (["--outputs", "nope"], "no column 'nope'"),
     (["--outputs", "theta", "--increment", "-1"], "--increment must be finite and nonneg"),
-    (["--outputs", "theta", "--increment", "1,2"], "--increment needs 1 or 1 values"),
+    (["--outputs", "theta", "--increment", "1,2"],
+     "--increment needs one value (the model has one channel), got 2"),
     (["--outputs", "theta", "--window", "ten"], "--window must be an integer"),
     (["--outputs", "theta,t"], "the model has 1 output(s), the record 2"),
     (["--outputs", "theta", "--no-inputs"], "name the input columns with --inputs"),

@@ -19,7 +19,7 @@ def test_notebook_runs(path):
         # the real record stays outside the repository; CI has it and says so
         if os.environ.get("SETOBS_REQUIRE_DATA") == "1":
             pytest.fail("SETOBS_REQUIRE_DATA=1 but the HSM150 record was not found "
-                        "($SETOBS_DATA, ../shared/data, /work/shared/data)")
+                        "($SETOBS_DATA, <repo>/../shared/data)")
         pytest.skip("the HSM150 record is not available here")
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")

@@ -84,10 +84,15 @@ def optional_import(name: str, *, extra: str, feature: str) -> types.ModuleType:
         return importlib.import_module(name)
     except ImportError as exc:
         top = name.split(".")[0]
+        dist = _DISTRIBUTIONS.get(top, top)
         raise ImportError(
             f"{feature} needs the optional package {top!r}, which is not installed: "
-            f'pip install "setobs[{extra}]" (or pip install {top})'
+            f'pip install "setobs[{extra}]" (or pip install {dist})'
         ) from exc
+
+
+#: Import names whose distribution on the package index has another name.
+_DISTRIBUTIONS = {"yaml": "pyyaml"}
 
 
 class _NoBar:

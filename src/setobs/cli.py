@@ -152,8 +152,21 @@ def _per_channel(name: str, vals: list[float], dim: int) -> np.ndarray:
     if len(vals) == 1:
         return np.full(dim, vals[0])
     if len(vals) != dim:
-        raise CLIError(f"{name} needs 1 or {dim} values, got {len(vals)}")
+        raise CLIError(f"{name} needs one value" + (f" or {dim} (one per channel)" if dim > 1
+                                                    else " (the model has one channel)")
+                       + f", got {len(vals)}")
     return np.asarray(vals)
+
+
+#: Exit code of ``setobs estimate`` when the record contradicts the model.
+EXIT_INCONSISTENT = 1
+#: A run that skips more than this fraction of its samples says so on stderr.
+SKIP_WARN_FRACTION = 0.01
+
+
+def _round_time(x: float) -> float:
+    """A time or sampling time at 12 significant digits (0.0009999999999998899 -> 0.001)."""
+    return float(f"{x:.12g}")
 
 
 def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None,
@@ -161,16 +174,30 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
              variable: str | None = None, decimate: int = 1, increment: str,
              noise: str | None = None, calibrate: bool = False, window: int | None = 10,
              out: str | None = None, plot: bool = True, progress: bool | None = None,
-             on_inconsistent: str = "skip") -> int:
-    """Certified disturbance bounds from a measured record (CSV + plot + summary)."""
+             on_inconsistent: str = "raise", unit: str | None = None) -> int:
+    """Certified disturbance bounds from a measured record (CSV + plot + summary).
+
+    The record's time axis comes from its time column, else ``dt``, else the model
+    file's ``Ts``; without any of them it is the sample index. With
+    ``on_inconsistent="raise"`` (the default) the first sample the model cannot
+    explain stops the run: one message on stderr with the step, its time and what
+    to do, exit code 1 (:data:`EXIT_INCONSISTENT`).
+    """
     import time as _time
 
+    from .exceptions import ModelInvalidatedError
     from .io import load_model, load_record
     from .setmembership import SMFDO, calibrate_noise
 
     rec = load_record(record, outputs=outputs, inputs=inputs, time=time_col, dt=dt,
                       variable=variable, decimate=decimate)
     sys_ = load_model(model, dt=rec.dt)
+    if rec.dt is None and sys_.dt is not None:
+        # no time column and no --dt: the model's sampling time gives the time axis
+        import dataclasses
+
+        rec = dataclasses.replace(rec, t=np.arange(rec.Y.shape[0]) * sys_.dt, dt=sys_.dt)
+    times_known = rec.dt is not None
     if rec.Y.shape[1] != sys_.l:
         raise CLIError(f"the model has {sys_.l} output(s), the record {rec.Y.shape[1]} "
                        f"(--outputs {outputs})")
@@ -209,30 +236,52 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
 
     from .setmembership import ModelInvalidatedWarning
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ModelInvalidatedWarning)
-        res = obs.run(rec.Y, rec.U, progress=show)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ModelInvalidatedWarning)
+            res = obs.run(rec.Y, rec.U, progress=show)
+    except ModelInvalidatedError as exc:
+        k = exc.step
+        when = f" (t = {_round_time(float(rec.t[k])):g} s)" if times_known else ""
+        print(f"setobs: the record is inconsistent with the model at step {k}{when}: no "
+              f"trajectory within the bounds explains it. What to do: --calibrate (the "
+              f"smallest noise bound that explains the record), a larger --noise or "
+              f"--increment, or --on-inconsistent skip (drop such samples) or reset "
+              f"(restart there, losing the guarantee at that step).", file=sys.stderr)
+        return EXIT_INCONSISTENT
     elapsed = _time.perf_counter() - t0
     out_dir = Path(out or Path(record).with_suffix("").name + "_estimate")
     out_dir.mkdir(parents=True, exist_ok=True)
     df = res.to_pandas(dt=rec.dt, names=sys_.disturbance_names)
-    df.insert(0, "time", rec.t[: len(df)])
+    if times_known:
+        df.insert(0, "time", np.round(rec.t[: len(df)], 12))
+    else:
+        df.insert(0, "step", np.arange(len(df)))
     df.to_csv(out_dir / "estimate.csv", index=False)
     statuses = {str(k): int(c) for k, c in zip(*np.unique(res.status, return_counts=True),
                                               strict=True)}
     first = res.first_inconsistent
+    skipped = int(np.sum(res.status == "skipped")) + int(np.sum(res.status == "reset"))
     summary = {"record": str(record), "model": str(model), "steps": int(N),
-               "sampling_time": rec.dt, "window": window, "increment": inc.tolist(),
+               "sampling_time": None if rec.dt is None else _round_time(rec.dt),
+               "window": window, "increment": inc.tolist(),
                "noise": None if v is None else np.asarray(v).tolist(),
                "calibrated": bool(calibrate), "statuses": statuses,
                "first_inconsistent_step": first,
-               "first_inconsistent_time": None if first is None else float(rec.t[first]),
+               "first_inconsistent_time": (None if first is None or not times_known
+                                           else _round_time(float(rec.t[first]))),
                "seconds": round(elapsed, 3)}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(f"steps {N}; statuses: " + ", ".join(f"{k} {c}" for k, c in statuses.items())
           + f"; first inconsistent step: {first if first is not None else 'none'}"
-          + (f" (t = {rec.t[first]:g} s)" if first is not None and rec.dt else "")
+          + (f" (t = {_round_time(rec.t[first]):g} s)" if first is not None and times_known
+             else "")
           + f"; {elapsed:.2f} s")
+    if skipped > SKIP_WARN_FRACTION * N:
+        print(f"setobs: warning: {skipped} of {N} samples ({100 * skipped / N:.1f} %) were "
+              f"{on_inconsistent + 'ped' if on_inconsistent == 'skip' else 'reset'}: the "
+              f"bounds are probably too small for this record (try --calibrate, or a larger "
+              f"--noise or --increment)", file=sys.stderr)
     written = [out_dir / "estimate.csv", out_dir / "summary.json"]
     if plot:
         import matplotlib
@@ -245,7 +294,8 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         fig, axes = plt.subplots(sys_.q, 1, figsize=(8, 2.6 * sys_.q), sharex=True,
                                  squeeze=False)
         for i in range(sys_.q):
-            plot_estimate_band(res, component=i, ax=axes[i, 0], t=rec.t)
+            plot_estimate_band(res, component=i, ax=axes[i, 0],
+                               t=rec.t if times_known else None, unit=unit)
         axes[0, 0].set_title(f"certified disturbance bounds: {Path(record).name}")
         fig.tight_layout()
         fig.savefig(out_dir / "estimate.png", dpi=110)
@@ -347,7 +397,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                      "comma-separated)")
     pe.add_argument("--inputs", help="input columns (names or indices)")
     pe.add_argument("--time", dest="time_col", help="time column (sets the sampling time)")
-    pe.add_argument("--dt", type=float, help="sampling time (without a time column)")
+    pe.add_argument("--dt", type=float, help="sampling time (without a time column; default "
+                                             "the model file's Ts)")
     pe.add_argument("--variable", help="data matrix in a .mat/.npz record")
     pe.add_argument("--decimate", type=int, default=1, help="keep every k-th sample "
                                                            "(continuous models)")
@@ -358,7 +409,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     pe.add_argument("--calibrate", action="store_true",
                     help="use the smallest noise bound that makes the record consistent")
     pe.add_argument("--window", default="10", help="SMFDO window (the paper's delta), or 'exact'")
-    pe.add_argument("--on-inconsistent", choices=["skip", "reset", "raise"], default="skip")
+    pe.add_argument("--on-inconsistent", choices=["raise", "skip", "reset"], default="raise",
+                    help="what to do with a sample the model cannot explain: 'raise' "
+                         "(default) stops at the first one with exit code 1, saying the step, "
+                         "its time and what to do; 'skip' drops such samples (a run that "
+                         "skips more than 1 %% of them says so on stderr); 'reset' restarts "
+                         "the filter there (the guarantee is lost at that step)")
+    pe.add_argument("--unit", help="unit of the disturbance, for the plot's axis (e.g. 'N m')")
     pe.add_argument("--out", help="output directory")
     pe.add_argument("--no-plot", action="store_true")
     pe.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None)
@@ -393,7 +450,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                             decimate=args.decimate, increment=args.increment,
                             noise=args.noise, calibrate=args.calibrate, window=window,
                             out=args.out, plot=not args.no_plot, progress=args.progress,
-                            on_inconsistent=args.on_inconsistent)
+                            on_inconsistent=args.on_inconsistent, unit=args.unit)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

@@ -111,7 +111,16 @@ class ModelInvalidatedError(SetobsError, RuntimeError):
         The time step ``k`` at which the measurement could not be explained.
     """
 
+    #: What a user can do about it, appended to every message.
+    HINT = ("what to do: if the sample is an outlier or a fault, it is found; if the model "
+            "and the record are right, the bounds are too small: calibrate the noise bound "
+            "(setobs.calibrate_noise, or `setobs estimate --calibrate`), use a larger "
+            "measurement_noise / increment_set, or pass on_inconsistent='skip' (drop such "
+            "samples) or 'reset' (restart, losing the guarantee at that step)")
+
     def __init__(self, message: str, step: int) -> None:
+        if self.HINT not in message:
+            message = f"{message}; {self.HINT}"
         super().__init__(message)
         self.step = step
 

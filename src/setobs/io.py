@@ -319,7 +319,9 @@ def load_record(path: str | Path, *, outputs: Any, inputs: Any = None, time: Any
                                  f"{steps.min():g} to {steps.max():g} s)")
         if dt is not None and abs(dt - med) > 0.01 * med:
             raise ModelFileError(f"--dt {dt:g} disagrees with the time column ({med:g} s)")
-        dt = med
+        # 12 significant digits: a time column printed in milliseconds gives steps
+        # like 0.0009999999999998899, which is 0.001 s
+        dt = float(f"{med:.12g}")
     if dt is not None and not dt > 0:
         raise ModelFileError(f"dt must be positive, got {dt}")
     sl = slice(None, None, int(decimate))

@@ -24,7 +24,8 @@ def _ax(ax):
 
 
 def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: int = 0,
-                       ax: Any = None, label: str = "SMFDO", t: ArrayLike | None = None) -> Any:
+                       ax: Any = None, label: str = "SMFDO", t: ArrayLike | None = None,
+                       unit: str | None = None, steady_ylim: bool = True) -> Any:
     """Estimate, its certified interval ``[lo, hi]`` and the truth (like Li-Cong-Dong Fig. 1(a)).
 
     A result without an interval (a point observer's) draws the estimate and the truth.
@@ -43,6 +44,12 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
         Axes to draw on (default: a new figure).
     label : str
         Legend prefix of the estimate and its interval.
+    unit : str, optional
+        Unit of the disturbance, appended to the y label (``"tau_L [N m]"``).
+    steady_ylim : bool
+        Set the y range from the band after its start-up (1st-99th percentiles of
+        the finite bounds, estimate and truth, plus a margin) when the start-up
+        transient would otherwise squash a steady band into a line (default True).
     """
     ax = _ax(ax)
     N = result.estimate.shape[0]
@@ -60,9 +67,53 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
     if truth is not None:
         ax.plot(k, np.asarray(truth)[:, component], "k--", lw=1.0, label="truth")
     ax.set_xlabel("time [s]" if t is not None or dt else "k")
-    ax.set_ylabel(names[component] if len(names) > component else f"d[{component}]")
+    name = names[component] if len(names) > component else f"d[{component}]"
+    ax.set_ylabel(f"{name} [{unit}]" if unit else name)
     ax.legend(loc="best", fontsize=7)
+    if steady_ylim:
+        series = [result.estimate[:, component]]
+        if hasattr(result, "lo"):
+            series += [result.lo[:, component], result.hi[:, component]]
+        if truth is not None:
+            series.append(np.asarray(truth, dtype=float)[:, component])
+        lim = _steady_range(series)
+        if lim is not None:
+            ax.set_ylim(*lim)
     return ax
+
+
+def _steady_range(series: list[ArrayLike], startup: float = 0.05,
+                 squash: float = 3.0) -> tuple[float, float] | None:
+    """A y range that shows the steady part of time series, or ``None`` if the full
+    range already does.
+
+    The range spans the 1st to 99th percentiles of the finite values after the first
+    ``startup`` fraction of the samples, widened by 10 % on each side; it is returned
+    only when the full range of the finite values is more than ``squash`` times it
+    (a start-up transient that would squash the steady band into a line).
+
+    Parameters
+    ----------
+    series : list of array_like, each shape (N,)
+        The curves drawn (estimate, bounds, truth).
+    startup : float
+        Fraction of the samples treated as start-up.
+    squash : float
+        How much wider the full range must be before the steady range is used.
+    """
+    arrs = [np.asarray(x, dtype=float).reshape(-1) for x in series]
+    full = np.concatenate([a[np.isfinite(a)] for a in arrs]) if arrs else np.zeros(0)
+    steady = np.concatenate([a[int(startup * a.size):][np.isfinite(a[int(startup * a.size):])]
+                             for a in arrs])
+    if full.size == 0 or steady.size == 0:
+        return None
+    lo, hi = np.percentile(steady, [1.0, 99.0])
+    width = hi - lo
+    if not width > 0:
+        width = max(abs(lo), 1.0) * 1e-3
+    if full.max() - full.min() <= squash * width:
+        return None
+    return float(lo - 0.1 * width), float(hi + 0.1 * width)
 
 
 def plot_error_curves(table: Any, metric: str = "error_inf", ax: Any = None, *,
