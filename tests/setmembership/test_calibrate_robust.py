@@ -157,8 +157,8 @@ def test_chain_moves_on_and_checks_answers(monkeypatch):
     over (and named); the next solver answers."""
     sys_ = so.LinearSystem([[1.0]], [[1.0]], [[1.0]])
     Y = np.array([[0.0], [1.0], [0.0], [1.0], [0.0]])
-    chain = (("broken", _failing), ("liar", _wrong_point), *calmod._CHAIN)
-    monkeypatch.setattr(calmod, "_CHAIN", chain)
+    chain = (("broken", _failing), ("liar", _wrong_point), *calmod.SOLVER_CHAIN)
+    monkeypatch.setattr(calmod, "SOLVER_CHAIN", chain)
     cal = so.calibrate_noise(sys_, Y, increment=0.0)
     assert abs(cal.minimal[0] - 0.5) < 1e-8
     failed = " | ".join(cal.info["failed_attempts"])
@@ -167,7 +167,7 @@ def test_chain_moves_on_and_checks_answers(monkeypatch):
 
 
 def test_chain_ends_in_a_solver_error_not_a_crash(monkeypatch):
-    monkeypatch.setattr(calmod, "_CHAIN", (("broken", _failing), ("liar", _wrong_point)))
+    monkeypatch.setattr(calmod, "SOLVER_CHAIN", (("broken", _failing), ("liar", _wrong_point)))
     with pytest.raises(SolverError, match=r"failed under every solver.*broken.*liar"):
         so.calibrate_noise(so.LinearSystem([[1.0]], [[1.0]], [[1.0]]),
                            np.array([[0.0], [1.0], [0.0]]), increment=0.0)

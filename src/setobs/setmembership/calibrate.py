@@ -279,7 +279,7 @@ class _RecordLP:
         """
         A, b, c, m_eq = self._conic(inc, weights, per_channel)
         tried = []
-        for name, attempt in _CHAIN:
+        for name, attempt in SOLVER_CHAIN:
             try:
                 z, lower, status = attempt(A, b, c, m_eq, time_limit)
             except Exception as exc:
@@ -360,7 +360,11 @@ def _highs_ipm_attempt(A, b, c, m_eq, time_limit):
     return np.asarray(r.x, dtype=float), float(lower), "optimal"
 
 
-_CHAIN = (("clarabel", _clarabel_attempt(False)),
+#: The solvers :func:`calibrate_noise` tries, in order: ``(name, attempt)`` with
+#: ``attempt(A, b, c, m_eq, time_limit) -> (z or None, dual bound, status)`` for
+#: ``min c^T z, A z + s = b, s in {0}^m_eq x R_+``. Each answer is checked before
+#: it is accepted (``_RecordLP._accept``); the tests insert failing solvers here.
+SOLVER_CHAIN = (("clarabel", _clarabel_attempt(False)),
           ("clarabel (robust settings)", _clarabel_attempt(True)),
           ("HiGHS interior point (scipy)", _highs_ipm_attempt))
 
