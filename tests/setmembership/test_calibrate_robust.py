@@ -23,8 +23,6 @@ import setobs as so
 from setobs.exceptions import SolverError
 from setobs.setmembership import calibrate as calmod
 
-cp = pytest.importorskip("cvxpy")
-
 DATA = Path(__file__).parents[1] / "data" / "regressions" / "exchanger_calib_1000.mps.gz"
 # The ARX(2,2) model in observer canonical form, as it stands in the regression LP:
 # input and disturbance enter through the same channel (an input disturbance).
@@ -80,6 +78,9 @@ def io_oracle(Y, U, inc):
     z_(k+1) = a1 z_k + a2 z_(k-1) + g1 s_k + g2 s_(k-1), s = u + d, |d_(k+1) - d_k| <= inc,
     |y - z| <= alpha; then the forward simulation of its trajectory (increments
     clipped) and the noise that exactly consistent trajectory needs."""
+    # imported here, not at collection: cvxpy loads scs's single-threaded OpenBLAS,
+    # which the BLAS-limit tests would then see in every later test
+    cp = pytest.importorskip("cvxpy")
     N = Y.shape[0]
     y, u = Y[:, 0], U[:N - 1, 0]
     a1, a2 = PHI[0, 0], PHI[1, 0]
