@@ -264,3 +264,60 @@ def test_a_closed_pipe_is_not_an_error():
                             shell=True, capture_output=True, text=True, timeout=300,
                             executable="/bin/bash")
     assert status.returncode == 0
+
+
+# ------------------------------------------------------------------ round 2 (issue 32, item 6)
+_P, _G, _X = CHANG.Phi, CHANG.G, CHANG.Xi
+
+
+def _nonlinear_order_zero():
+    from setobs.observers import NonlinearModularObserver
+
+    return NonlinearModularObserver(so.examples.modular_example(), A0=0.4, B0=1.0, Aw=0.6,
+                                    Bw=1.0, order=0, x0=[1.0])
+
+
+@pytest.mark.parametrize(("make", "match"), [
+    (lambda: LinearSystem(np.diag([1e200, 0.5, 0.5]), _G, _X),
+     r"Phi has an entry of 1e\+200 .* at most 1e\+150"),
+    (lambda: LinearSystem(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0))),
+     "a system needs at least one state"),
+    (lambda: so.SMFDO(CHANG, window=10).run(np.zeros((5, 2)), np.ones((5, 1))),
+     "U is given but the system has no inputs"),
+    (lambda: so.calibrate_noise(CHANG, np.zeros((5, 2)), np.ones((5, 1)), increment=1.0),
+     "U is given but the system has no inputs"),
+    (lambda: so.SMFDO(CHANG, window=10).run(np.full((5, 2), 1e300)),
+     r"Y has an entry of 1e\+300"),
+    (lambda: ConstrainedZonotope.from_vertices(np.zeros((0, 2))),
+     "from_vertices needs at least one point"),
+    (_nonlinear_order_zero, "order .* must be an integer >= 1, got 0"),
+])
+def test_round2_inputs_get_a_clear_error(make, match):
+    with pytest.raises(DimensionError, match=match):
+        make()
+
+
+def test_round2_cli_inputs_get_one_line_and_exit_2(tmp_path, capsys):
+    (tmp_path / "m.yaml").write_text("Phi: [[1.0, 0.1], [0.0, 0.9]]\nG: [[0.0], [0.1]]\n"
+                                     "Xi: [[1.0, 0.0]]\n")
+    (tmp_path / "big.yaml").write_text("Phi: [[1e200, 0.0], [0.0, 0.9]]\nG: [[0.0], [0.1]]\n"
+                                       "Xi: [[1.0, 0.0]]\n")
+    (tmp_path / "huge.csv").write_text(
+        "t,y\n" + "".join(f"{k * 0.01},{1e308 if k % 2 else -1e308}\n" for k in range(20)))
+    cases = [
+        (["check", str(tmp_path / "big.yaml")], "at most 1e+150"),
+        (["estimate", str(tmp_path / "huge.csv"), "--model", str(tmp_path / "m.yaml"),
+          "--outputs", "y", "--increment", "0.01", "--no-plot", "--out", str(tmp_path / "o")],
+         "Y has an entry of -1e+308"),
+        (["estimate", str(tmp_path / "huge.csv"), "--model", str(tmp_path / "m.yaml"),
+          "--outputs", "y", "--increment", "0.01,0.02", "--no-plot",
+          "--out", str(tmp_path / "o")], "--increment needs one value"),
+    ]
+    import warnings
+
+    for args, match in cases:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")      # no overflow warnings before the error
+            assert main(args) == 2, args
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("setobs: error:") and match in err and "\n" not in err, err

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import DimensionError
+from .tolerances import MAX_MAGNITUDE
 
 __all__ = ["as_matrix", "as_vector", "check_real_scalar", "readonly"]
 
@@ -75,6 +76,15 @@ def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool,
     if not allow_inf and np.isinf(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isinf(a))[0])
         raise DimensionError(f"{name} contains inf (first at index {idx}); it must be finite")
+    with np.errstate(invalid="ignore"):
+        big = np.abs(a) > MAX_MAGNITUDE
+    big &= np.isfinite(a)
+    if big.any():
+        idx = tuple(int(i) for i in np.argwhere(big)[0])
+        raise DimensionError(
+            f"{name} has an entry of {a[idx]:.3g} (first at index {idx}): entries must be at "
+            f"most {MAX_MAGNITUDE:.0e} in magnitude (products of such numbers overflow double "
+            "precision); rescale the units")
 
 
 def as_matrix(

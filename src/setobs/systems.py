@@ -129,6 +129,8 @@ class LinearSystem:
         n = Phi_a.shape[0]
         if Phi_a.shape[1] != n:
             raise DimensionError(f"Phi must be square, got shape {Phi_a.shape}")
+        if n == 0:
+            raise DimensionError("Phi is 0 x 0: a system needs at least one state")
         G_a = as_matrix("G", G, rows=n)
         Xi_a = as_matrix("Xi", Xi, cols=n)
         if Gamma is None:

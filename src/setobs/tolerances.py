@@ -36,6 +36,7 @@ __all__ = [
     "FASTLP_BOUNDED_CLEAR",
     "FASTLP_CONSISTENCY_RTOL",
     "FASTLP_GAP_RTOL",
+    "FASTLP_PRIMAL_RTOL",
     "FASTLP_RANK_GREY",
     "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
@@ -44,11 +45,14 @@ __all__ = [
     "HREP_CLIP_RTOL",
     "HREP_FLAT_RTOL",
     "HREP_SNAP_TOL",
+    "HREP_VERIFY_RTOL",
     "IMAG_DISPLAY_RTOL",
     "KALMAN_MEASUREMENT_FLOOR",
     "LP_REFINE_GAP",
+    "MAX_MAGNITUDE",
     "NEWTON_RTOL",
     "PONTRYAGIN_MATCH_RTOL",
+    "PRIMAL_RESIDUAL_RTOL",
     "PRODUCT_RTOL",
     "RANK_FLOOR",
     "RANK_RTOL",
@@ -63,6 +67,10 @@ __all__ = [
 ]
 
 #: Absolute tolerance on normalised equality constraints for emptiness/containment.
+#: Largest magnitude of a finite entry in any matrix, vector or record the package
+#: accepts: products and sums of a few such numbers still fit in double precision
+#: (1e308); larger entries are refused with a message that names the matrix.
+MAX_MAGNITUDE: float = 1e150
 FEASIBILITY_TOL: float = 1e-9
 
 #: Radius of unbounded factors up to which certified bounds hold (see module docs).
@@ -124,6 +132,10 @@ FASTLP_UNBOUNDED_CLEAR: float = 1e-6
 FASTLP_BOUNDED_CLEAR: float = 1e-12
 #: Accepted gap between the certified bound and the simplex objective.
 FASTLP_GAP_RTOL: float = 1e-9
+#: The compiled simplex accepts an optimal basis only when its basic solution
+#: satisfies the reduced equations to this, relative to ``1 + |b_i| + |A_i| |x|``
+#: row by row (an inaccurate basis inverse otherwise passes a loose bound as optimal).
+FASTLP_PRIMAL_RTOL: float = 1e-9
 #: Relative size of the singular values that make a structure unusable (rank
 #: decisions between these and 1 would have to be made; the reference path
 #: does not make them, so the fast path does not either).
@@ -140,6 +152,13 @@ EQUILIBRATION_FLOOR: float = 1e-10
 # ---- the HiGHS reference LPs (setobs.geometry.lp)
 #: Relative certification gap above which duals are recomputed from the basis.
 LP_REFINE_GAP: float = 1e-9
+#: A solver's "optimal" point is accepted only when every row satisfies
+#: ``|A_i x - b_i| <= PRIMAL_RESIDUAL_RTOL (1 + |b_i| + |A_i| |x|)`` (and the factor
+#: bounds to the same tolerance): a guard against gross errors, above the solvers'
+#: own feasibility tolerances (1e-10 to 1e-7). HiGHS once returned "optimal" with a
+#: relative residual of 3e-3 on an exact-mode set, and a multiplier certified near
+#: that point's objective, 0.01 below the true minimum (issue 32, item 3).
+PRIMAL_RESIDUAL_RTOL: float = 1e-6
 
 # ---- vertex enumeration (setobs.geometry.polytope)
 #: Relative tolerance of the vertex enumeration: a facet of the found hull is
@@ -162,6 +181,13 @@ HREP_CLIP_RTOL: float = 1e-12
 #: certified set when its slack is below this fraction of the set's extent:
 #: vertices with the same facets are one vertex (near-duplicates from clipping).
 HREP_ACTIVE_RTOL: float = 1e-6
+#: Exact mode's H-representation is carried to the next step only when every vertex
+#: of ``{z : H z <= g}`` lies within this (relative to the set's extent) of the
+#: carried vertex set: otherwise the normals miss a facet (the vertex set drifted
+#: from the polytope on thin sets at a calibrated noise bound, and the carried set
+#: grew outer by up to 5 % of the width while steps said ok), and the step's exact
+#: set is carried as a constrained zonotope instead.
+HREP_VERIFY_RTOL: float = 1e-6
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

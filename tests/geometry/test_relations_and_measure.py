@@ -158,9 +158,12 @@ def test_samples_on_a_triangle_are_uniform():
 
 
 def test_samples_by_lp_chords_in_4d_have_uniform_marginals():
-    """Thinned enough (20 steps per point) for the KS test's independence assumption."""
+    """Thinned enough for the KS test's independence assumption: 40 steps per point
+    (with 20, the long side's marginal failed the test at 1e-3 for 2 of 6 seeds, with
+    and without the unit-magnitude rescaling, which changes the random stream; with
+    40, 48 marginals over 12 seeds all had p > 0.008)."""
     B = ConstrainedZonotope.from_box([0.0, -1.0, 0.0, 2.0], [1.0, 1.0, 3.0, 2.5])
-    X = sample(B, 200, rng=2, method="lp", thin=20)
+    X = sample(B, 200, rng=2, method="lp", thin=40)
     lo, hi = np.array([0.0, -1.0, 0.0, 2.0]), np.array([1.0, 1.0, 3.0, 2.5])
     assert (X >= lo - 1e-9).all() and (X <= hi + 1e-9).all()
     for i in range(4):

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_sylvester
 
 from .._validation import as_matrix
-from ..exceptions import DesignError
+from ..exceptions import DesignError, DimensionError
 from ..tolerances import NEWTON_RTOL, RESONANCE_RTOL
 from ._linalg import rank_decision
 from .existence import ExistenceReport
@@ -530,6 +530,9 @@ def design_modular(system: Any, A0: ArrayLike, B0: ArrayLike | None, Aw: ArrayLi
     m, mu, p = system.n, system.q, system.l
     A0a, Awa = _as_square("A0", A0, m), _as_square("Aw", Aw, mu)
     B0a, Bwa = _as_gain("B0", B0, m, p), _as_gain("Bw", Bw, mu, p)
+    if isinstance(order, bool) or not isinstance(order, int | np.integer) or order < 1:
+        raise DimensionError(f"order (the degree of the power series) must be an integer >= 1, "
+                             f"got {order!r}")
     report = nonlinear_modular_conditions(system, A0a, Awa, order=order)
     basis_x = Monomials(m, order)
     basis_v = Monomials(m + mu, order)

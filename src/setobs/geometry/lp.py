@@ -71,6 +71,7 @@ from ..exceptions import EmptySetError
 from ..tolerances import (
     FEASIBILITY_TOL,
     LP_REFINE_GAP,
+    PRIMAL_RESIDUAL_RTOL,
     UNBOUNDED_RADIUS,
     UNBOUNDED_REDUCED_COST_TOL,
 )
@@ -410,7 +411,14 @@ class FactorPolytope:
         hs = getattr(highspy, "_Highs", highspy.Highs)()
         hs.setOptionValue("output_flag", False)
         hs.setOptionValue("presolve", "off")
-        hs.setOptionValue("threads", 1)
+        # No "threads" option: HiGHS keeps one task scheduler per calling thread, sized
+        # by the first solve in that thread, and every later model whose "threads"
+        # differs fails in run() with an error status ("Not Set"). With threads = 1
+        # here, any earlier HiGHS solve at the default size in the same thread (the
+        # old calibration LP, a user's own model, cvxpy's HiGHS) turned every SMFDO LP
+        # into a retry chain ending in "fallback", and records that contradicted
+        # the model were never invalidated (issue 32, items 1-2). The default (0)
+        # accepts any scheduler; the LPs here run the serial dual simplex anyway.
         # Tighter than HiGHS's 1e-7 defaults: with them the certified bound sat up
         # to ~1e-6 (relative) below the optimum on SMFDO sets with constrained
         # increment sets (the solver's point was infeasible by ~1e-7); with 1e-10
@@ -601,6 +609,7 @@ class FactorPolytope:
         # tolerances act on a unit-size problem; certification uses the true w.
         scale = self.objective_scale(w)
         best = -np.inf  # best certified bound of any multiplier (fallback answer)
+        infeasible_claims = 0
         attempts = [None, *self._RETRIES]
         for i, options in enumerate(attempts):
             hs = self.highs_model() if i == 0 else self._build(
@@ -613,6 +622,12 @@ class FactorPolytope:
                 y = np.asarray(sol.row_dual, dtype=np.float64) * scale
                 x = np.asarray(sol.col_value, dtype=np.float64)
                 bound = self.certify(w, y, w_err, w_pair)
+                if not self.point_is_feasible(x):
+                    # "Optimal" at an infeasible point: its objective, and the
+                    # multiplier certified near it, may undercut the minimum.
+                    # Certified all the same; the next attempt decides.
+                    best = max(best, bound)
+                    continue
                 obj = float(w @ x)
                 if np.isfinite(bound) and obj - bound > LP_REFINE_GAP * (1.0 + abs(obj)):
                     y_ref = self._basis_duals(hs, w)
@@ -631,7 +646,10 @@ class FactorPolytope:
                         "the set is empty (certified: every point violates a normalised "
                         f"constraint by at least {rep.violation_lower_bound:.3g})"
                     )
-                return self.minimize_relaxed(w, w_err, w_pair)
+                # "Infeasible" without a certificate: a hard LP, not a verdict. The
+                # other settings decide it; the relaxed LP is the last resort.
+                infeasible_claims += 1
+                continue
             # Undecided: keep whatever multiplier the solver left (certified, it
             # is a valid bound however poor), then retry with other settings.
             y = np.asarray(hs.getSolution().row_dual, dtype=np.float64)
@@ -640,9 +658,46 @@ class FactorPolytope:
         out = self.try_compiled(w, w_err, w_pair)
         if out is not None:
             return out
+        if infeasible_claims:
+            # Not certified empty, but no setting found a feasible optimum: the LP
+            # with rows relaxed by the smallest violation found is a valid outer
+            # bound, wider than the exact one (so a fallback, counted).
+            rel = self.minimize_relaxed(w, w_err, w_pair)
+            if rel.status == "optimal":
+                # Exact after all when the relaxed minimiser satisfies the exact rows
+                # (then its objective bounds the minimum from above) and closes the
+                # gap: a degenerate LP that HiGHS mislabelled, decided.
+                if (rel.point is not None and self.point_is_feasible(rel.point)
+                        and rel.objective - rel.bound <= LP_REFINE_GAP * (1.0 + abs(rel.objective))
+                        * 1e3):
+                    return rel
+                self.fallbacks += 1
+                return LPResult(max(rel.bound, best), rel.objective, rel.point, "fallback")
+            if rel.status == "unbounded":
+                return rel
+            best = max(best, rel.bound)
         best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
         self.fallbacks += 1
         return LPResult(best, np.nan, None, "fallback")
+
+    def point_is_feasible(self, x: NDArray[np.float64]) -> bool:
+        """Whether a solver's point satisfies ``A x = b`` and ``|x| <= h`` to
+        ``PRIMAL_RESIDUAL_RTOL`` (row by row, relative to ``1 + |b_i| + |A_i| |x|``).
+
+        Parameters
+        ----------
+        x : ndarray, shape (n_g,)
+            The point.
+        """
+        if x.shape != (self.n_g,) or not np.isfinite(x).all():
+            return False
+        if self.n_c:
+            resid = np.abs(self.A @ x - self.b)
+            scale = 1.0 + np.abs(self.b) + np.abs(self.A) @ np.abs(x)
+            if (resid > PRIMAL_RESIDUAL_RTOL * scale).any():
+                return False
+        over = np.abs(x) - self.h
+        return not (over > PRIMAL_RESIDUAL_RTOL * (1.0 + np.where(self._unb, 0.0, self.h))).any()
 
     def try_compiled(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
                      w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None

@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +26,13 @@ from .._lazy import optional_import
 from .._rounding import gamma, round_down
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
-from .zonotope import ConstrainedZonotope, factor_polytope, hull_with_status, support_unwarned
+from .zonotope import (
+    ConstrainedZonotope,
+    factor_polytope,
+    hull_with_status,
+    support_unwarned,
+    unit_scaled,
+)
 
 __all__ = ["DistanceResult", "QPResult", "VolumeResult", "distance", "minimize_quadratic",
            "nearest_point", "sample", "volume"]
@@ -130,7 +137,7 @@ def minimize_quadratic(Z: ConstrainedZonotope, P: ArrayLike, q: ArrayLike) -> QP
     --------
     >>> Z = ConstrainedZonotope.from_box([1.0, 1.0], [2.0, 3.0])
     >>> r = minimize_quadratic(Z, np.eye(2), np.zeros(2))
-    >>> r.point.round(6).tolist()
+    >>> (r.point.round(6) + 0.0).tolist()
     [1.0, 1.0]
     """
     from scipy import sparse
@@ -182,6 +189,9 @@ def nearest_point(Z: ConstrainedZonotope, p: ArrayLike) -> NDArray[np.float64]:
         The point.
     """
     pv = as_vector("p", p, size=Z.dim)
+    Zs, f = unit_scaled(Z, float(np.abs(pv).max(initial=0.0)))
+    if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
+        return nearest_point(Zs, pv / f) * f
     return minimize_quadratic(Z, np.eye(Z.dim), -pv).point
 
 
@@ -208,6 +218,10 @@ def distance(Z: ConstrainedZonotope, p: ArrayLike) -> DistanceResult:
     (5.0, True)
     """
     pv = as_vector("p", p, size=Z.dim)
+    Zs, f = unit_scaled(Z, float(np.abs(pv).max(initial=0.0)))
+    if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
+        r = distance(Zs, pv / f)
+        return DistanceResult(r.distance * f, r.lower * f, r.point * f)
     z = nearest_point(Z, pv)
     d = float(np.linalg.norm(pv - z))
     lower = 0.0
@@ -323,6 +337,9 @@ def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None
         raise DimensionError(f"n must be a nonnegative integer, got {n!r}")
     if method not in ("auto", "facets", "lp"):
         raise ValueError(f"method must be 'auto', 'facets' or 'lp', got {method!r}")
+    Zs, f = unit_scaled(Z)
+    if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
+        return sample(Zs, n, rng, burn_in=burn_in, thin=thin, method=method) * f
     gen = np.random.default_rng(rng)
     box, _ = hull_with_status(Z)
     if not box.is_bounded:
@@ -396,6 +413,11 @@ def volume(Z: ConstrainedZonotope, *, n_samples: int = 20_000, confidence: float
     check_real_scalar("confidence", confidence, positive=True)
     if not confidence < 1:
         raise DimensionError(f"confidence must be in (0, 1), got {confidence}")
+    Zs, f = unit_scaled(Z)
+    if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
+        r = volume(Zs, n_samples=n_samples, confidence=confidence, rng=rng)
+        fn = f ** Z.dim
+        return dataclasses.replace(r, value=r.value * fn, lower=r.lower * fn, upper=r.upper * fn)
     if Z.is_empty():
         return VolumeResult(0.0, 0.0, 0.0, "empty")
     box, _ = hull_with_status(Z)

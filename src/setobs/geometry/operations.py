@@ -173,7 +173,7 @@ def intersect_halfspace(Z: ConstrainedZonotope, a: ArrayLike, beta: float
     >>> Z = ConstrainedZonotope([[3.0, 0.0, 1.0], [0.0, 2.0, 1.0]], [0.0, 0.0],
     ...                         A=[[1.0, 0.0, 1.0]], b=[1.0])
     >>> V = intersect_halfspace(Z, [1.0, -2.0], 1.0).vertices()
-    >>> sorted(map(tuple, V.round(6).tolist()))
+    >>> sorted(map(tuple, (V.round(6) + 0.0).tolist()))   # + 0.0: no -0.0 from rounding
     [(1.0, 0.0), (1.0, 3.0), (3.0, 1.0), (3.0, 2.0)]
     """
     av = as_vector("a", a, size=Z.dim)
@@ -347,6 +347,9 @@ def from_vertices(V: ArrayLike) -> ConstrainedZonotope:
     """
     Va = as_matrix("V", V)
     m = Va.shape[0]
+    if m == 0 or Va.shape[1] == 0:
+        raise DimensionError(f"from_vertices needs at least one point of dimension >= 1, got "
+                             f"an array of shape {Va.shape}")
     G = Va.T / 2.0
     c = Va.sum(axis=0) / 2.0
     cerr = gamma(m) * np.abs(Va).sum(axis=0) / 2.0

@@ -21,7 +21,13 @@ from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import VERTEX_RTOL
 from .box import box_center_radius
-from .zonotope import ConstrainedZonotope, hull_with_status, support_unwarned, trusted_cz
+from .zonotope import (
+    ConstrainedZonotope,
+    hull_with_status,
+    support_unwarned,
+    trusted_cz,
+    unit_scaled,
+)
 
 __all__ = ["HRep", "cz_from_hpolytope", "polygon_2d", "to_hrep", "vertices"]
 
@@ -241,6 +247,9 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     SolverError
         If the construction cannot be verified.
     """
+    Zs, f = unit_scaled(Z)
+    if Zs is not Z:  # the same construction at unit magnitude, scaled back exactly
+        return vertices(Zs) * f
     if Z.dim == 1:
         box, _ = hull_with_status(Z)
         if not box.is_bounded:
@@ -265,6 +274,10 @@ def to_hrep(Z: ConstrainedZonotope) -> HRep:
     Z : ConstrainedZonotope
         A bounded set.
     """
+    Zs, f = unit_scaled(Z)
+    if Zs is not Z:  # at unit magnitude, scaled back exactly
+        hr = to_hrep(Zs)
+        return HRep(hr.H, hr.k * f, hr.E, hr.f * f)
     n = Z.dim
     if n == 1:
         V = vertices(Z)

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import CONTAINMENT_RTOL, FEASIBILITY_TOL
-from .zonotope import ConstrainedZonotope, support_unwarned
+from .zonotope import ConstrainedZonotope, magnitude, scaled_by, support_unwarned, unit_scaled
 
 __all__ = ["ContainmentResult", "is_equal", "is_subset", "is_subset_of_polytope"]
 
@@ -111,7 +111,7 @@ def is_subset_of_polytope(Z: ConstrainedZonotope, H: ArrayLike, k: ArrayLike,
     >>> bool(is_subset_of_polytope(Z, [[1.0, 1.0]], [2.0]))
     True
     >>> r = is_subset_of_polytope(Z, [[1.0, 1.0]], [1.5])
-    >>> r.holds, r.witness.round(6).tolist()
+    >>> r.holds, (r.witness.round(6) + 0.0).tolist()
     (False, [1.0, 1.0])
     """
     H_a = as_matrix("H", H, cols=Z.dim)
@@ -196,6 +196,14 @@ def is_subset(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResu
         raise TypeError(f"is_subset expects a ConstrainedZonotope, got {type(W).__name__}")
     if W.dim != Z.dim:
         raise DimensionError(f"containment: dimensions differ ({Z.dim} vs {W.dim})")
+    # Both sets at the container's magnitude (exact power-of-two scaling), so the
+    # tolerances are relative to the sets' size: a 1e-8 set 0.1 % outside its
+    # container was "inside" under absolute tolerances.
+    Ws, f = unit_scaled(W, magnitude(Z) if np.isfinite(magnitude(Z)) else 0.0)
+    if Ws is not W:
+        r = is_subset(scaled_by(Z, f), Ws)
+        return ContainmentResult(r.holds, None if r.witness is None else r.witness * f,
+                                 r.method, r.margin * f, r.tol * f)
     if Z.is_empty():
         return ContainmentResult(True, None, "empty", -np.inf, 0.0)
     if W.is_empty():

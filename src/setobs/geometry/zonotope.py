@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -1096,6 +1097,70 @@ def trusted_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.flo
     ``c`` and ``b`` (``None``: exact); certified queries widen by them.
     """
     return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr)
+
+
+def magnitude(Z: ConstrainedZonotope) -> float:
+    """A bound on ``max |z|`` over the set without an LP: ``|c| + |G| h`` on the finite
+    factors (``inf`` when a factor is unbounded), at least the largest ``|c|``."""
+    fin = np.isfinite(Z.h)
+    if not fin.all():
+        return float("inf")
+    return float((np.abs(Z.c) + np.abs(Z.G) @ Z.h).max(initial=0.0))
+
+
+def unit_scaled(Z: ConstrainedZonotope, *others: float) -> tuple[ConstrainedZonotope, float]:
+    """``(Z / f, f)`` with ``f`` the power of two that brings the set's magnitude
+    (:func:`magnitude`, or the largest of ``others`` if larger) into ``[1/2, 1)``.
+
+    Scaling by a power of two is exact in floating point (``G``, ``c`` and the
+    rounding bound of ``c`` are divided; the factors, ``A``, ``b`` and ``h`` are
+    unchanged), so a query answered on ``Z / f`` and multiplied back by ``f`` is the
+    query on ``Z``, and its tolerances become relative to the set's magnitude: the
+    same answer, scaled, for a set and its image under ``x -> s x``. ``f = 1`` for a
+    set already at that magnitude, an unbounded one, or the origin.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+    *others : float
+        Further magnitudes to cover (a query point's ``max |p|``).
+    """
+    m = max([magnitude(Z), *[float(o) for o in others]])
+    if not np.isfinite(m) or m <= 0.0:
+        return Z, 1.0
+    _, e = math.frexp(m)      # m = f' 2^e with f' in [1/2, 1)
+    f = math.ldexp(1.0, e)
+    Zs = scaled_by(Z, f)
+    return (Z, 1.0) if Zs is Z else (Zs, f)
+
+
+def scaled_by(Z: ConstrainedZonotope, f: float) -> ConstrainedZonotope:
+    """``Z / f`` for a power of two ``f`` (exact: see :func:`unit_scaled`).
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+    f : float
+        A power of two.
+    """
+    cerr = None if Z._cerr is None else Z._cerr / f
+    # Factors at unit size too (each finite h_j brought into [1/2, 1) by a power of
+    # two, the column of G and A multiplied by it: exact), so that tolerances on the
+    # factors (point containment, LP feasibility) are relative as well.
+    h = Z.h
+    fin = np.isfinite(h) & (h > 0.0)
+    e = np.zeros(h.size)
+    if fin.any():
+        e[fin] = np.frexp(h[fin])[1]
+    if f == 1.0 and not e.any():
+        return Z
+    col = np.ldexp(1.0, e.astype(int))
+    return ConstrainedZonotope._trusted(Z.G * (col / f)[None, :] if f != 1.0 else Z.G * col,
+                                        Z.c / f, Z.A * col[None, :], Z.b,
+                                        np.where(fin, np.ldexp(h, -e.astype(int)), h),
+                                        Z.unbounded_radius, cerr, Z._berr)
 
 
 def factor_polytope(Z: ConstrainedZonotope) -> FactorPolytope:

@@ -52,7 +52,13 @@ from numpy.typing import NDArray
 
 from ..geometry.polytope import hpolytope_in_box
 from ..geometry.zonotope import ConstrainedZonotope, trusted_cz
-from ..tolerances import HREP_ACTIVE_RTOL, HREP_CLIP_RTOL, HREP_FLAT_RTOL, HREP_SNAP_TOL
+from ..tolerances import (
+    HREP_ACTIVE_RTOL,
+    HREP_CLIP_RTOL,
+    HREP_FLAT_RTOL,
+    HREP_SNAP_TOL,
+    HREP_VERIFY_RTOL,
+)
 
 __all__ = ["HState", "clip", "hull_points", "snap_normals", "step_geometry", "tidy_vertices"]
 
@@ -218,6 +224,42 @@ def snap_normals(H_new: NDArray[np.float64], H_prev: NDArray[np.float64] | None
     out = H_new.copy()
     out[hit] = H_prev[j[hit]]
     return out
+
+
+def vertices_match(V: NDArray[np.float64], H: NDArray[np.float64],
+                   g: NDArray[np.float64]) -> bool:
+    """Whether the carried vertices ``V`` span ``{z : H z <= g}``: every vertex of the
+    polytope (pycddlib's float enumeration) lies within ``HREP_VERIFY_RTOL`` times the
+    extent of ``V`` of a point of ``V``. ``False`` also when the enumeration fails.
+
+    Parameters
+    ----------
+    V : ndarray, shape (n_v, N)
+        The carried (tidied) vertices.
+    H : ndarray, shape (m, N)
+        Normals, flat directions included with both signs.
+    g : ndarray, shape (m,)
+        Certified offsets.
+    """
+    import cdd
+
+    if V.shape[0] == 0 or H.shape[0] == 0:
+        return False
+    ext = float(np.abs(V - V.mean(axis=0)).max())
+    mag = max(ext, float(np.abs(V).max()) * 1e-12, np.finfo(float).tiny)
+    c = V.mean(axis=0)
+    try:
+        mat = cdd.matrix_from_array(np.hstack([(g - H @ c)[:, None], -H]).tolist(),
+                                    rep_type=cdd.RepType.INEQUALITY)
+        gen = np.array(cdd.copy_generators(cdd.polyhedron_from_matrix(mat)).array,
+                       dtype=float)
+    except Exception:
+        return False
+    if gen.size == 0 or np.any(gen[:, 0] != 1.0):
+        return False   # empty, or rays/lines: the polytope is not the bounded set carried
+    W = gen[:, 1:] + c
+    d = np.sqrt(((W[:, None, :] - V[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+    return bool(d.max() <= HREP_VERIFY_RTOL * mag)
 
 
 def tidy_vertices(V: NDArray[np.float64], H: NDArray[np.float64],

@@ -394,6 +394,9 @@ def _prepare(sys, Y, U, disturbance_inputs):
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     Ya = as_matrix("Y", Y, cols=sys.l, allow_nan=True)
     Ua = None
+    if not sys.p and U is not None and np.size(U):
+        raise DimensionError("U is given but the system has no inputs (no Gamma): pass "
+                             "U=None, or build the system with its input matrix")
     if sys.p:
         if U is None:
             raise DimensionError(f"U is required: the system has {sys.p} input(s)")

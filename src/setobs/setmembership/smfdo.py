@@ -34,7 +34,14 @@ from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
-from ._hrep import HState, snap_normals, step_geometry, structure_A, tidy_vertices
+from ._hrep import (
+    HState,
+    snap_normals,
+    step_geometry,
+    structure_A,
+    tidy_vertices,
+    vertices_match,
+)
 from ._window import WindowModel, model_rtol
 
 __all__ = [
@@ -810,6 +817,15 @@ class SMFDO:
                          self.window)).encode())
         return hsh.digest()
 
+    def __copy__(self) -> SMFDO:
+        """An independent copy (``copy.copy`` is ``copy.deepcopy`` here): the
+        estimator's state (window history, warm-start bases, carried sets) is
+        mutable, and a shallow copy shared it, so running the copy changed the
+        original's later results (a false invalidation on consistent data)."""
+        import copy
+
+        return copy.deepcopy(self)
+
     def reset_state(self) -> None:
         """Forget all data and start again at ``k = 0``."""
         self.k = -1
@@ -1169,7 +1185,14 @@ class SMFDO:
         lo_c = round_down(box_o.lo - gm * rng_z)
         hi_c = round_up(box_o.hi + gm * rng_z)
         g = round_up(g + gm * (np.abs(H_new) @ rng_z))
-        return HState(H_new, g, lo_c, hi_c, tidy_vertices(V_new, H_new, g)), box, box_o, Zd
+        V_t = tidy_vertices(V_new, H_new, g)
+        if not vertices_match(V_t, H_new, g):
+            # The normals from the approximate geometry miss a facet: carrying
+            # {H z <= g} would be an outer set from the next step on. This step's
+            # bounds are exact (its LPs ran over the exact set); carry that set.
+            self._h_back_off(self.k + 1)
+            return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd
+        return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd
 
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, e: _Entry) -> ConstrainedZonotope:
@@ -1485,6 +1508,9 @@ class SMFDO:
         Ya = as_matrix("Y", Y, cols=self.sys.l, allow_nan=True)
         N = Ya.shape[0]
         Ua = None
+        if not self.sys.p and U is not None and np.size(U):
+            raise DimensionError("U is given but the system has no inputs (no Gamma): pass "
+                                 "U=None, or build the system with its input matrix")
         if self.sys.p:
             if U is None:
                 raise DimensionError(f"U is required: the system has {self.sys.p} input(s)")
