@@ -34,26 +34,17 @@ import numpy as np
 import setobs as so
 
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.setmembership.test_verdicts import history_lp_noisy
+from tests.setmembership.test_verdicts import (
+    history_lp_noisy,
+    random_scaled_system,
+)
 
 
 def draw(seed: int):
     rng = np.random.default_rng(seed)
     dec = float(rng.choice([0, 1, 2]))
-    n = int(rng.integers(2, 6))
-    q = int(rng.integers(1, min(2, n) + 1))
-    l = int(rng.integers(q, n + 1))
-    p = int(rng.integers(0, 3))
-    Phi = rng.standard_normal((n, n))
-    Phi *= rng.uniform(0.6, 1.0) / max(abs(np.linalg.eigvals(Phi)))
-    G, Xi, Gam = rng.standard_normal((n, q)), rng.standard_normal((l, n)), \
-        rng.standard_normal((n, p))
-    T = np.diag(10.0 ** rng.uniform(-dec, dec, n))
-    So = np.diag(10.0 ** rng.uniform(-dec, dec, l))
-    Sd = np.diag(10.0 ** rng.uniform(-dec, dec, q))
-    Phi, G = T @ Phi @ np.linalg.inv(T), T @ G @ np.linalg.inv(Sd)
-    Xi, Gam = So @ Xi @ np.linalg.inv(T), T @ Gam
-    rd = 10.0 ** rng.uniform(-dec, dec, q)
+    Phi, G, Xi, Gam, rd = random_scaled_system(rng, dec)
+    n, q, l, p = Phi.shape[0], G.shape[1], Xi.shape[0], Gam.shape[1]
     rv = 10.0 ** rng.uniform(-2, 0, l) * np.abs(Xi).sum(1)
     N = 30
     x, d = rng.standard_normal(n), rng.standard_normal(q) * rd * 3

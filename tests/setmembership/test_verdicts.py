@@ -154,13 +154,10 @@ def test_copy_shares_no_mutable_state():
     assert ref.violations(D) == 0
 
 
-def _random_noisy_masked(seed: int):
-    """The generator of exact_noise_masks_wider_than_lp.py (seed 103 is the reported
-    case): a random system with up to three decades of scaling, noise and increments
-    on the vertices of their boxes, missing entries and two missing rows."""
-    rng = np.random.default_rng(seed)
-    dec = float(rng.choice([0, 1, 2, 3]))
-    rng.integers(2), rng.integers(2), rng.integers(2)
+def random_scaled_system(rng: np.random.Generator, dec: float):
+    """A random stable system (2-5 states, 1-2 disturbances, q-n outputs, 0-2 inputs)
+    under diagonal scalings of up to ``dec`` decades of states, outputs and
+    disturbances, and its increment radii: ``(Phi, G, Xi, Gamma, r_dd)``."""
     n = int(rng.integers(2, 6))
     q = int(rng.integers(1, min(2, n) + 1))
     l = int(rng.integers(q, n + 1))
@@ -177,6 +174,18 @@ def _random_noisy_masked(seed: int):
     Xi = So @ Xi @ np.linalg.inv(T)
     Gam = T @ Gam
     rd = 10.0 ** rng.uniform(-dec, dec, q)
+    return Phi, G_, Xi, Gam, rd
+
+
+def _random_noisy_masked(seed: int):
+    """The generator of exact_noise_masks_wider_than_lp.py (seed 103 is the reported
+    case): a random system with up to three decades of scaling, noise and increments
+    on the vertices of their boxes, missing entries and two missing rows."""
+    rng = np.random.default_rng(seed)
+    dec = float(rng.choice([0, 1, 2, 3]))
+    rng.integers(2), rng.integers(2), rng.integers(2)
+    Phi, G_, Xi, Gam, rd = random_scaled_system(rng, dec)
+    n, q, l, p = Phi.shape[0], G_.shape[1], Xi.shape[0], Gam.shape[1]
     rng.integers(2), rng.integers(2)
     rv = 10.0 ** rng.uniform(-2 - dec, -1 + dec, l)
     Nr = 40
