@@ -35,32 +35,13 @@ import setobs as so
 
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.setmembership.test_verdicts import (
+    campaign_record,
     history_lp_noisy,
-    random_scaled_system,
 )
 
 
-def draw(seed: int):
-    rng = np.random.default_rng(seed)
-    dec = float(rng.choice([0, 1, 2]))
-    Phi, G, Xi, Gam, rd = random_scaled_system(rng, dec)
-    n, q, l, p = Phi.shape[0], G.shape[1], Xi.shape[0], Gam.shape[1]
-    rv = 10.0 ** rng.uniform(-2, 0, l) * np.abs(Xi).sum(1)
-    N = 30
-    x, d = rng.standard_normal(n), rng.standard_normal(q) * rd * 3
-    U = rng.standard_normal((N, p))
-    Y = []
-    for k in range(N):
-        Y.append(Xi @ x + rv * rng.uniform(-1, 1, l))
-        x = Phi @ x + G @ d + Gam @ U[k]
-        d = d + rd * rng.uniform(-1, 1, q)
-    Y = np.array(Y)
-    Y[rng.random(Y.shape) < 0.1] = np.nan
-    return Phi, G, Xi, Gam, rd, rv, Y, U
-
-
 def run_seed(seed: int) -> dict:
-    Phi, G, Xi, Gam, rd, rv, Y, U = draw(seed)
+    Phi, G, Xi, Gam, rd, rv, Y, U = campaign_record(seed)
     s = so.LinearSystem(Phi, G, Xi, Gam if Gam.shape[1] else None)
     Ua = U if Gam.shape[1] else None
     out = {"seed": seed, "n": s.n, "q": s.q, "l": s.l, "p": s.p}

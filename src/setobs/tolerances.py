@@ -43,6 +43,7 @@ __all__ = [
     "FRAGILE_MARGIN_DECADES",
     "HREP_ACTIVE_RTOL",
     "HREP_CLIP_RTOL",
+    "HREP_CONVERT_RTOL",
     "HREP_FLAT_RTOL",
     "HREP_SNAP_TOL",
     "HREP_VERIFY_RTOL",
@@ -188,6 +189,13 @@ HREP_ACTIVE_RTOL: float = 1e-6
 #: grew outer by up to 5 % of the width while steps said ok), and the step's exact
 #: set is carried as a constrained zonotope instead.
 HREP_VERIFY_RTOL: float = 1e-6
+#: Facet tolerance (relative to the set's size) of exact mode's conversion of a
+#: posterior to an H-representation. With ``VERTEX_RTOL`` (1e-9) the converted
+#: polytope may exceed the set by slivers of that size, and on thin sets at a
+#: calibrated noise bound later measurement slabs amplified them to 2e-4 of the
+#: interval width; a conversion that cannot confirm its facets this tightly is
+#: left to the set recursion.
+HREP_CONVERT_RTOL: float = 1e-12
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

@@ -278,3 +278,52 @@ def test_exact_mode_with_noise_and_masks_is_the_whole_history_set(fast):
         np.testing.assert_array_less(lo - 1e-6 * width - 1e-12, res.lo[k] + 1e-15)  # sound
         np.testing.assert_allclose(res.lo[k], lo, atol=1e-6 * width.max(), rtol=0)
         np.testing.assert_allclose(res.hi[k], hi, atol=1e-6 * width.max(), rtol=0)
+
+
+def campaign_record(seed: int):
+    """The record of seed ``seed`` of ``benchmarks/verdict_campaign.py``: a random scaled
+    system (up to two decades), noise and increments uniform in their boxes, 10 %
+    missing entries; ``(Phi, G, Xi, Gamma, r_dd, r_v, Y, U)``."""
+    rng = np.random.default_rng(seed)
+    dec = float(rng.choice([0, 1, 2]))
+    Phi, G, Xi, Gam, rd = random_scaled_system(rng, dec)
+    n, q, l, p = Phi.shape[0], G.shape[1], Xi.shape[0], Gam.shape[1]
+    rv = 10.0 ** rng.uniform(-2, 0, l) * np.abs(Xi).sum(1)
+    N = 30
+    x, d = rng.standard_normal(n), rng.standard_normal(q) * rd * 3
+    U = rng.standard_normal((N, p))
+    Y = []
+    for k in range(N):
+        Y.append(Xi @ x + rv * rng.uniform(-1, 1, l))
+        x = Phi @ x + G @ d + Gam @ U[k]
+        d = d + rd * rng.uniform(-1, 1, q)
+    Y = np.array(Y)
+    Y[rng.random(Y.shape) < 0.1] = np.nan
+    return Phi, G, Xi, Gam, rd, rv, Y, U
+
+
+@pytest.mark.parametrize(("seed", "steps"), [
+    (36, (10, 20, 29)), (38, (13, 29)),
+    # open (issue 32): both exact-mode paths agree with each other and are 8.6e-5 of
+    # the width wider than the LP (three HiGHS methods agree; the data allowances do
+    # not explain it): strict, so that the fix shows
+    pytest.param(51, (29,), marks=pytest.mark.xfail(strict=True, reason="open: exact mode "
+                                                    "wider than the whole-history LP")),
+])
+def test_exact_mode_at_the_calibrated_bound_equals_the_whole_history_lp(seed, steps):
+    """Seeds of the campaign where exact mode was 1e-6 to 9e-5 of the width wider than
+    the whole-history LP with status ok: the conversion to an H-representation
+    confirmed facets only to VERTEX_RTOL (1e-9 of the size), and later measurement
+    slabs on the thin calibrated set amplified those slivers (seed 38: 2e-4 at
+    k = 13). The conversion now confirms facets to HREP_CONVERT_RTOL."""
+    Phi, G_, Xi, Gam, rd, rv, Y, U = campaign_record(seed)
+    s = so.LinearSystem(Phi, G_, Xi, Gam if Gam.shape[1] else None)
+    Ua = U if Gam.shape[1] else None
+    cal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv)
+    res = so.SMFDO(s, window=None, increment_set=rd, measurement_noise=cal.radii).run(Y, Ua)
+    assert set(np.unique(res.status)) <= {"ok", "unbounded"}
+    for k in steps:
+        lo, hi = history_lp_noisy(Phi, G_, Xi, Gam, rd, cal.radii, Y, U, k)
+        width = float((hi - lo).max())
+        assert np.abs(res.lo[k] - lo).max() <= 1e-6 * width, (k, res.lo[k], lo)
+        assert np.abs(res.hi[k] - hi).max() <= 1e-6 * width, (k, res.hi[k], hi)

@@ -195,8 +195,8 @@ class _VerifiedHull:
         return tuple(np.round(np.concatenate([eq[:-1], [-eq[-1] / self.scale]]), 9))
 
 
-def verified_facets(Z: ConstrainedZonotope, max_lps: int = 20_000
-                    ) -> tuple[NDArray[np.float64], ...]:
+def verified_facets(Z: ConstrainedZonotope, max_lps: int = 20_000,
+                    rtol: float = VERTEX_RTOL) -> tuple[NDArray[np.float64], ...]:
     """``(vertices, normals, offsets, flat)`` of a bounded set by :class:`_VerifiedHull`.
 
     ``normals @ x <= offsets`` are the confirmed facets (certified offsets);
@@ -208,8 +208,10 @@ def verified_facets(Z: ConstrainedZonotope, max_lps: int = 20_000
         A bounded set.
     max_lps : int
         LP budget (:class:`~setobs.SolverError` beyond it).
+    rtol : float
+        Tolerance, relative to the set's size, within which a facet is confirmed.
     """
-    vh = _VerifiedHull(Z, max_lps=max_lps)
+    vh = _VerifiedHull(Z, rtol=rtol, max_lps=max_lps)
     V, H, k = vh.run()
     return V, H, k, vh.flat
 

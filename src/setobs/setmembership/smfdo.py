@@ -33,7 +33,7 @@ from ..geometry.box import box_center, box_center_radius, trusted_box
 from ..geometry.zonotope import hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
-from ..tolerances import DATA_RTOL, UNBOUNDED_RADIUS
+from ..tolerances import DATA_RTOL, HREP_CONVERT_RTOL, UNBOUNDED_RADIUS
 from ._hrep import (
     HState,
     snap_normals,
@@ -1037,7 +1037,8 @@ class SMFDO:
             box, _ = hull_with_status(Z)
             if not box.is_bounded:
                 return None
-            V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS)
+            V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
+                                              rtol=HREP_CONVERT_RTOL)
             g_flat = [support_unwarned(Z, f) for f in flats] + \
                 [support_unwarned(Z, -f) for f in flats]
         except SetobsError:
@@ -1051,7 +1052,7 @@ class SMFDO:
         H = np.vstack([F, flats, -flats])
         g = np.concatenate([gF, np.asarray(g_flat, dtype=float)])
         if not np.isfinite(g).all() or V.shape[0] > H_MAX_VERTICES or \
-                H.shape[0] > H_MAX_NORMALS:
+                H.shape[0] > H_MAX_NORMALS or not vertices_match(V, H, g):
             return None
         return HState(H, g, box.lo, box.hi, V)
 
