@@ -193,8 +193,9 @@ HREP_VERIFY_RTOL: float = 1e-6
 #: posterior to an H-representation. With ``VERTEX_RTOL`` (1e-9) the converted
 #: polytope may exceed the set by slivers of that size, and on thin sets at a
 #: calibrated noise bound later measurement slabs amplified them to 2e-4 of the
-#: interval width; a conversion that cannot confirm its facets this tightly is
-#: left to the set recursion.
+#: interval width. A conversion that cannot confirm its facets this tightly falls
+#: back to ``VERTEX_RTOL`` (carrying the set instead cost 1e-6 of exactness over
+#: long records through the set recursion's rounding allowances).
 HREP_CONVERT_RTOL: float = 1e-12
 
 # ---- exact reduction (setobs.geometry.reduction)

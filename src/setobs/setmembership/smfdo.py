@@ -1037,8 +1037,11 @@ class SMFDO:
             box, _ = hull_with_status(Z)
             if not box.is_bounded:
                 return None
-            V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
-                                              rtol=HREP_CONVERT_RTOL)
+            try:
+                V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
+                                                  rtol=HREP_CONVERT_RTOL)
+            except SetobsError:
+                V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS)
             g_flat = [support_unwarned(Z, f) for f in flats] + \
                 [support_unwarned(Z, -f) for f in flats]
         except SetobsError:
