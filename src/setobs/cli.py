@@ -164,10 +164,6 @@ EXIT_INCONSISTENT = 1
 SKIP_WARN_FRACTION = 0.01
 
 
-def _round_time(x: float) -> float:
-    """A time or sampling time at 12 significant digits (0.0009999999999998899 -> 0.001)."""
-    return float(f"{x:.12g}")
-
 
 def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None,
              time_col: str | None = None, dt: float | None = None,
@@ -186,7 +182,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     import time as _time
 
     from .exceptions import ModelInvalidatedError
-    from .io import load_model, load_record
+    from .io import load_model, load_record, round_time
     from .setmembership import SMFDO, calibrate_noise
 
     rec = load_record(record, outputs=outputs, inputs=inputs, time=time_col, dt=dt,
@@ -242,7 +238,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
             res = obs.run(rec.Y, rec.U, progress=show)
     except ModelInvalidatedError as exc:
         k = exc.step
-        when = f" (t = {_round_time(float(rec.t[k])):g} s)" if times_known else ""
+        when = f" (t = {round_time(float(rec.t[k])):g} s)" if times_known else ""
         print(f"setobs: the record is inconsistent with the model at step {k}{when}: no "
               f"trajectory within the bounds explains it. What to do: --calibrate (the "
               f"smallest noise bound that explains the record), a larger --noise or "
@@ -261,20 +257,20 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     statuses = {str(k): int(c) for k, c in zip(*np.unique(res.status, return_counts=True),
                                               strict=True)}
     first = res.first_inconsistent
-    skipped = int(np.sum(res.status == "skipped")) + int(np.sum(res.status == "reset"))
+    skipped = statuses.get("skipped", 0) + statuses.get("reset", 0)
     summary = {"record": str(record), "model": str(model), "steps": int(N),
-               "sampling_time": None if rec.dt is None else _round_time(rec.dt),
+               "sampling_time": None if rec.dt is None else round_time(rec.dt),
                "window": window, "increment": inc.tolist(),
                "noise": None if v is None else np.asarray(v).tolist(),
                "calibrated": bool(calibrate), "statuses": statuses,
                "first_inconsistent_step": first,
                "first_inconsistent_time": (None if first is None or not times_known
-                                           else _round_time(float(rec.t[first]))),
+                                           else round_time(float(rec.t[first]))),
                "seconds": round(elapsed, 3)}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(f"steps {N}; statuses: " + ", ".join(f"{k} {c}" for k, c in statuses.items())
           + f"; first inconsistent step: {first if first is not None else 'none'}"
-          + (f" (t = {_round_time(rec.t[first]):g} s)" if first is not None and times_known
+          + (f" (t = {round_time(rec.t[first]):g} s)" if first is not None and times_known
              else "")
           + f"; {elapsed:.2f} s")
     if skipped > SKIP_WARN_FRACTION * N:

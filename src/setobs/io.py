@@ -272,6 +272,18 @@ def _columns(what: str, spec: Any, names: list[str]) -> list[int]:
     return out
 
 
+def round_time(x: float) -> float:
+    """A time or sampling time at 12 significant digits: a time column printed in
+    milliseconds gives steps like 0.0009999999999998899, which is 0.001 s.
+
+    Parameters
+    ----------
+    x : float
+        Seconds.
+    """
+    return float(f"{float(x):.12g}")
+
+
 def load_record(path: str | Path, *, outputs: Any, inputs: Any = None, time: Any = None,
                 dt: float | None = None, variable: str | None = None,
                 decimate: int = 1) -> Record:
@@ -319,9 +331,7 @@ def load_record(path: str | Path, *, outputs: Any, inputs: Any = None, time: Any
                                  f"{steps.min():g} to {steps.max():g} s)")
         if dt is not None and abs(dt - med) > 0.01 * med:
             raise ModelFileError(f"--dt {dt:g} disagrees with the time column ({med:g} s)")
-        # 12 significant digits: a time column printed in milliseconds gives steps
-        # like 0.0009999999999998899, which is 0.001 s
-        dt = float(f"{med:.12g}")
+        dt = round_time(med)
     if dt is not None and not dt > 0:
         raise ModelFileError(f"dt must be positive, got {dt}")
     sl = slice(None, None, int(decimate))

@@ -103,8 +103,8 @@ def _steady_range(series: list[ArrayLike], startup: float = 0.05,
     """
     arrs = [np.asarray(x, dtype=float).reshape(-1) for x in series]
     full = np.concatenate([a[np.isfinite(a)] for a in arrs]) if arrs else np.zeros(0)
-    steady = np.concatenate([a[int(startup * a.size):][np.isfinite(a[int(startup * a.size):])]
-                             for a in arrs])
+    tails = [a[int(startup * a.size):] for a in arrs]
+    steady = np.concatenate([t[np.isfinite(t)] for t in tails])
     if full.size == 0 or steady.size == 0:
         return None
     lo, hi = np.percentile(steady, [1.0, 99.0])

@@ -58,6 +58,7 @@ __all__ = [
     "RANK_FLOOR",
     "RANK_RTOL",
     "REDUNDANT_BOUND_MARGIN",
+    "RELAXED_EXACT_GAP",
     "RESONANCE_RTOL",
     "SERIES_TAIL_RTOL",
     "UNBOUNDED_RADIUS",
@@ -160,6 +161,10 @@ LP_REFINE_GAP: float = 1e-9
 #: relative residual of 3e-3 on an exact-mode set, and a multiplier certified near
 #: that point's objective, 0.01 below the true minimum (issue 32, item 3).
 PRIMAL_RESIDUAL_RTOL: float = 1e-6
+#: The LP with rows relaxed (the last resort after an uncertified "infeasible") counts
+#: as exact when its minimiser satisfies the exact rows and its objective is within
+#: this of its certified bound, relative to ``1 + |objective|``.
+RELAXED_EXACT_GAP: float = 1e-6
 
 # ---- vertex enumeration (setobs.geometry.polytope)
 #: Relative tolerance of the vertex enumeration: a facet of the found hull is

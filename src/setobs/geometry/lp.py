@@ -72,6 +72,7 @@ from ..tolerances import (
     FEASIBILITY_TOL,
     LP_REFINE_GAP,
     PRIMAL_RESIDUAL_RTOL,
+    RELAXED_EXACT_GAP,
     UNBOUNDED_RADIUS,
     UNBOUNDED_REDUCED_COST_TOL,
 )
@@ -668,8 +669,8 @@ class FactorPolytope:
                 # (then its objective bounds the minimum from above) and closes the
                 # gap: a degenerate LP that HiGHS mislabelled, decided.
                 if (rel.point is not None and self.point_is_feasible(rel.point)
-                        and rel.objective - rel.bound <= LP_REFINE_GAP * (1.0 + abs(rel.objective))
-                        * 1e3):
+                        and rel.objective - rel.bound
+                        <= RELAXED_EXACT_GAP * (1.0 + abs(rel.objective))):
                     return rel
                 self.fallbacks += 1
                 return LPResult(max(rel.bound, best), rel.objective, rel.point, "fallback")

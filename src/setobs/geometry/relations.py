@@ -199,7 +199,8 @@ def is_subset(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResu
     # Both sets at the container's magnitude (exact power-of-two scaling), so the
     # tolerances are relative to the sets' size: a 1e-8 set 0.1 % outside its
     # container was "inside" under absolute tolerances.
-    Ws, f = unit_scaled(W, magnitude(Z) if np.isfinite(magnitude(Z)) else 0.0)
+    mz = magnitude(Z)
+    Ws, f = unit_scaled(W, mz if np.isfinite(mz) else 0.0)
     if Ws is not W:
         r = is_subset(scaled_by(Z, f), Ws)
         return ContainmentResult(r.holds, None if r.witness is None else r.witness * f,

@@ -1145,22 +1145,26 @@ def scaled_by(Z: ConstrainedZonotope, f: float) -> ConstrainedZonotope:
     f : float
         A power of two.
     """
-    cerr = None if Z._cerr is None else Z._cerr / f
+    cached = Z._cache.get(("scaled_by", f))
+    if cached is not None:   # repeated queries reuse the scaled set and its LP caches
+        return cached
     # Factors at unit size too (each finite h_j brought into [1/2, 1) by a power of
     # two, the column of G and A multiplied by it: exact), so that tolerances on the
     # factors (point containment, LP feasibility) are relative as well.
     h = Z.h
     fin = np.isfinite(h) & (h > 0.0)
-    e = np.zeros(h.size)
+    e = np.zeros(h.size, dtype=int)
     if fin.any():
         e[fin] = np.frexp(h[fin])[1]
     if f == 1.0 and not e.any():
         return Z
-    col = np.ldexp(1.0, e.astype(int))
-    return ConstrainedZonotope._trusted(Z.G * (col / f)[None, :] if f != 1.0 else Z.G * col,
-                                        Z.c / f, Z.A * col[None, :], Z.b,
-                                        np.where(fin, np.ldexp(h, -e.astype(int)), h),
-                                        Z.unbounded_radius, cerr, Z._berr)
+    col = np.ldexp(1.0, e)
+    cerr = None if Z._cerr is None else Z._cerr / f
+    out = ConstrainedZonotope._trusted(Z.G * (col / f)[None, :], Z.c / f, Z.A * col[None, :],
+                                       Z.b, np.where(fin, np.ldexp(h, -e), h),
+                                       Z.unbounded_radius, cerr, Z._berr)
+    Z._cache[("scaled_by", f)] = out
+    return out
 
 
 def factor_polytope(Z: ConstrainedZonotope) -> FactorPolytope:
