@@ -27,6 +27,7 @@ __all__ = [
     "CALIBRATION_ATOL",
     "CALIBRATION_CHECK_TOL",
     "CALIBRATION_RTOL",
+    "CENTER_ERROR_ABSORB_RTOL",
     "CONTAINMENT_RTOL",
     "DATA_RTOL",
     "ELIMINATION_ERR_RTOL",
@@ -202,6 +203,12 @@ HREP_VERIFY_RTOL: float = 1e-6
 #: back to ``VERTEX_RTOL`` (carrying the set instead cost 1e-6 of exactness over
 #: long records through the set recursion's rounding allowances).
 HREP_CONVERT_RTOL: float = 1e-12
+#: The set recursion (exact mode's reference path) carries the rounding bound of a
+#: posterior's centre as bounded factors once it exceeds this fraction of the
+#: centre's largest entry: mapped as a bound, ``|A| c_err``, it grows like
+#: ``rho(|A|)^k`` (1e-3 of the width after 30 steps of a non-normal ``A``, issue 32);
+#: mapped as generators it follows ``A^k``.
+CENTER_ERROR_ABSORB_RTOL: float = 1e-13
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

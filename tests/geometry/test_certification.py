@@ -92,6 +92,45 @@ def test_total_solver_failure_gives_a_wider_certified_box_and_a_warning(seed):
         assert Fraction(box.lo[i]) <= lo and Fraction(box.hi[i]) >= hi
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_an_lp_no_setting_decides_is_decided_by_the_perturbed_restart(seed, monkeypatch):
+    """HiGHS stalls on the objective itself under every setting (a degenerate tie it
+    cannot break), the compiled simplex is unavailable: the restart with the
+    objective perturbed finds a basis, and the bound certified for the true
+    objective from it is exact (rational oracle), not a fallback."""
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=2, n_g=6, n_c=2)
+    made: list[np.ndarray] = []
+    real_perturbed, real_solve = FactorPolytope.perturbed_objective, FactorPolytope.solve_objective
+
+    def perturbed(self, w):
+        made.append(out := real_perturbed(self, w))
+        return out
+
+    def stalling(self, hs, w, scale):
+        if any(w is m for m in made):
+            assert np.any(w != made[-1] * 0.0)  # (a perturbed objective reaches HiGHS)
+            return real_solve(self, hs, w, scale)
+        return highspy.HighsModelStatus.kIterationLimit
+
+    monkeypatch.setattr(FactorPolytope, "perturbed_objective", perturbed)
+    monkeypatch.setattr(FactorPolytope, "solve_objective", stalling)
+    monkeypatch.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SolverWarning)
+        box = Z.interval_hull()
+    assert made and factor_polytope(Z).fallbacks == 0
+    for i in range(2):
+        e = np.zeros(2)
+        e[i] = 1.0
+        lo, hi = exact_extremes(Z, e)
+        assert Fraction(box.lo[i]) <= lo and Fraction(box.hi[i]) >= hi
+        scale = 1.0 + abs(float(lo)) + abs(float(hi))
+        assert float(lo) - box.lo[i] <= 1e-9 * scale and box.hi[i] - float(hi) <= 1e-9 * scale
+
+
 def test_highs_infeasible_claim_is_checked(monkeypatch):
     """If HiGHS claims infeasibility on a feasible set, we must not report it empty."""
     Z = ConstrainedZonotope(np.eye(2), np.zeros(2), [[1.0, 1.0]], [0.5])

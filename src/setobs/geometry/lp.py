@@ -49,7 +49,8 @@ smallest constraint violation (see :meth:`FactorPolytope.emptiness`).
 
 A solver's bad day never aborts a query: an undecided HiGHS status is retried
 with other settings (a fresh unscaled model, default tolerances with the
-primal simplex, the interior-point method) and with the compiled simplex of
+primal simplex, the interior-point method with crossover, a restart with the
+objective perturbed -- certified for the true one), and with the compiled simplex of
 :mod:`setobs.geometry.fastlp`; if every attempt fails, the best certified
 bound of any multiplier seen (at worst ``y = 0``, i.e. ``-sum h_j |w_j|`` or
 ``-inf``) is returned with status ``"fallback"``: wider, still outer.
@@ -469,6 +470,24 @@ class FactorPolytope:
          "dual_feasibility_tolerance": 1e-7},
         {"solver": "ipm", "run_crossover": "on"},
     )
+    #: Relative size of the objective perturbation of the last HiGHS retry (a
+    #: perturbed restart: ties of a degenerate LP broken, the bound certified for
+    #: the true objective from the basis found).
+    PERTURBATION: float = 1e-7
+
+    def perturbed_objective(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``w`` plus a fixed pseudo-random perturbation of relative size
+        :attr:`PERTURBATION` on the bounded factors (a perturbation on an unbounded
+        one could make the LP unbounded).
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        """
+        u = np.random.default_rng(12345).uniform(-1.0, 1.0, self.n_g)
+        mag = float(np.abs(w).max(initial=0.0))
+        return w + np.where(self._unb, 0.0, self.PERTURBATION * max(mag, 1e-300) * u)
 
     def _build(self, row_lo, row_hi, cost, options: dict[str, object] | None = None
                ) -> highspy.Highs | None:
@@ -611,13 +630,16 @@ class FactorPolytope:
         scale = self.objective_scale(w)
         best = -np.inf  # best certified bound of any multiplier (fallback answer)
         infeasible_claims = 0
-        attempts = [None, *self._RETRIES]
+        attempts = [None, *self._RETRIES, "perturbed"]
         for i, options in enumerate(attempts):
+            perturbed = options == "perturbed"
             hs = self.highs_model() if i == 0 else self._build(
-                self.b, self.b, np.zeros(self.n_g), options)
+                self.b, self.b, np.zeros(self.n_g), None if perturbed else options)
             if hs is None:
                 continue
-            st = self.solve_objective(hs, w, scale)
+            st = self.solve_objective(hs, self.perturbed_objective(w) if perturbed else w, scale)
+            if perturbed and st == highspy.HighsModelStatus.kUnbounded:
+                continue  # (says nothing about the true objective)
             if st == highspy.HighsModelStatus.kOptimal:
                 sol = hs.getSolution()
                 y = np.asarray(sol.row_dual, dtype=np.float64) * scale
@@ -754,7 +776,7 @@ class FactorPolytope:
         return LPResult(bound, float(objs[0]), None, "optimal")
 
     def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
-        """Duals recomputed from HiGHS's optimal basis, with one refinement step.
+        """Duals recomputed from HiGHS's optimal basis, refined in extended precision.
 
         Solves ``A[N, B]^T y_N = w_B`` (``B`` basic columns, ``N`` nonbasic rows;
         ``y = 0`` on rows whose slack is basic). Only a candidate multiplier:
@@ -769,7 +791,15 @@ class FactorPolytope:
         M = self.A[np.ix_(nbr, bc)].T
         try:
             yn = np.linalg.solve(M, w[bc])
-            yn += np.linalg.solve(M, w[bc] - M @ yn)
+            # Iterative refinement with residuals in extended precision (long
+            # double where the platform has it): the duals of the basis to
+            # working precision, also on ill-conditioned bases.
+            Ml, wl = M.astype(np.longdouble), w[bc].astype(np.longdouble)
+            for _ in range(3):
+                r = np.asarray(wl - Ml @ yn.astype(np.longdouble), dtype=np.float64)
+                if not r.any():
+                    break
+                yn = yn + np.linalg.solve(M, r)
         except np.linalg.LinAlgError:
             return None
         y = np.zeros(self.n_c)

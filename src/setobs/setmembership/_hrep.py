@@ -63,6 +63,11 @@ from ..tolerances import (
 __all__ = ["HState", "clip", "hull_points", "snap_normals", "step_geometry", "tidy_vertices"]
 
 _EPS = np.finfo(float).eps
+#: Most points a clip of the approximate geometry may produce before the step goes
+#: to the reference path (every inside-outside pair of points gives one).
+MAX_CLIP_POINTS = 1024
+#: Most vertices of a carried H-representation (``smfdo.H_MAX_VERTICES``).
+MAX_VERTICES = 128
 
 
 @dataclass(frozen=True, eq=False)
@@ -350,7 +355,9 @@ def step_geometry(V: NDArray[np.float64], A_o: NDArray[np.float64], shift: NDArr
             return None
     for i, (a, b, eq) in enumerate(clips):
         P = clip(P, a, b, eq)
-        if P.shape[0] == 0:
+        if P.shape[0] == 0 or P.shape[0] > MAX_CLIP_POINTS:
+            # (too many: every inside-outside pair gives a point, and the hull of
+            # thousands of points in 7 dimensions took Qhull 15 s and 7e5 facets)
             return None
         if i < len(clips) - 1 and P.shape[0] > 8 * N and (P := pruned(P)) is None:
             return None

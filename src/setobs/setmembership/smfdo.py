@@ -30,11 +30,17 @@ from ..exceptions import (
 )
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center, box_center_radius, trusted_box
-from ..geometry.zonotope import hull_with_status, trusted_cz
+from ..geometry.zonotope import absorb_center_error, hull_with_status, trusted_cz
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
-from ..tolerances import DATA_RTOL, HREP_CONVERT_RTOL, UNBOUNDED_RADIUS
+from ..tolerances import (
+    CENTER_ERROR_ABSORB_RTOL,
+    DATA_RTOL,
+    HREP_CONVERT_RTOL,
+    UNBOUNDED_RADIUS,
+)
 from ._hrep import (
+    MAX_VERTICES,
     HState,
     snap_normals,
     step_geometry,
@@ -73,8 +79,14 @@ H_CONVERSION_LPS = 150
 #: set's complexity grow quickly (the paper example with a noise box: 44, 107,
 #: 264 facets and 178, 361, 754 vertices at k = 2, 3, 4; benchmarks/exact_mode.py),
 #: and then the vertex geometry costs more than the whole-history LPs.
-H_MAX_VERTICES = 128
+H_MAX_VERTICES = MAX_VERTICES
 H_MAX_NORMALS = 64
+#: Exact mode converts a posterior whose facets are confirmed only to
+#: ``VERTEX_RTOL`` (not ``HREP_CONVERT_RTOL``) when its box is at most this many
+#: times wider than one step's uncertainty: converted earlier, in the transient
+#: before the data bound the set (widths 1e3 to 1e5 times the later ones), that
+#: tolerance became 1e-6 of the later width (issue 32, campaign seed 36).
+H_LAX_SIZE_FACTOR = 1e3
 
 
 @dataclass(frozen=True)
@@ -744,6 +756,7 @@ class SMFDO:
         self._hrep = (window is None and self.fast and self._inc_fixed is not None
                       and not self._noise_varies)
         self._h_images: list[NDArray[np.float64]] | None = None
+        self._h_floor_value: float | None = None
         self._h_noise: dict[bytes, list] = {}
         self.reset_state()
 
@@ -1030,7 +1043,7 @@ class SMFDO:
         """The H-representation of a bounded posterior (certified facets and box,
         :func:`setobs.geometry.polytope.to_hrep`'s construction), or ``None``."""
         from ..exceptions import SetobsError
-        from ..geometry.polytope import verified_facets
+        from ..geometry.polytope import BUDGET_STATUS, verified_facets
         from ..geometry.zonotope import support_unwarned
 
         try:
@@ -1039,9 +1052,19 @@ class SMFDO:
                 return None
             try:
                 V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
-                                                  rtol=HREP_CONVERT_RTOL)
-            except SetobsError:
-                V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS)
+                                                  rtol=HREP_CONVERT_RTOL,
+                                                  max_facets=4 * H_MAX_NORMALS)
+            except SetobsError as exc:
+                if getattr(exc, "status", "") == BUDGET_STATUS:
+                    return None  # too complex for the H-recursion: no lax retry
+                # Facets confirmed to VERTEX_RTOL of the set's size only: an
+                # excess of that size, absolute, outlives a later contraction of
+                # the set. Not while the set is far larger than one step's
+                # uncertainty (the transient before the data bound it).
+                if float(np.max(box.hi - box.lo)) > H_LAX_SIZE_FACTOR * self._h_floor():
+                    raise
+                V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
+                                                  max_facets=4 * H_MAX_NORMALS)
             g_flat = [support_unwarned(Z, f) for f in flats] + \
                 [support_unwarned(Z, -f) for f in flats]
         except SetobsError:
@@ -1058,6 +1081,14 @@ class SMFDO:
                 H.shape[0] > H_MAX_NORMALS or not vertices_match(V, H, g):
             return None
         return HState(H, g, box.lo, box.hi, V)
+
+    def _h_floor(self) -> float:
+        """Largest width of one step's uncertainty in ``z_o`` (``B_o`` times the
+        increment set, with ``E_o`` times the process noise)."""
+        if self._h_floor_value is None:
+            w = hull_with_status(self._B_step @ self._step_set)[0]
+            self._h_floor_value = float(np.max(w.hi - w.lo, initial=0.0))
+        return self._h_floor_value
 
     def _h_setup(self) -> list[NDArray[np.float64]]:
         """Vertices of the increment (and process-noise) sets mapped into the state."""
@@ -1200,7 +1231,12 @@ class SMFDO:
 
     # ------------------------------------------------------------------ recursion
     def _prior(self, Z: ConstrainedZonotope, e: _Entry) -> ConstrainedZonotope:
-        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``."""
+        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``.
+
+        The centre's rounding bound goes through ``A_o`` as factors once it is
+        above rounding level (:func:`~setobs.geometry.zonotope.absorb_center_error`).
+        """
+        Z = absorb_center_error(Z, CENTER_ERROR_ABSORB_RTOL)
         Zp = self.A_o @ Z + self.B_o @ e.dd
         if e.w is not None:
             Zp = Zp + self._E_o @ e.w
