@@ -148,3 +148,25 @@ def test_all_names_exist(module):
         obj = getattr(mod, name)
         if inspect.isfunction(obj) or inspect.isclass(obj):
             assert not _is_private(obj.__name__)
+
+
+BASE_LAYER = ("exceptions", "tolerances", "_rounding", "_validation", "_format", "_blas",
+              "_lazy", "_deprecation", "_riccati")
+
+
+def test_the_base_layer_imports_nothing_above_it():
+    """The package's base modules import only each other (also under TYPE_CHECKING):
+    exceptions.py once imported the existence report from analysis/, the one
+    import that ran upward and tied the base files into a circle with it."""
+    bad = []
+    for name in BASE_LAYER:
+        path = ROOT / "src" / "setobs" / f"{name}.py"
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                target = (node.module or "").split(".")[0]
+                if node.level > 1 or target not in BASE_LAYER:
+                    bad.append(f"{name}.py:{node.lineno}: from {'.' * node.level}{node.module}")
+            elif isinstance(node, ast.Import):
+                bad += [f"{name}.py:{node.lineno}: import {a.name}" for a in node.names
+                        if a.name.split(".")[0] == "setobs"]
+    assert bad == []

@@ -7,10 +7,10 @@ has the same meaning the subclass also derives from it, so that
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .analysis.existence import BoundedDOReport
+# (The base layer imports nothing above it: the report's type,
+# setobs.analysis.existence.BoundedDOReport, is named in the docstring only.)
 
 __all__ = [
     "DesignError",
@@ -90,11 +90,11 @@ class ExistenceError(SetobsError, ValueError):
 
     Attributes
     ----------
-    report : BoundedDOReport
+    report : setobs.analysis.existence.BoundedDOReport
         The analysis report (ranks, margins, unrecoverable directions).
     """
 
-    def __init__(self, message: str, report: BoundedDOReport) -> None:
+    def __init__(self, message: str, report: Any) -> None:
         super().__init__(message)
         self.report = report
 

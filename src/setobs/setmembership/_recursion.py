@@ -1,0 +1,218 @@
+"""The SMFDO's set recursion (eqs. (20)-(21)), its consistency verdicts and step statuses."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .._rounding import UNIT_ROUNDOFF
+from ..exceptions import (
+    EmptySetError,
+    ModelInvalidatedError,
+    ModelInvalidatedWarning,
+    SolverWarning,
+)
+from ..geometry import Box, ConstrainedZonotope
+from ..geometry.box import box_center, trusted_box
+from ..geometry.zonotope import absorb_center_error, hull_with_status, trusted_cz
+from ..tolerances import CENTER_ERROR_ABSORB_RTOL
+from ._setup import Entry
+from ._steps import SMFDOStep
+from ._window import model_rtol
+
+__all__ = ["ON_INCONSISTENT", "SetRecursion"]
+
+#: ``on_inconsistent`` choices.
+ON_INCONSISTENT = ("raise", "skip", "reset")
+
+
+class SetRecursion:
+    """The set recursion of the SMFDO (a mixin of :class:`~setobs.SMFDO`): prior and
+    posterior, the reference step with its inconsistency policy and fallback
+    flag, and the committed step's reported bounds."""
+
+    # ------------------------------------------------------------------ recursion
+    def _prior(self, Z: ConstrainedZonotope, e: Entry) -> ConstrainedZonotope:
+        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``.
+
+        The centre's rounding bound goes through ``A_o`` as factors once it is
+        above rounding level (:func:`~setobs.geometry.zonotope.absorb_center_error`).
+        """
+        Z = absorb_center_error(Z, CENTER_ERROR_ABSORB_RTOL)
+        Zp = self.A_o @ Z + self.B_o @ e.dd
+        if e.w is not None:
+            Zp = Zp + self._E_o @ e.w
+        u = e.u
+        if u is not None and self.sys.p:
+            v = self.Gamma_o @ u
+            err = self.data_rtol * (np.abs(self.Gamma_o) @ np.abs(u)) if self.data_rtol \
+                else None
+            Zp = Zp.minkowski_sum(v, err=err)
+        return Zp
+
+    def _posterior(self, Zp: ConstrainedZonotope, e: Entry,
+                   depth: int) -> ConstrainedZonotope:
+        """Eq. (21): ``Zp ∩ {z : C_o z in y - F_b V}`` on the measured rows of ``y``
+        (balanced units); with no noise set, ``{z : C_o z = y}``; with nothing
+        measured, ``Zp`` (a prediction step).
+
+        ``y`` is known to within ``data_rtol |y|`` plus the model allowance of
+        ``depth`` recursion steps (see :mod:`setobs.setmembership._window`) and
+        the feedthrough's rounding.
+        """
+        y = e.y
+        m = ~np.isnan(y)
+        if not m.any():
+            return Zp
+        nD = self._inc_fixed.n_gen if self._inc_fixed is not None else self.sys.q
+        nV = 0 if e.v is None else e.v.n_gen
+        rtol = self.data_rtol + model_rtol(depth, self.A_o.shape[0], self.sys.p, nD + nV)
+        ym = y[m]
+        y_err = rtol * np.abs(ym)
+        if e.yerr is not None:
+            y_err = y_err + e.yerr[m]
+        C = self.C_o if m.all() else self.C_o[m]
+        if e.v is None:
+            return Zp.intersect_affine(C, ym, y_err=y_err)
+        V = e.v
+        # the set y - V_m (rows m of F_b V): centre y - c_V (rounded once), the
+        # noise's own constraints, generators -G_V
+        cY = ym - V.c[m]
+        cY_err = UNIT_ROUNDOFF * np.abs(cY) + V.c_err[m] + y_err
+        Yset = trusted_cz(-V.G[m], cY, V.A, V.b, V.h, V.unbounded_radius, cY_err,
+                                            V.b_err)
+        return Zp.intersect(Yset, R=C)
+
+    def _reference_step(self, k: int, mode: str, e: Entry) -> SMFDOStep:
+        """One step on the set recursion (eqs. (20)-(21), or the window's re-run from
+        the restart box): the bounds, and the consistency verdict and status."""
+        self.stats["reference"] += 1
+        if k == 0:
+            Zp = self._Z0_prior
+            depth = 0
+        elif mode == "box":
+            # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
+            Z = self._box_cz(self._hulls[0])
+            Zp = None
+            hist = self._window_hist(e)
+            for i, ei in enumerate(hist):
+                Zp = self._prior(Z, ei)
+                if i < len(hist) - 1:
+                    Z = self._posterior(Zp, ei, i + 1)
+            depth = len(hist)
+        else:
+            Zp = self._prior(self._Z, e)
+            depth = self._depth + 1
+        Z = self._posterior(Zp, e, depth)
+        status = "ok"
+        try:
+            Zd, box, box_o, fell_back = self._bounds(Z)
+        except EmptySetError:
+            msg = (f"the measurement at step k={k} is inconsistent with the model and the "
+                   "uncertainty sets (empty posterior)")
+            if self.on_inconsistent == "raise":
+                raise ModelInvalidatedError(msg, k) from None
+            # One-step prior from the last valid posterior (the windowed re-run may
+            # pass through the same inconsistency again).
+            Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, e)
+            if self.on_inconsistent == "skip":
+                # The measurement is dropped, here and in the window's history.
+                e = e.skipped()
+                Z = Zp1
+                depth = self._depth + 1 if k else 0
+                Zd, box, box_o, fell_back = self._bounds(Z)
+                status = "skipped"
+            else:
+                Z = self._handle_empty(k, Zp1, e, msg)
+                depth = 0
+                Zd, box, box_o, fell_back = self._bounds(Z)
+                # The window restarts from the reset set: eq. (24) is applied again
+                # only once delta consistent steps have been collected.
+                self._hulls.clear()
+                self._hist.clear()
+                self._from_initial = False
+                self._windowing = False
+                status = "reset"
+            self.stats[status] += 1
+            if self.first_inconsistent is None:
+                self.first_inconsistent = k
+            if not self._in_run and not self._warned_inconsistent:
+                self._warned_inconsistent = True
+                warnings.warn(
+                    f"{msg}: {'skipped' if status == 'skipped' else 'reset'} "
+                    "(status recorded per step; warned once per observer)",
+                    ModelInvalidatedWarning, stacklevel=4)
+        if fell_back:
+            status = "fallback" if status == "ok" else status
+            self.stats["fallback"] += 1
+            if not self._warned_fallback:
+                self._warned_fallback = True
+                warnings.warn(
+                    f"SMFDO step k={k}: an LP failed under every solver setting; the bounds "
+                    "of this step are wider (still certified) and flagged status='fallback' "
+                    "(warned once per observer)", SolverWarning, stacklevel=4)
+        self._depth = depth
+        return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, e,
+                            status)
+
+    def _commit(self, k, mode, Z_src, box, box_o, Zd, e: Entry, status) -> SMFDOStep:
+        self.k = k
+        self._last_y = e.y
+        self._Z_src = Z_src
+        if mode == "box":
+            self._windowing = True
+        if self.window is not None:  # (exact mode runs the plain recursion: no history)
+            self._hist.append(e)  # e.dd is None at k = 0 (never used)
+            # The restart box of eq. (24) gets the same relative margin as the
+            # reported bounds: the set recursion itself rounds (O(eps)), and a
+            # box without margin can make a thin set (states pinned to rounding
+            # level) empty at a later step.
+            self._hulls.append(trusted_box(*self._outward(box_o.lo, box_o.hi)))
+            if self._windowing and len(self._hist) > self.window:
+                del self._hist[:len(self._hist) - self.window]
+        lo, hi = self._outward(box.lo, box.hi)
+        est = box_center(lo, hi)
+        rad = float(np.max(0.5 * (hi - lo), initial=0.0))
+        if status == "ok" and not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            status = "unbounded"
+        return SMFDOStep(k, est, lo, hi, rad, Zd, status)
+
+    def _bounds(self, Z: ConstrainedZonotope):
+        """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, and
+        whether an LP fell back."""
+        fb_o = False
+        box_o = None
+        if self.window is not None:
+            box_o, fb_o = hull_with_status(Z)
+        Zd = self.P @ Z
+        if box_o is not None and self._P_coords is not None:
+            j = self._P_coords
+            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o
+        box_d, fb_d = hull_with_status(Zd)
+        return Zd, box_d, box_o, fb_o or fb_d
+
+    def _outward(self, lo, hi):
+        a, b = np.abs(lo), np.abs(hi)
+        if np.isinf(a).any() or np.isinf(b).any():
+            a[np.isinf(a)] = 0.0
+            b[np.isinf(b)] = 0.0
+        scale = np.maximum(1.0, np.maximum(a, b))
+        return lo - self.margin * scale, hi + self.margin * scale
+
+    def _handle_empty(self, k: int, Zp: ConstrainedZonotope, e: Entry, msg: str):
+        """``on_inconsistent="reset"``: the posterior of an inflated box of ``Zp``."""
+        try:
+            hull, _ = hull_with_status(Zp)
+        except EmptySetError:
+            raise ModelInvalidatedError(msg + " (the prior itself is empty)", k) from None
+        w = np.where(np.isfinite(hull.width), hull.width, 0.0)
+        scale = 1.0 + float(np.abs(np.where(np.isfinite(hull.lo), hull.lo, 0.0)).max(initial=0.0))
+        factor = self.reset_inflation
+        for _ in range(40):  # inflate geometrically until the measurement is explainable
+            pad = factor * (w + scale)
+            Zr = self._posterior(self._box_cz(Box(hull.lo - pad, hull.hi + pad)), e, 0)
+            if not Zr.is_empty():
+                return Zr
+            factor *= 4.0
+        raise ModelInvalidatedError(msg + " (no reset box explains it)", k)

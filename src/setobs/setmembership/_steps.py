@@ -1,0 +1,246 @@
+"""Results of the SMFDO: one step (:class:`SMFDOStep`) and a run (:class:`SMFDOResult`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._deprecation import renamed
+from .._validation import as_matrix, as_vector
+from ..exceptions import DimensionError
+from ..geometry import ConstrainedZonotope
+from ..results import error_summary, time_axis, time_index
+
+__all__ = ["STEP_STATUSES", "SMFDOResult", "SMFDOStep"]
+
+#: Values of :attr:`SMFDOStep.status`.
+STEP_STATUSES = ("ok", "unbounded", "fallback", "reset", "skipped")
+
+
+@dataclass(frozen=True)
+class SMFDOStep:
+    """One step of the SMFDO.
+
+    Attributes
+    ----------
+    k : int
+        Time step.
+    estimate : ndarray, shape (q,)
+        Centre of the disturbance interval hull (Algorithm 1, line 15);
+        NaN where the set is still unbounded.
+    lo, hi : ndarray, shape (q,)
+        Certified interval hull of the disturbance set (``+-inf`` while unbounded).
+    error_bound : float
+        Certified bound on the infinity-norm error of ``estimate``:
+        ``max_i (hi_i - lo_i) / 2``, its worst case over the computed set (the
+        optimal worst-case error in exact mode, an upper bound on it with a
+        window).
+    disturbance_set : ConstrainedZonotope or None
+        ``P Z_k`` when requested (``keep_sets=True``).
+    status : str
+        ``"ok"``; ``"unbounded"`` (some bound is infinite, e.g. before the data
+        pin the disturbance down); ``"fallback"`` (an LP failed under every
+        solver setting: the bounds are still certified, but wider); ``"reset"``
+        (the posterior was empty and ``on_inconsistent="reset"`` restarted the
+        filter: the guarantee is lost at this step); ``"skipped"`` (the
+        posterior was empty and ``on_inconsistent="skip"`` dropped the
+        measurement: the bounds are the prediction, sound if the sample was an
+        outlier).
+    """
+
+    k: int
+    estimate: NDArray[np.float64]
+    lo: NDArray[np.float64]
+    hi: NDArray[np.float64]
+    error_bound: float
+    disturbance_set: ConstrainedZonotope | None = None
+    status: str = "ok"
+
+    radius = renamed("radius", "error_bound")
+
+    def contains(self, d: ArrayLike) -> bool:
+        """Whether ``d`` lies in ``[lo, hi]``.
+
+        Parameters
+        ----------
+        d : array_like, shape (q,)
+            A disturbance value.
+        """
+        dv = as_vector("d", d, size=self.lo.size)
+        return bool(np.all((dv >= self.lo) & (dv <= self.hi)))
+
+
+@dataclass(frozen=True)
+class SMFDOResult:
+    """Batch result of :meth:`SMFDO.run` (the protocol of :mod:`setobs.results`).
+
+    Arrays of shape ``(N, q)`` (``error_bound``, ``status``: ``(N,)``). Unpacks as
+    ``t, estimate, lo, hi = smfdo.run(Y)``.
+
+    Attributes
+    ----------
+    estimate : ndarray, shape (N, q)
+        Centre of the certified interval (worst-case optimal for the infinity
+        norm); NaN while unbounded.
+    lo, hi : ndarray, shape (N, q)
+        Certified interval hull of the consistent disturbances (``-inf``/``inf``
+        while unbounded).
+    error_bound : ndarray, shape (N,)
+        Certified bound on the infinity-norm error of :attr:`estimate`:
+        ``max_i (hi_i - lo_i) / 2`` (in exact mode the ``optimal`` metric).
+    steps : list of SMFDOStep
+        The per-step records.
+    status : ndarray of str, shape (N,)
+        Per-step status (:data:`STEP_STATUSES`).
+    first_inconsistent : int or None
+        The first time step ``k`` of this record whose measurement was
+        inconsistent with the model (status ``"skipped"`` or ``"reset"``): a
+        fault-detection result (the model, the uncertainty sets or the sensor
+        failed there). ``None`` if every measurement was consistent.
+    dt : float or None
+        The system's sampling time (for time axes).
+    names : tuple of str
+        The disturbance names (for tables and plot labels).
+    """
+
+    estimate: NDArray[np.float64]
+    lo: NDArray[np.float64]
+    hi: NDArray[np.float64]
+    error_bound: NDArray[np.float64]
+    steps: list[SMFDOStep]
+    status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
+    first_inconsistent: int | None = None
+    dt: float | None = None
+    names: tuple[str, ...] = ()
+
+    radius = renamed("radius", "error_bound")
+
+    @property
+    def time(self) -> NDArray[np.float64]:
+        """Time axis ``k dt`` (or ``k`` when the sampling time is unknown)."""
+        return time_axis(self.lo.shape[0], self.dt)
+
+    def __iter__(self):
+        return iter((self.time, self.estimate, self.lo, self.hi))
+
+    def plot(self, ax: Any = None, truth: ArrayLike | None = None, component: int = 0) -> Any:
+        """Estimate, certified interval and truth of one component
+        (:func:`setobs.plotting.plot_estimate_band`).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: the current axes).
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        component : int
+            Disturbance component.
+
+        Returns
+        -------
+        matplotlib Axes
+            The axes drawn on.
+        """
+        from ..plotting import plot_estimate_band
+
+        return plot_estimate_band(self, truth=truth, component=component, ax=ax)
+
+    def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
+        """One row (index ``"SMFDO"``) over steps ``k >= start``: ``error_bound`` (mean
+        certified error bound over the bounded steps; the ``optimal`` worst-case
+        error in exact mode), ``max_error_bound``, ``unbounded`` steps,
+        ``inconsistent`` steps and, with the truth, ``error_inf``, ``max_error_inf``,
+        ``error_2`` and ``truth_inside`` (fraction of steps whose certified interval
+        holds the truth).
+
+        Parameters
+        ----------
+        truth : array_like, shape (N, q), optional
+            The true disturbance.
+        start : int
+            First step counted.
+
+        Returns
+        -------
+        pandas.DataFrame
+            The summary row.
+        """
+        r = self.error_bound[start:]
+        fin = np.isfinite(r)
+        st = self.status[start:] if self.status.size else np.zeros(0, dtype="<U9")
+        extra: dict[str, Any] = {
+            "error_bound": float(r[fin].mean()) if fin.any() else np.inf,
+            "max_error_bound": float(r[fin].max()) if fin.any() else np.inf,
+            "unbounded": int((~fin).sum()),
+            "inconsistent": int(np.isin(st, ("skipped", "reset")).sum()),
+        }
+        if truth is not None:
+            D = as_matrix("truth", truth, cols=self.lo.shape[1])
+            inside = np.all((D >= self.lo) & (D <= self.hi), axis=1)[start:]
+            extra["truth_inside"] = float(inside.mean()) if inside.size else np.nan
+        return error_summary("SMFDO", self.estimate, truth, start, extra)
+
+    def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
+        """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
+        (the estimate and its certified interval), then ``error_bound`` and ``status``.
+
+        The index is the time ``k dt`` (named ``"time"``) when a sampling time is
+        known (``dt`` or the system's), else the step ``k``.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sampling time (default: the system's).
+        names : sequence of str, optional
+            Disturbance names (default: the system's).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The table.
+        """
+        import pandas as pd
+
+        N, q = self.lo.shape
+        nm = list(names) if names is not None else (list(self.names) or
+                                                      [f"d{i}" for i in range(q)])
+        if len(nm) != q:
+            raise DimensionError(f"names must have {q} entries, got {len(nm)}")
+        cols: dict[str, Any] = {}
+        for i, name in enumerate(nm):
+            cols[name] = self.estimate[:, i]
+            cols[f"{name}_lo"] = self.lo[:, i]
+            cols[f"{name}_hi"] = self.hi[:, i]
+        cols["error_bound"] = self.error_bound
+        cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
+        return pd.DataFrame(cols, index=time_index(N, dt if dt is not None else self.dt))
+
+    @property
+    def consistent(self) -> bool:
+        """Whether no step was skipped or reset (the bands are the model's sets)."""
+        return self.first_inconsistent is None
+
+    def violations(self, D: ArrayLike) -> int:
+        """Number of steps at which the true disturbance ``D[k]`` is outside ``[lo, hi]``.
+
+        Parameters
+        ----------
+        D : array_like, shape (N, q)
+            The true disturbance.
+
+        Raises
+        ------
+        DimensionError
+            If ``D`` does not have the shape ``(N, q)`` of the result.
+        """
+        N, q = self.lo.shape
+        if np.shape(D) != (N, q):
+            raise DimensionError(f"D must have shape ({N}, {q}) like the result, "
+                                 f"got {np.shape(D)}")
+        Da = as_matrix("D", D, cols=q)
+        out = (Da < self.lo) | (Da > self.hi)
+        return int(out.any(axis=1).sum())
