@@ -205,7 +205,7 @@ HREP_VERIFY_RTOL: float = 1e-6
 HREP_CONVERT_RTOL: float = 1e-12
 #: The set recursion (exact mode's reference path) carries the rounding bound of a
 #: posterior's centre as bounded factors once it exceeds this fraction of the
-#: centre's largest entry: mapped as a bound, ``|A| c_err``, it grows like
+#: set's magnitude: mapped as a bound, ``|A| c_err``, it grows like
 #: ``rho(|A|)^k`` (1e-3 of the width after 30 steps of a non-normal ``A``, issue 32);
 #: mapped as generators it follows ``A^k``.
 CENTER_ERROR_ABSORB_RTOL: float = 1e-13

@@ -216,3 +216,11 @@ def test_center_error_carried_as_factors_follows_the_map_not_its_absolute_value(
         excess = float(np.max(np.maximum(lo - box.lo, box.hi - hi) / width))
         assert (excess <= 1e-9) == ok, excess
     assert carried.n_gen < G0.shape[1] + 2 * K  # absorbed now and then, not every step
+    # a centre at zero: the threshold follows the set's reach, not |c| = 0
+    Z0 = ConstrainedZonotope(G0, np.zeros(2)).minkowski_sum(np.zeros(2), err=[1e-20, 1e-20])
+    assert absorb_center_error(Z0, 1e-13) is Z0
+    Zbig = ConstrainedZonotope(G0, np.zeros(2)).minkowski_sum(np.zeros(2), err=[1e-3, 0.0])
+    Za = absorb_center_error(Zbig, 1e-13)
+    assert Za.n_gen == 3 and not Za.c_err.any()
+    box_a, box_b = Za.interval_hull(), Zbig.interval_hull()
+    np.testing.assert_allclose([box_a.lo, box_a.hi], [box_b.lo, box_b.hi], rtol=0, atol=1e-15)

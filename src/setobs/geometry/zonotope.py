@@ -1184,7 +1184,8 @@ def support_unwarned(Z: ConstrainedZonotope, d: NDArray[np.float64]) -> float:
 
 def absorb_center_error(Z: ConstrainedZonotope, rtol: float) -> ConstrainedZonotope:
     """``Z`` with its centre's rounding bound carried as bounded factors, when it exceeds
-    ``rtol * max|c|``; else ``Z`` itself.
+    ``rtol`` times the set's magnitude (``max|c|``, or the largest reach
+    ``|G| h`` of its bounded factors if that is larger); else ``Z`` itself.
 
     The certified set ``{c + e + G xi : |e| <= c_err, A xi = b, |xi| <= h}`` is
     ``{c + [G, diag(c_err)] [xi; eta] : A xi = b, |xi| <= h, |eta| <= 1}`` (the
@@ -1200,12 +1201,15 @@ def absorb_center_error(Z: ConstrainedZonotope, rtol: float) -> ConstrainedZonot
     Z : ConstrainedZonotope
         The set.
     rtol : float
-        Threshold relative to the largest entry of ``|c|`` (0: absorb any error).
+        Threshold relative to the set's magnitude (0: absorb any error).
     """
     cerr = Z._cerr
     if cerr is None:
         return Z
-    scale = float(np.abs(Z._c).max(initial=0.0))
+    # the set's magnitude: its centre, or its bounded generators' reach (a centre at
+    # or near zero must not make every step absorb)
+    reach = np.abs(Z._G) @ np.where(np.isinf(Z._h), 0.0, Z._h)
+    scale = max(float(np.abs(Z._c).max(initial=0.0)), float(reach.max(initial=0.0)))
     if float(cerr.max()) <= rtol * scale:
         return Z
     j = np.flatnonzero(cerr > 0.0)
