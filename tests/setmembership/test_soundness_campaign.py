@@ -40,7 +40,7 @@ def random_case(rng):
             return sys
 
 
-def _simulate(sys, N, rng):
+def simulate_case(sys, N, rng):
     r = 10.0 ** rng.uniform(-3, 1, sys.q)
     x = rng.normal(size=sys.n) * 10.0 ** rng.uniform(-3, 5)
     d = rng.normal(size=sys.q) * r * 10.0
@@ -60,7 +60,7 @@ def _one(seed: int) -> tuple[int, int, list[str]]:
     sys = random_case(rng)
     exact = seed % 25 == 0
     N = 60 if exact else 400
-    Y, D, U, r = _simulate(sys, N, rng)
+    Y, D, U, r = simulate_case(sys, N, rng)
     return run_windows(sys, Y, U, D, [None] if exact else [3, 10, 20], seed, increment_set=r)
 
 

@@ -505,3 +505,22 @@ def test_a_large_unknown_initial_state_is_decided_without_fallback():
         res = obs.run(Y[:10], None if U is None else U[:10])
     assert res.violations(D[:10]) == 0  # (sound either way)
     assert obs.stats["fallback"] == 0
+
+
+def test_rows_known_within_their_rounding_are_decided_as_intervals():
+    """Seed 31 of the slow soundness campaign (outputs to 2.7e10): from k = 202 the
+    float rows of window 3's LPs are inconsistent beyond HiGHS's tolerance, though
+    within their rounding allowance ``b_err``; every setting said "infeasible" and
+    the steps ended ``fallback`` (26 of 400). The LP of the certified set, rows as
+    intervals ``[b - b_err, b + b_err]``, decides them with the gap closed."""
+    from tests.setmembership.test_soundness_campaign import random_case, simulate_case
+
+    rng = np.random.default_rng(31)
+    s = random_case(rng)
+    Y, D, U, r = simulate_case(s, 400, rng)
+    assert np.abs(Y).max() > 1e10
+    obs = so.SMFDO(s, window=3, increment_set=r)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", so.SolverWarning)
+        res = obs.run(Y[:230], None if U is None else U[:230])
+    assert obs.stats["fallback"] == 0 and res.violations(D[:230]) == 0

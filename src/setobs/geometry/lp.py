@@ -50,8 +50,10 @@ smallest constraint violation (see :meth:`FactorPolytope.emptiness`).
 A solver's bad day never aborts a query: an undecided HiGHS status is retried
 with other settings (a fresh unscaled model, default tolerances with the
 primal simplex, the interior-point method with crossover, a restart with the
-objective perturbed -- certified for the true one), and with the compiled simplex of
-:mod:`setobs.geometry.fastlp`; if every attempt fails, the best certified
+objective perturbed -- certified for the true one), with the compiled simplex of
+:mod:`setobs.geometry.fastlp`, and after an uncertified "infeasible" with the
+rows as the intervals ``[b - b_err, b + b_err]`` the certificate covers (exact
+for the certified set when decided); if every attempt fails, the best certified
 bound of any multiplier seen (at worst ``y = 0``, i.e. ``-sum h_j |w_j|`` or
 ``-inf``) is returned with status ``"fallback"``: wider, still outer.
 """
@@ -682,6 +684,16 @@ class FactorPolytope:
         if out is not None:
             return out
         if infeasible_claims:
+            # The rows are known to within b_err (the rounding of the operations that
+            # formed b, the data's representation): at magnitudes where b_err exceeds
+            # the solver's tolerance (states of 1e9, outputs of 1e10) the float rows
+            # may be inconsistent while the certified set is not. Its LP has the rows
+            # as intervals [b - b_err, b + b_err]; the certificate already holds for
+            # every such b, so a minimiser there with the gap closed is exact.
+            out = self.minimize_within_b_err(w, w_err, w_pair, scale)
+            if out is not None:
+                return out
+        if infeasible_claims:
             # Not certified empty, but no setting found a feasible optimum: the LP
             # with rows relaxed by the smallest violation found is a valid outer
             # bound, wider than the exact one (so a fallback, counted).
@@ -702,6 +714,45 @@ class FactorPolytope:
         best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
         self.fallbacks += 1
         return LPResult(best, np.nan, None, "fallback")
+
+    def minimize_within_b_err(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
+                              w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None,
+                              scale: float) -> LPResult | None:
+        """``min w^T xi`` over ``|A xi - b| <= b_err``, ``|xi| <= h`` (the set the
+        certificate covers), or ``None`` unless it is decided with the gap closed.
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_g,)
+            Objective over the factors.
+        w_err : ndarray, optional
+            Elementwise bound on the rounding error in ``w``.
+        w_pair : (M, v), optional
+            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+        scale : float
+            Power of two the objective is divided by (:meth:`objective_scale`).
+        """
+        be = self.b_err
+        if be is None or not np.any(be):
+            return None
+        hs = self._build(self.b - be, self.b + be, np.zeros(self.n_g))
+        if hs is None or self.solve_objective(hs, w, scale) != highspy.HighsModelStatus.kOptimal:
+            return None
+        sol = hs.getSolution()
+        y = np.asarray(sol.row_dual, dtype=np.float64) * scale
+        x = np.asarray(sol.col_value, dtype=np.float64)
+        if x.shape != (self.n_g,) or not np.isfinite(x).all():
+            return None
+        slack = np.abs(self.A @ x - self.b) - be
+        tol = PRIMAL_RESIDUAL_RTOL * (1.0 + np.abs(self.b) + np.abs(self.A) @ np.abs(x))
+        over = np.abs(x) - self.h
+        if (slack > tol).any() or (over > PRIMAL_RESIDUAL_RTOL * (1.0 + self.h)).any():
+            return None
+        bound = self.certify(w, y, w_err, w_pair)
+        obj = float(w @ x)
+        if not np.isfinite(bound) or obj - bound > RELAXED_EXACT_GAP * (1.0 + abs(obj)):
+            return None
+        return LPResult(bound, obj, x, "optimal")
 
     def point_is_feasible(self, x: NDArray[np.float64]) -> bool:
         """Whether a solver's point satisfies ``A x = b`` and ``|x| <= h`` to
