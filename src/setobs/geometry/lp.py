@@ -693,7 +693,6 @@ class FactorPolytope:
             out = self.minimize_within_b_err(w, w_err, w_pair, scale)
             if out is not None:
                 return out
-        if infeasible_claims:
             # Not certified empty, but no setting found a feasible optimum: the LP
             # with rows relaxed by the smallest violation found is a valid outer
             # bound, wider than the exact one (so a fallback, counted).
@@ -741,12 +740,7 @@ class FactorPolytope:
         sol = hs.getSolution()
         y = np.asarray(sol.row_dual, dtype=np.float64) * scale
         x = np.asarray(sol.col_value, dtype=np.float64)
-        if x.shape != (self.n_g,) or not np.isfinite(x).all():
-            return None
-        slack = np.abs(self.A @ x - self.b) - be
-        tol = PRIMAL_RESIDUAL_RTOL * (1.0 + np.abs(self.b) + np.abs(self.A) @ np.abs(x))
-        over = np.abs(x) - self.h
-        if (slack > tol).any() or (over > PRIMAL_RESIDUAL_RTOL * (1.0 + self.h)).any():
+        if not self.point_is_feasible(x, row_allowance=be):
             return None
         bound = self.certify(w, y, w_err, w_pair)
         obj = float(w @ x)
@@ -754,7 +748,8 @@ class FactorPolytope:
             return None
         return LPResult(bound, obj, x, "optimal")
 
-    def point_is_feasible(self, x: NDArray[np.float64]) -> bool:
+    def point_is_feasible(self, x: NDArray[np.float64],
+                          row_allowance: NDArray[np.float64] | None = None) -> bool:
         """Whether a solver's point satisfies ``A x = b`` and ``|x| <= h`` to
         ``PRIMAL_RESIDUAL_RTOL`` (row by row, relative to ``1 + |b_i| + |A_i| |x|``).
 
@@ -762,11 +757,16 @@ class FactorPolytope:
         ----------
         x : ndarray, shape (n_g,)
             The point.
+        row_allowance : ndarray, shape (n_c,), optional
+            Rows as intervals: ``|A x - b| <= row_allowance`` (``b_err``), to the
+            same tolerance.
         """
         if x.shape != (self.n_g,) or not np.isfinite(x).all():
             return False
         if self.n_c:
             resid = np.abs(self.A @ x - self.b)
+            if row_allowance is not None:
+                resid = resid - row_allowance
             scale = 1.0 + np.abs(self.b) + np.abs(self.A) @ np.abs(x)
             if (resid > PRIMAL_RESIDUAL_RTOL * scale).any():
                 return False

@@ -14,7 +14,6 @@ from ..tolerances import (
     UNBOUNDED_RADIUS,
 )
 from ._hrep import (
-    MAX_VERTICES,
     HState,
     snap_normals,
     step_geometry,
@@ -31,15 +30,12 @@ __all__ = ["H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS", "H_MAX_VERT
 #: mode (a beneath-beyond vertex enumeration); beyond it the set recursion goes on.
 H_CONVERSION_LPS = 150
 
-
 #: Complexity beyond which exact mode leaves the H-representation recursion for
 #: the set recursion (vertices, normals): measurement noise can make the exact
 #: set's complexity grow quickly (the paper example with a noise box: 44, 107,
 #: 264 facets and 178, 361, 754 vertices at k = 2, 3, 4; benchmarks/exact_mode.py),
 #: and then the vertex geometry costs more than the whole-history LPs.
-H_MAX_VERTICES = MAX_VERTICES
-
-
+H_MAX_VERTICES = 128
 H_MAX_NORMALS = 64
 
 

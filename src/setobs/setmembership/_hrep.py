@@ -66,8 +66,6 @@ _EPS = np.finfo(float).eps
 #: Most points a clip of the approximate geometry may produce before the step goes
 #: to the reference path (every inside-outside pair of points gives one).
 MAX_CLIP_POINTS = 1024
-#: Most vertices of a carried H-representation (``smfdo.H_MAX_VERTICES``).
-MAX_VERTICES = 128
 
 
 @dataclass(frozen=True, eq=False)
