@@ -51,9 +51,11 @@ A solver's bad day never aborts a query: an undecided HiGHS status is retried
 with other settings (a fresh unscaled model, default tolerances with the
 primal simplex, the interior-point method with crossover, a restart with the
 objective perturbed -- certified for the true one), with the compiled simplex of
-:mod:`setobs.geometry.fastlp`, and after an uncertified "infeasible" with the
-rows as the intervals ``[b - b_err, b + b_err]`` the certificate covers (exact
-for the certified set when decided); if every attempt fails, the best certified
+:mod:`setobs.geometry.fastlp`, and with the rows as the intervals
+``[b - b_err, b + b_err]`` the certificate covers (exact for the certified set
+when decided; unbounded factors are pivoted out first, so that rows of an
+unknown initial state of size 1e9 do not reach HiGHS); if every attempt fails,
+the best certified
 bound of any multiplier seen (at worst ``y = 0``, i.e. ``-sum h_j |w_j|`` or
 ``-inf``) is returned with status ``"fallback"``: wider, still outer.
 """
@@ -223,6 +225,7 @@ def lagrangian_lower_bound(
     unbounded_pinv: NDArray[np.float64] | None = None,
     w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     b_err: NDArray[np.float64] | None = None,
+    exact_residual: bool = False,
 ) -> tuple[float, NDArray[np.float64]]:
     """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any multiplier ``y``.
 
@@ -248,6 +251,12 @@ def lagrangian_lower_bound(
     b_err : ndarray, optional
         Elementwise bound on the uncertainty of ``b``: the bound then holds for
         every right-hand side within ``b +- b_err``.
+    exact_residual : bool
+        Evaluate every reduced cost ``r = w - A^T y`` correctly rounded (exact
+        products, :func:`math.fsum`; ``O(n_c n_g)`` Python work) instead of with
+        the forward error bound ``gamma(2 n_c + 2) (|w| + |A|^T |y|)``. With
+        duals of size 1e4 the latter alone opened a gap of 2e-6 on an optimal
+        basis (``y^T b`` and ``sum h |r|`` both 2e4, cancelling to 0.87).
 
     Returns
     -------
@@ -290,10 +299,17 @@ def lagrangian_lower_bound(
             w[unb], np.zeros((0, int(unb.sum()))), [], (w_pair[0][:, unb], w_pair[1]))
     abs_y = np.abs(y1) + np.abs(y2)
     scale_r = np.abs(w) + (np.abs(A).T @ abs_y if n_c else 0.0)
-    r = w - A.T @ y1 - A.T @ y2 if n_c else w.copy()
-    err_r = 2.0 * gamma(2 * n_c + 2) * scale_r
-    if w_err is not None:
-        err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
+    if exact_residual and n_c:
+        # correctly rounded: |true - r| <= u |r| / (1 - u), plus an underflow guard
+        r = _exact_residual(w, A, [y1, y2], w_pair)
+        err_r = 2.0 * UNIT_ROUNDOFF * np.abs(r) + 2.0 * (2 * n_c + 1) * _TINY
+        if w_err is not None and w_pair is None:
+            err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
+    else:
+        r = w - A.T @ y1 - A.T @ y2 if n_c else w.copy()
+        err_r = 2.0 * gamma(2 * n_c + 2) * scale_r
+        if w_err is not None:
+            err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
     bound_r = np.abs(r) + err_r
     t2 = 0.0
     if unb.any():
@@ -519,6 +535,7 @@ class FactorPolytope:
         y: NDArray[np.float64],
         w_err: NDArray[np.float64] | None = None,
         w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+        exact_residual: bool = False,
     ) -> float:
         """Certified lower bound of ``min w^T xi`` from multiplier ``y``.
 
@@ -532,13 +549,39 @@ class FactorPolytope:
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
             ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+        exact_residual : bool
+            Reduced costs correctly rounded (see :func:`lagrangian_lower_bound`).
         """
-        return self._certify(w, y, w_err, w_pair)[0]
+        return self._certify(w, y, w_err, w_pair, exact_residual)[0]
 
-    def _certify(self, w, y, w_err=None, w_pair=None) -> tuple[float, NDArray[np.float64]]:
+    def _tightened(self, w, w_err, w_pair, hs, y, bound: float, obj: float,
+                   rtol: float) -> float:
+        """``bound`` (from multiplier ``y``) certified again while its gap to the
+        solver's objective ``obj`` exceeds ``rtol`` (relative to ``1 + |obj|``): from
+        the duals of the optimal basis of ``hs`` (refined in extended precision;
+        skipped when ``hs`` is ``None``), then, above :data:`RELAXED_EXACT_GAP`, with
+        every reduced cost correctly rounded (the forward error bound of
+        ``w - A^T y`` grows with ``|y|``, and duals of 1e4 once opened a gap of 2e-6
+        by that term alone)."""
+        gap_tol = 1.0 + abs(obj)
+        if not np.isfinite(bound) or obj - bound <= rtol * gap_tol:
+            return bound
+        if hs is not None:
+            y_ref = self._basis_duals(hs, w)
+            if y_ref is not None:
+                b_ref = self.certify(w, y_ref, w_err, w_pair)
+                if b_ref > bound:
+                    bound, y = b_ref, y_ref
+        if obj - bound > RELAXED_EXACT_GAP * gap_tol:
+            bound = max(bound, self.certify(w, y, w_err, w_pair, exact_residual=True))
+        return bound
+
+    def _certify(self, w, y, w_err=None, w_pair=None, exact_residual=False
+                 ) -> tuple[float, NDArray[np.float64]]:
         return lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, unbounded_radius=self.unbounded_radius,
             unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
+            exact_residual=exact_residual,
             b_err=self.b_err,
         )
 
@@ -632,6 +675,7 @@ class FactorPolytope:
         scale = self.objective_scale(w)
         best = -np.inf  # best certified bound of any multiplier (fallback answer)
         infeasible_claims = 0
+        open_gap: LPResult | None = None  # the best "optimal" whose gap stayed open
         attempts = [None, *self._RETRIES, "perturbed"]
         for i, options in enumerate(attempts):
             perturbed = options == "perturbed"
@@ -654,12 +698,15 @@ class FactorPolytope:
                     best = max(best, bound)
                     continue
                 obj = float(w @ x)
-                if np.isfinite(bound) and obj - bound > LP_REFINE_GAP * (1.0 + abs(obj)):
-                    y_ref = self._basis_duals(hs, w)
-                    if y_ref is not None:
-                        bound = max(bound, self.certify(w, y_ref, w_err, w_pair))
+                bound = self._tightened(w, w_err, w_pair, hs, y, bound, obj, LP_REFINE_GAP)
                 if np.isinf(bound):
                     return LPResult(-np.inf, obj, x, "unbounded")
+                if obj - bound > RELAXED_EXACT_GAP * (1.0 + abs(obj)):
+                    # Certified, but not tight (duals inaccurate on a nearly degenerate
+                    # set, 1e-3 of its width once): the next settings may close it.
+                    if open_gap is None or bound > open_gap.bound:
+                        open_gap = LPResult(bound, obj, x, "fallback")
+                    continue
                 return LPResult(bound, obj, x, "optimal")
             if st == highspy.HighsModelStatus.kUnbounded:
                 return LPResult(-np.inf, -np.inf, None, "unbounded")
@@ -683,16 +730,21 @@ class FactorPolytope:
         out = self.try_compiled(w, w_err, w_pair)
         if out is not None:
             return out
+        # The rows are known to within b_err (the rounding of the operations that
+        # formed b, the data's representation): at magnitudes where b_err exceeds
+        # the solver's tolerance (states of 1e9, outputs of 1e10) the float rows
+        # may be inconsistent while the certified set is not ("infeasible"), or too
+        # ill-scaled for any setting (no status). Its LP has the rows as intervals
+        # [b - b_err, b + b_err]; the certificate already holds for every such b,
+        # so a minimiser there with the gap closed is exact.
+        out = self.minimize_within_b_err(w, w_err, w_pair, scale)
+        if out is not None:
+            return out
+        if open_gap is not None:
+            self.fallbacks += 1
+            return LPResult(max(open_gap.bound, best), open_gap.objective, open_gap.point,
+                            "fallback")
         if infeasible_claims:
-            # The rows are known to within b_err (the rounding of the operations that
-            # formed b, the data's representation): at magnitudes where b_err exceeds
-            # the solver's tolerance (states of 1e9, outputs of 1e10) the float rows
-            # may be inconsistent while the certified set is not. Its LP has the rows
-            # as intervals [b - b_err, b + b_err]; the certificate already holds for
-            # every such b, so a minimiser there with the gap closed is exact.
-            out = self.minimize_within_b_err(w, w_err, w_pair, scale)
-            if out is not None:
-                return out
             # Not certified empty, but no setting found a feasible optimum: the LP
             # with rows relaxed by the smallest violation found is a valid outer
             # bound, wider than the exact one (so a fallback, counted).
@@ -734,19 +786,100 @@ class FactorPolytope:
         be = self.b_err
         if be is None or not np.any(be):
             return None
-        hs = self._build(self.b - be, self.b + be, np.zeros(self.n_g))
-        if hs is None or self.solve_objective(hs, w, scale) != highspy.HighsModelStatus.kOptimal:
-            return None
-        sol = hs.getSolution()
-        y = np.asarray(sol.row_dual, dtype=np.float64) * scale
-        x = np.asarray(sol.col_value, dtype=np.float64)
-        if not self.point_is_feasible(x, row_allowance=be):
+        if self._unb.any() and self.A[:, self._unb].any():
+            out = self._within_b_err_reduced(w, w_err, w_pair)
+            if out is not None:
+                return out
+        for options in (None, *self._RETRIES):
+            hs = self._build(self.b - be, self.b + be, np.zeros(self.n_g), options)
+            if hs is None or self.solve_objective(hs, w, scale) != \
+                    highspy.HighsModelStatus.kOptimal:
+                continue
+            sol = hs.getSolution()
+            out = self._decided_within_b_err(
+                w, w_err, w_pair, np.asarray(sol.row_dual, dtype=np.float64) * scale,
+                np.asarray(sol.col_value, dtype=np.float64), hs)
+            if out is not None:
+                return out
+        return None
+
+    def _decided_within_b_err(self, w, w_err, w_pair, y, x, hs=None) -> LPResult | None:
+        """The answer of the interval-row LP from a multiplier ``y`` and a point ``x``:
+        ``x`` in the certified set and the gap closed (with the duals of the basis
+        of ``hs`` refined where the solver's are not accurate enough), or ``None``."""
+        if not self.point_is_feasible(x, row_allowance=self.b_err):
             return None
         bound = self.certify(w, y, w_err, w_pair)
         obj = float(w @ x)
+        bound = self._tightened(w, w_err, w_pair, hs, y, bound, obj, RELAXED_EXACT_GAP)
         if not np.isfinite(bound) or obj - bound > RELAXED_EXACT_GAP * (1.0 + abs(obj)):
             return None
         return LPResult(bound, obj, x, "optimal")
+
+    def _within_b_err_reduced(self, w, w_err, w_pair) -> LPResult | None:
+        """:meth:`minimize_within_b_err` with the unbounded factors pivoted out.
+
+        The LP is ``min w^T xi`` over ``A_u xi_u + A_b xi_b = b + e``,
+        ``|e| <= b_err``, ``|xi_b| <= h`` (``u``: unbounded factors). With
+        ``A_u = U S V^T`` (numerical rank ``r``), ``N`` an orthonormal basis of its
+        left null space and ``A_u^T M = w_u``, it is the same LP as
+        ``min (w_b - A_b^T M)^T xi_b + M^T e`` subject to
+        ``N^T A_b xi_b - N^T e = N^T b`` (``xi_u`` is then fixed by the rest), up
+        to the constant ``M^T b``. A record whose states are of size 1e9 (an
+        unknown initial state, ``X0 = R^n``) gives rows of that size, consistent
+        only to their ``b_err`` (1e-16 relative), on which HiGHS says
+        "infeasible" under every setting; pivoted out, the rows are of the size of
+        the increments and the solve is routine. Only the LP is solved this way:
+        its multiplier ``y = M + N y_N`` (the reduced cost of ``e``) is certified
+        on the stored data by :meth:`certify`, and its point is checked against
+        the certified set.
+        """
+        unb = self._unb
+        be = self.b_err
+        Au, Ab = self.A[:, unb], self.A[:, ~unb]
+        U, S, Vt = np.linalg.svd(Au)
+        eps = np.finfo(np.float64).eps
+        r = int(np.count_nonzero(S > S[0] * max(Au.shape) * eps)) if S[0] > 0 else 0
+        Ur, Vr, Sr, N = U[:, :r], Vt[:r].T, S[:r], U[:, r:]
+        wu = w[unb]
+        M = Ur @ ((Vr.T @ wu) / Sr)
+        # Centred at the least-squares point xi_0 of A_u xi_u = b (refined, residual
+        # correctly rounded): N^T A_u is zero only to rounding, and times xi_u ~ 1e11
+        # that would shift the reduced rows by 1e-4; times xi_u - xi_0 it does not.
+        xi0 = Vr @ ((Ur.T @ self.b) / Sr)
+        for _ in range(2):
+            r0 = _exact_residual(self.b, Au.T, [xi0])
+            xi0 = xi0 + Vr @ ((Ur.T @ r0) / Sr)
+        r0 = _exact_residual(self.b, Au.T, [xi0])
+        # w_u outside the row space of A_u: unbounded below (the other paths decide)
+        if np.abs(Au.T @ M - wu).max(initial=0.0) > 1e3 * eps * float(
+                (np.abs(wu) + np.abs(Au).T @ np.abs(M)).max(initial=0.0)):
+            return None
+        hb = self.h[~unb]
+        pos = be > 0.0  # e_i = b_err_i t_i, |t_i| <= 1 (columns of the data's size)
+        Ne = -N.T[:, pos] * be[pos]
+        A2 = np.hstack([N.T @ Ab, Ne])
+        b2 = N.T @ r0
+        w2 = np.concatenate([w[~unb] - Ab.T @ M, M[pos] * be[pos]])
+        ones = np.ones(int(pos.sum()))
+        scale = self.objective_scale(w2)
+        hs = self.new_highs()
+        hs.setOptionValue("simplex_strategy", 1)
+        if not self._pass(hs, A2, np.concatenate([-hb, -ones]), np.concatenate([hb, ones]),
+                          b2, b2, w2 / scale):
+            return None
+        hs.run()
+        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            return None
+        sol = hs.getSolution()
+        y = M + N @ (np.asarray(sol.row_dual, dtype=np.float64) * scale)
+        col = np.asarray(sol.col_value, dtype=np.float64)
+        x = np.empty(self.n_g)
+        x[~unb] = col[:hb.size]
+        e = np.zeros(self.n_c)
+        e[pos] = col[hb.size:] * be[pos]
+        x[unb] = xi0 + Vr @ ((Ur.T @ (r0 + e - Ab @ x[~unb])) / Sr)
+        return self._decided_within_b_err(w, w_err, w_pair, y, x)
 
     def point_is_feasible(self, x: NDArray[np.float64],
                           row_allowance: NDArray[np.float64] | None = None) -> bool:
@@ -758,17 +891,26 @@ class FactorPolytope:
         x : ndarray, shape (n_g,)
             The point.
         row_allowance : ndarray, shape (n_c,), optional
-            Rows as intervals: ``|A x - b| <= row_allowance`` (``b_err``), to the
-            same tolerance.
+            Rows as intervals: ``|A x - b| <= row_allowance`` (``b_err``), to
+            ``PRIMAL_RESIDUAL_RTOL`` relative to ``1 + |A_i| h`` over the bounded
+            factors, plus the rounding of the evaluation.
         """
         if x.shape != (self.n_g,) or not np.isfinite(x).all():
             return False
         if self.n_c:
             resid = np.abs(self.A @ x - self.b)
-            if row_allowance is not None:
-                resid = resid - row_allowance
-            scale = 1.0 + np.abs(self.b) + np.abs(self.A) @ np.abs(x)
-            if (resid > PRIMAL_RESIDUAL_RTOL * scale).any():
+            absAx = np.abs(self.A) @ np.abs(x)
+            if row_allowance is None:
+                tol = PRIMAL_RESIDUAL_RTOL * (1.0 + np.abs(self.b) + absAx)
+            else:
+                # Rows as intervals: the tolerance relative to the rows' bounded part
+                # (the unbounded factors of an unknown initial state make |b| ~ 1e10,
+                # and 1e-6 of that would hide anything), plus the rounding of
+                # representing and evaluating A x - b.
+                reach = np.abs(self.A[:, ~self._unb]) @ self.h[~self._unb]
+                tol = row_allowance + PRIMAL_RESIDUAL_RTOL * (1.0 + reach) + 8.0 * gamma(
+                    self.n_g + 2) * (absAx + np.abs(self.b))
+            if (resid > tol).any():
                 return False
         over = np.abs(x) - self.h
         return not (over > PRIMAL_RESIDUAL_RTOL * (1.0 + np.where(self._unb, 0.0, self.h))).any()
