@@ -413,3 +413,18 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
             else:
                 hi[i] = val
     return lo, hi
+
+
+def slab_lp_extremes(M, A, b, tol, bounds):
+    """Min and max of each row of ``M v`` over ``|A v - b| <= tol`` with the variable
+    ``bounds`` (scipy's HiGHS; a failed solve fails the test)."""
+    from scipy.optimize import linprog
+
+    A_ub, b_ub = np.vstack([A, -A]), np.r_[b + tol, tol - b]
+    lo, hi = np.empty(M.shape[0]), np.empty(M.shape[0])
+    for i in range(M.shape[0]):
+        for sgn in (1.0, -1.0):
+            r = linprog(sgn * M[i], A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs")
+            assert r.status == 0, r.message
+            (lo if sgn > 0 else hi)[i] = sgn * r.fun
+    return lo, hi

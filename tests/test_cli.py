@@ -218,6 +218,33 @@ def test_estimate_end_to_end_contains_the_truth(tmp_path, capsys):
     assert (out / "estimate.png").stat().st_size > 10_000
 
 
+def test_estimate_states_writes_certified_state_bounds(tmp_path, capsys):
+    """--states: the CSV gains ``<state>_lo``/``_hi`` columns holding the simulated
+    states (own simulation, the model's discretisation)."""
+    rec, d = _motor_record(tmp_path)
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    out = tmp_path / "out"
+    assert main(["estimate", str(rec), "--model", str(model), "--outputs", "theta",
+                 "--inputs", "tau", "--time", "t", "--increment", "1e-3", "--noise", "1e-4",
+                 "--out", str(out), "--no-progress", "--no-plot", "--states"]) == 0
+    import pandas as pd
+
+    df = pd.read_csv(out / "estimate.csv")
+    sys_ = so.examples.servo_motor()
+    tau = 0.05 + 0.01 * np.sin(np.arange(400) * 0.02)
+    X = sys_.simulate(d[:, None], tau[:, None])[1]
+    from setobs.io import load_model
+
+    names = load_model(str(model), dt=1e-3).state_names  # (none in the file: x0, x1)
+    assert list(df.columns)[-4:] == [f"{n}_{b}" for n in names for b in ("lo", "hi")]
+    for i, name in enumerate(names):
+        lo, hi = df[f"{name}_lo"].to_numpy(), df[f"{name}_hi"].to_numpy()
+        ok = np.isfinite(lo) & np.isfinite(hi)
+        assert ok.sum() > 390
+        assert np.all(lo[ok] <= X[ok, i] + 1e-12) and np.all(X[ok, i] <= hi[ok] + 1e-12)
+
+
 def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
     """--calibrate finds a bound at most the simulated noise that the record
     accepts; a too small bound reports the first inconsistent step (not a crash)."""

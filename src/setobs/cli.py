@@ -170,8 +170,10 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
              variable: str | None = None, decimate: int = 1, increment: str,
              noise: str | None = None, calibrate: bool = False, window: int | None = 10,
              out: str | None = None, plot: bool = True, progress: bool | None = None,
-             on_inconsistent: str = "raise", unit: str | None = None) -> int:
-    """Certified disturbance bounds from a measured record (CSV + plot + summary).
+             on_inconsistent: str = "raise", unit: str | None = None,
+             states: bool = False) -> int:
+    """Certified disturbance bounds from a measured record (CSV + plot + summary);
+    with ``states``, the certified state bounds too (``<state>_lo``/``_hi`` columns).
 
     The record's time axis comes from its time column, else ``dt``, else the model
     file's ``Ts``; without any of them it is the sample index. With
@@ -219,7 +221,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     else:
         v = None
     obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
-                on_inconsistent=on_inconsistent)
+                on_inconsistent=on_inconsistent, state_bounds=states)
     N = rec.Y.shape[0]
     if progress is None:  # automatic: long records on a terminal, when tqdm is installed
         import importlib.util
@@ -411,6 +413,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "its time and what to do; 'skip' drops such samples (a run that "
                          "skips more than 1 %% of them says so on stderr); 'reset' restarts "
                          "the filter there (the guarantee is lost at that step)")
+    pe.add_argument("--states", action="store_true",
+                    help="also write the certified state bounds (<state>_lo, <state>_hi)")
     pe.add_argument("--unit", help="unit of the disturbance, for the plot's axis (e.g. 'N m')")
     pe.add_argument("--out", help="output directory")
     pe.add_argument("--no-plot", action="store_true")
@@ -446,7 +450,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                             decimate=args.decimate, increment=args.increment,
                             noise=args.noise, calibrate=args.calibrate, window=window,
                             out=args.out, plot=not args.no_plot, progress=args.progress,
-                            on_inconsistent=args.on_inconsistent, unit=args.unit)
+                            on_inconsistent=args.on_inconsistent, unit=args.unit,
+                            states=args.states)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

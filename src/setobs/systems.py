@@ -73,7 +73,9 @@ class LinearSystem:
     Phi : array_like, shape (n, n)
         State matrix.
     G : array_like, shape (n, q)
-        Disturbance input matrix.
+        Disturbance input matrix; ``np.zeros((n, 0))`` for a model without
+        disturbances (``q = 0``: for state estimation with
+        ``SMFDO(..., state_bounds=True)``; the disturbance observers refuse it).
     Xi : array_like, shape (l, n)
         Output matrix.
     Gamma : array_like, shape (n, p), optional
@@ -137,8 +139,6 @@ class LinearSystem:
             Gamma_a = np.zeros((n, 0))
         else:
             Gamma_a = as_matrix("Gamma", Gamma, rows=n)
-        if G_a.shape[1] == 0:
-            raise DimensionError("G must have at least one column (one disturbance)")
         if Xi_a.shape[0] == 0:
             raise DimensionError("Xi must have at least one row (one output)")
         if dt is not None and not dt > 0:
@@ -308,7 +308,9 @@ class LinearSystem:
         G : array_like, optional
             Disturbance input matrix.
         disturbance_inputs : sequence of int or str, optional
-            Disturbance columns of ``B`` (when ``G`` is omitted).
+            Disturbance columns of ``B`` (when ``G`` is omitted); an empty
+            sequence states that there are none (``q = 0``: a model for state
+            estimation, ``SMFDO(..., state_bounds=True)``).
         dt : float, optional
             Sampling time. Required with ``continuous=True``.
         continuous : bool
@@ -385,7 +387,8 @@ class LinearSystem:
             Signal names (``ss.input_labels``, ...) are kept.
         disturbance_inputs : sequence of int or str
             Indices or names (``ss.input_labels``) of the inputs that are
-            disturbances; the others are control inputs.
+            disturbances; the others are control inputs (empty: no disturbance,
+            a model for state estimation).
         dt : float, optional
             Sampling time for a continuous-time ``ss`` (must equal ``ss.dt``
             when ``ss`` is discrete with a numeric sampling time).
@@ -560,9 +563,7 @@ def _input_indices(name: str, indices: Any, m: int,
         if j in out:
             raise DimensionError(f"{name}: index {j} is given twice")
         out.append(j)
-    if not out:
-        raise DimensionError(f"{name} must name at least one input (the disturbances)")
-    return out
+    return out  # (empty: no disturbance, a model for state estimation)
 
 
 def _is_statespace(obj: Any) -> bool:

@@ -145,6 +145,10 @@ class PointObserver:
     def __init__(self, sys: LinearSystem, *,
                  disturbance_inputs: DisturbanceInputs = None) -> None:
         self.sys = require_system(sys, disturbance_inputs=disturbance_inputs)
+        if self.sys.q == 0:
+            raise DesignError(
+                f"{type(self).__name__} estimates disturbances and the system has none "
+                "(q = 0); for certified state bounds use SMFDO(sys, state_bounds=True)")
         self.delay = 0
         self.information = "predicted"
 

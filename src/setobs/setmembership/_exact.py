@@ -108,7 +108,9 @@ class ExactSteps:
         if self._h_images is None:
             from ..geometry.polytope import vertices
 
-            images = [vertices(self._inc_fixed) @ self.B_o.T]
+            # (no disturbance, q = 0: the point {0}, neutral in the Minkowski sum)
+            images = [vertices(self._inc_fixed) @ self.B_o.T if self.sys.q
+                      else np.zeros((1, self.A_o.shape[0]))]
             if self._W_fixed is not None:
                 images.append(vertices(self._W_fixed) @ self._E_o.T)
             self._h_images = images

@@ -107,7 +107,7 @@ class SetRecursion:
         Z = self._posterior(Zp, e, depth)
         status = "ok"
         try:
-            Zd, box, box_o, fell_back = self._bounds(Z)
+            Zd, box, box_o, fell_back, box_x = self._bounds(Z)
         except EmptySetError:
             msg = (f"the measurement at step k={k} is inconsistent with the model and the "
                    "uncertainty sets (empty posterior)")
@@ -121,12 +121,12 @@ class SetRecursion:
                 e = e.skipped()
                 Z = Zp1
                 depth = self._depth + 1 if k else 0
-                Zd, box, box_o, fell_back = self._bounds(Z)
+                Zd, box, box_o, fell_back, box_x = self._bounds(Z)
                 status = "skipped"
             else:
                 Z = self._handle_empty(k, Zp1, e, msg)
                 depth = 0
-                Zd, box, box_o, fell_back = self._bounds(Z)
+                Zd, box, box_o, fell_back, box_x = self._bounds(Z)
                 # The window restarts from the reset set: eq. (24) is applied again
                 # only once delta consistent steps have been collected.
                 self._hulls.clear()
@@ -154,9 +154,10 @@ class SetRecursion:
                     "(warned once per observer)", SolverWarning, stacklevel=4)
         self._depth = depth
         return self._commit(k, mode, Z, box, box_o, Zd if self.keep_sets else None, e,
-                            status)
+                            status, box_x)
 
-    def _commit(self, k, mode, Z_src, box, box_o, Zd, e: Entry, status) -> SMFDOStep:
+    def _commit(self, k, mode, Z_src, box, box_o, Zd, e: Entry, status,
+                box_x: Box | None = None) -> SMFDOStep:
         self.k = k
         self._last_y = e.y
         self._Z_src = Z_src
@@ -176,21 +177,33 @@ class SetRecursion:
         rad = float(np.max(0.5 * (hi - lo), initial=0.0))
         if status == "ok" and not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             status = "unbounded"
-        return SMFDOStep(k, est, lo, hi, rad, Zd, status)
+        x_lo = x_hi = None
+        if box_x is not None:
+            x_lo, x_hi = self._outward(box_x.lo, box_x.hi)
+            x_lo[self._x_free], x_hi[self._x_free] = -np.inf, np.inf
+        return SMFDOStep(k, est, lo, hi, rad, Zd, status, x_lo, x_hi)
 
     def _bounds(self, Z: ConstrainedZonotope):
-        """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, and
-        whether an LP fell back."""
+        """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, whether
+        an LP fell back, and (``state_bounds``) the hull of the state ``M_x Z``."""
         fb_o = False
         box_o = None
-        if self.window is not None:
+        if self.window is not None or (self.state_bounds and self._X_coords is not None):
             box_o, fb_o = hull_with_status(Z)
+        box_x, fb_x = None, False
+        if self.state_bounds:
+            if self._X_coords is not None:
+                j = self._X_coords
+                box_x = Box(box_o.lo[j], box_o.hi[j])
+            else:  # (the same factor polytope: its HiGHS model is reused)
+                box_x, fb_x = hull_with_status(self._Mx @ Z)
         Zd = self.P @ Z
         if box_o is not None and self._P_coords is not None:
             j = self._P_coords
-            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o
+            return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o or fb_x, box_x
         box_d, fb_d = hull_with_status(Zd)
-        return Zd, box_d, box_o, fb_o or fb_d
+        return Zd, box_d, box_o if self.window is not None else None, fb_o or fb_d or fb_x, \
+            box_x
 
     def _outward(self, lo, hi):
         a, b = np.abs(lo), np.abs(hi)

@@ -50,6 +50,10 @@ class SMFDOStep:
         posterior was empty and ``on_inconsistent="skip"`` dropped the
         measurement: the bounds are the prediction, sound if the sample was an
         outlier).
+    state_lo, state_hi : ndarray, shape (n,), or None
+        Certified interval hull of the consistent states ``x_k`` (with
+        ``state_bounds=True``; ``+-inf`` for a state that depends on the
+        unobservable part, or while unbounded), else ``None``.
     """
 
     k: int
@@ -59,6 +63,8 @@ class SMFDOStep:
     error_bound: float
     disturbance_set: ConstrainedZonotope | None = None
     status: str = "ok"
+    state_lo: NDArray[np.float64] | None = None
+    state_hi: NDArray[np.float64] | None = None
 
     radius = renamed("radius", "error_bound")
 
@@ -105,6 +111,10 @@ class SMFDOResult:
         The system's sampling time (for time axes).
     names : tuple of str
         The disturbance names (for tables and plot labels).
+    state_lo, state_hi : ndarray, shape (N, n), or None
+        Certified interval hulls of the consistent states (``state_bounds=True``).
+    state_names : tuple of str
+        The state names (for tables).
     """
 
     estimate: NDArray[np.float64]
@@ -116,6 +126,9 @@ class SMFDOResult:
     first_inconsistent: int | None = None
     dt: float | None = None
     names: tuple[str, ...] = ()
+    state_lo: NDArray[np.float64] | None = None
+    state_hi: NDArray[np.float64] | None = None
+    state_names: tuple[str, ...] = ()
 
     radius = renamed("radius", "error_bound")
 
@@ -127,7 +140,8 @@ class SMFDOResult:
     def __iter__(self):
         return iter((self.time, self.estimate, self.lo, self.hi))
 
-    def plot(self, ax: Any = None, truth: ArrayLike | None = None, component: int = 0) -> Any:
+    def plot(self, ax: Any = None, truth: ArrayLike | None = None, component: int = 0,
+             states: bool = False) -> Any:
         """Estimate, certified interval and truth of one component
         (:func:`setobs.plotting.plot_estimate_band`).
 
@@ -136,9 +150,12 @@ class SMFDOResult:
         ax : matplotlib Axes, optional
             Where to draw (default: the current axes).
         truth : array_like, shape (N, q), optional
-            The true disturbance.
+            The true disturbance (with ``states``: the true states, ``N x n``).
         component : int
-            Disturbance component.
+            Disturbance component (with ``states``: state component).
+        states : bool
+            Draw the certified state interval ``[state_lo, state_hi]`` (and its
+            centre) instead (a result of ``state_bounds=True``).
 
         Returns
         -------
@@ -147,7 +164,19 @@ class SMFDOResult:
         """
         from ..plotting import plot_estimate_band
 
-        return plot_estimate_band(self, truth=truth, component=component, ax=ax)
+        if not states:
+            return plot_estimate_band(self, truth=truth, component=component, ax=ax)
+        if self.state_lo is None or self.state_hi is None:
+            raise DimensionError("no state bounds in this result: run the SMFDO with "
+                                 "state_bounds=True")
+        lo, hi = self.state_lo, self.state_hi
+        with np.errstate(invalid="ignore"):
+            mid = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), np.nan)
+        n = lo.shape[1]
+        view = SMFDOResult(mid, lo, hi, self.error_bound, self.steps, self.status,
+                           self.first_inconsistent, self.dt,
+                           self.state_names or tuple(f"x{i}" for i in range(n)))
+        return plot_estimate_band(view, truth=truth, component=component, ax=ax)
 
     def summary(self, truth: ArrayLike | None = None, start: int = 0) -> Any:
         """One row (index ``"SMFDO"``) over steps ``k >= start``: ``error_bound`` (mean
@@ -186,7 +215,8 @@ class SMFDOResult:
 
     def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
         """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
-        (the estimate and its certified interval), then ``error_bound`` and ``status``.
+        (the estimate and its certified interval), then ``error_bound`` and ``status``;
+        with state bounds, per state ``name_lo`` and ``name_hi`` after them.
 
         The index is the time ``k dt`` (named ``"time"``) when a sampling time is
         known (``dt`` or the system's), else the step ``k``.
@@ -217,6 +247,12 @@ class SMFDOResult:
             cols[f"{name}_hi"] = self.hi[:, i]
         cols["error_bound"] = self.error_bound
         cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
+        if self.state_lo is not None and self.state_hi is not None:
+            n = self.state_lo.shape[1]
+            xn = list(self.state_names) or [f"x{i}" for i in range(n)]
+            for i, name in enumerate(xn):
+                cols[f"{name}_lo"] = self.state_lo[:, i]
+                cols[f"{name}_hi"] = self.state_hi[:, i]
         return pd.DataFrame(cols, index=time_index(N, dt if dt is not None else self.dt))
 
     @property

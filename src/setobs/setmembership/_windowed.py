@@ -41,7 +41,8 @@ class WindowedSteps:
         return [*self._hist[-(win - 1):], entry] if win > 1 else [entry]
 
     def _fast_step(self, k: int, mode: str, entry: Entry):
-        """Hulls of ``Z_k`` (and ``P Z_k``) by the closed form, or ``None`` (reference path)."""
+        """Hulls of ``Z_k``, ``P Z_k`` (and of the state, ``state_bounds``) by the closed
+        form, or ``None`` (reference path)."""
         if (not self.fast or self._inc_fixed is None or self._noise_varies
                 or mode == "recursive"):
             return None
@@ -51,7 +52,8 @@ class WindowedSteps:
             # k = 100 on the paper example): the reference path is used.
             return None
         N = self.A_o.shape[0]
-        P_extra = None if self._P_coords is not None else self.P
+        rows = self.state_rows()
+        P_extra = rows if rows.shape[0] else None
         inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         hist = self._window_hist(entry) if mode == "box" else [*self._hist, entry]
         Y = np.array([e.y for e in hist])
@@ -121,12 +123,20 @@ class WindowedSteps:
             return None
         lo, hi = out
         box_o = trusted_box(lo[:N], hi[:N])
+        q = self.sys.q
+        extra = N
         if self._P_coords is not None:
             j = self._P_coords
             box = trusted_box(lo[j], hi[j])
         else:
-            box = trusted_box(lo[N:], hi[N:])
-        return (model, c, b, h, c_err, b_err), box, box_o
+            box = trusted_box(lo[N:N + q], hi[N:N + q])
+            extra += q
+        box_x = None
+        if self.state_bounds:
+            j = self._X_coords
+            box_x = trusted_box(lo[j], hi[j]) if j is not None else trusted_box(
+                lo[extra:], hi[extra:])
+        return (model, c, b, h, c_err, b_err), box, box_o, box_x
 
     @staticmethod
     def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -141,6 +141,17 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances; the others are control inputs.
+    state_bounds : bool
+        Also give the certified interval hull of the consistent states ``x_k`` at
+        every step (``step.state_lo``, ``step.state_hi``; ``result.state_lo``,
+        ``result.state_hi``, ``N x n``): the same sets, the same certified LPs (in
+        windowed mode extra rows of the fast path's warm-started LPs). With a
+        system without disturbances (``q = 0``: ``G`` with no columns) the SMFDO
+        is a set-membership state observer: the worst-case-optimal state set in
+        exact mode, an outer bound of it with a window. A state that depends on
+        the unobservable part of the augmented pair is reported unbounded. In
+        exact mode the H-representation fast path is not used with state bounds
+        yet (the whole-history set recursion is).
 
     Attributes
     ----------
@@ -227,6 +238,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         data_rtol: float = DATA_RTOL,
         keep_sets: bool = False,
         fast: bool = True,
+        state_bounds: bool = False,
         disturbance_inputs: DisturbanceInputs = None,
     ) -> None:
         sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
@@ -246,6 +258,9 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self.reset_inflation = check_real_scalar("reset_inflation", reset_inflation,
                                                  positive=True)
         self.margin = check_real_scalar("margin", margin, nonnegative=True)
+        if not isinstance(state_bounds, bool | np.bool_):
+            raise TypeError(f"state_bounds must be True or False, got {state_bounds!r}")
+        self.state_bounds = bool(state_bounds)
         self.data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
         if self.data_rtol > 1e-6:
             raise DimensionError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
@@ -396,14 +411,14 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         fast = self._fast_step(k, mode, e)
         if fast is not None:
             self.stats["fast"] += 1
-            Z_src, box, box_o = fast
+            Z_src, box, box_o, box_x = fast
             Zd = None
             if self.keep_sets:
                 model, c, b, h, c_err, b_err = Z_src
                 Z_src = model.to_cz(c, b, h, c_err, b_err)
                 Zd = self.P @ Z_src
             self._depth = k if mode == "init" else self.window
-            return self._commit(k, mode, Z_src, box, box_o, Zd, e, "ok")
+            return self._commit(k, mode, Z_src, box, box_o, Zd, e, "ok", box_x)
         return self._reference_step(k, mode, e)
 
     @with_single_threaded_blas
@@ -498,7 +513,17 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             first,
             self.sys.dt,
             tuple(self.sys.disturbance_names),
+            *self._state_arrays(steps),
         )
+
+    def _state_arrays(self, steps: list[SMFDOStep]):
+        """``state_lo``, ``state_hi`` (N x n) and the state names, or ``None``s."""
+        if not self.state_bounds:
+            return None, None, ()
+        n = self.sys.n
+        return (np.array([s.state_lo for s in steps]).reshape(len(steps), n),
+                np.array([s.state_hi for s in steps]).reshape(len(steps), n),
+                tuple(self.sys.state_names))
 
     def __repr__(self) -> str:
         mode = "exact" if self.window is None else f"window={self.window}"
