@@ -61,7 +61,8 @@ XI3 = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 def test_q0_is_a_set_membership_state_observer_equal_to_the_history_lp():
     """q = 0, process and measurement noise: exact mode equals the whole-history LP of
-    the state (1e-6 of the width), windows 3 and 10 contain it, all contain the truth."""
+    the state (1e-6 of the width), windows 3 and 10 contain it, all contain the truth;
+    the windows' fast path gives the state bounds as extra rows of its LPs."""
     rng = np.random.default_rng(3)
     rw, rv = 0.02, 0.05
     G0 = np.zeros((3, 0))
@@ -73,6 +74,7 @@ def test_q0_is_a_set_membership_state_observer_equal_to_the_history_lp():
                        state_bounds=True)
         res[w] = obs.run(Y)
         r = res[w]
+        assert obs.stats["fast"] > 0 or w is None  # (with noise: the set recursion)
         assert r.lo.shape == (25, 0) and r.state_lo.shape == (25, 3)
         assert np.all((X >= r.state_lo) & (X <= r.state_hi))
         assert set(r.status) == {"ok"}
@@ -109,8 +111,7 @@ def test_state_bounds_with_a_disturbance_equal_the_history_lp():
         np.testing.assert_allclose(r.lo, plain.lo, rtol=0, atol=1e-10)
         np.testing.assert_allclose(r.hi, plain.hi, rtol=0, atol=1e-10)
         assert np.all((X >= r.state_lo) & (X <= r.state_hi))
-        if w is not None:
-            assert obs.stats["fast"] > 0
+        assert obs.stats["fast"] > 0 or w is None
         for k in (5, 12, 19):
             lo, hi = state_history_lp(PHI3, G1, XI3, Y, k, 0.0, rv, r_inc)
             width = (hi - lo).max()
@@ -206,3 +207,28 @@ def test_the_state_band_is_plotted_from_the_certified_bounds():
                      measurement_noise=0.05).run(Y)
     with pytest.raises(so.DimensionError, match="state_bounds=True"):
         plain.plot(states=True)
+
+
+def test_exact_mode_state_bounds_on_the_h_representation_path():
+    """The paper example in other state coordinates (``x' = T x``, so that the state is
+    no coordinate of the SMFDO's internal set), noise-free: exact mode runs 22 of 25
+    steps on the H-representation path with the state map as extra rows of its LPs,
+    and equals the whole-history LP of the state within 1e-6 of the width."""
+    from tests.setmembership.test_smfdo import simulate
+
+    s0 = so.examples.chang2006()
+    T = np.array([[1.0, 0.5, 0.0], [0.0, 1.0, -0.3], [0.2, 0.0, 1.0]])
+    Ti = np.linalg.inv(T)
+    s = so.LinearSystem(T @ s0.Phi @ Ti, T @ s0.G, s0.Xi @ Ti)
+    x0 = T @ np.array([0.2, -0.5, 0.3])
+    Y, D = simulate(s, 25, np.random.default_rng(7), x0=x0, d0=[1.0, -2.0])
+    X = s.simulate(D, x0=x0)[1]
+    obs = so.SMFDO(s, window=None, state_bounds=True)
+    r = obs.run(Y)
+    assert obs.stats["fast"] >= 20
+    assert np.all((X >= r.state_lo) & (X <= r.state_hi))
+    for k in (5, 12, 24):
+        lo, hi = state_history_lp(s.Phi, s.G, s.Xi, Y, k, 0.0, 0.0, 1.0)
+        width = (hi - lo).max()
+        assert np.abs(r.state_lo[k] - lo).max() <= 1e-6 * width
+        assert np.abs(r.state_hi[k] - hi).max() <= 1e-6 * width

@@ -177,8 +177,10 @@ class ExactSteps:
         V_new, H_new = geo
         H_new = snap_normals(H_new, st.H)
         inc, B_step, Vn = self._step_set, self._B_step, self._V_fixed
-        P_rows = [H_new] if self._P_coords is not None else [self.P, H_new]
-        P_ext = np.vstack(P_rows)
+        # rows beyond z: P (unless it selects coordinates), the state map (state
+        # bounds, unless it selects coordinates), then the new facet normals
+        extra = self.state_rows()
+        P_ext = np.vstack([extra, H_new])
         mkey = m.tobytes()
         key = ("hrep", st.H.shape, st.H.tobytes(), H_new.shape, H_new.tobytes(), mkey)
         H_prev = st.H
@@ -216,14 +218,24 @@ class ExactSteps:
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return None
         box_o = trusted_box(lo[:N], hi[:N])
+        q = self.P.shape[0]
+        at = N
         if self._P_coords is not None:
             j = self._P_coords
             box = trusted_box(lo[j], hi[j])
-            g = hi[N:]
         else:
-            q = self.P.shape[0]
             box = trusted_box(lo[N:N + q], hi[N:N + q])
-            g = hi[N + q:]
+            at += q
+        box_x = None
+        if self.state_bounds:
+            if self._X_coords is not None:
+                j = self._X_coords
+                box_x = trusted_box(lo[j], hi[j])
+            else:
+                n = self.sys.n
+                box_x = trusted_box(lo[at:at + n], hi[at:at + n])
+                at += n
+        g = hi[at:]
         Zd = self.P @ model.to_cz(c, b, h, c_err, b_err) if self.keep_sets else None
         # The carried set covers the rounding of the objectives' products with the
         # generators (P_ext G, the model's G = [A_o, 0, B_o G_D]), which the LP
@@ -241,5 +253,5 @@ class ExactSteps:
             # {H z <= g} would be an outer set from the next step on. This step's
             # bounds are exact (its LPs ran over the exact set); carry that set.
             self._h_back_off(self.k + 1)
-            return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd
-        return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd
+            return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x
+        return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x

@@ -404,10 +404,9 @@ class ModelSetup:
         self._grow_limit = 4 * ((window or 0) + self.mu_o) + 16
         self._warned_fallback = False
         # Exact mode's H-representation recursion (setmembership._hrep): fixed
-        # uncertainty sets; their vertices are computed on first use. (Not with state
-        # bounds yet: those come from the set recursion's LPs.)
+        # uncertainty sets; their vertices are computed on first use.
         self._hrep = (window is None and self.fast and self._inc_fixed is not None
-                      and not self._noise_varies and not self.state_bounds)
+                      and not self._noise_varies)
         self._h_images: list[NDArray[np.float64]] | None = None
         self._h_floor_value: float | None = None
         self._h_noise: dict[bytes, list] = {}

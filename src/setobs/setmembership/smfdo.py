@@ -150,8 +150,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         is a set-membership state observer: the worst-case-optimal state set in
         exact mode, an outer bound of it with a window. A state that depends on
         the unobservable part of the augmented pair is reported unbounded. In
-        exact mode the H-representation fast path is not used with state bounds
-        yet (the whole-history set recursion is).
+        exact mode the state map is extra rows of the H-representation path's
+        LPs as well.
 
     Attributes
     ----------
@@ -405,9 +405,9 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             hstep = self._hrep_step(e)
             if hstep is not None:
                 self.stats["fast"] += 1
-                hst, box, box_o, Zd = hstep
+                hst, box, box_o, Zd, box_x = hstep
                 self._depth = 0
-                return self._commit(k, mode, hst, box, box_o, Zd, e, "ok")
+                return self._commit(k, mode, hst, box, box_o, Zd, e, "ok", box_x)
         fast = self._fast_step(k, mode, e)
         if fast is not None:
             self.stats["fast"] += 1
