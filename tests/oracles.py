@@ -290,8 +290,10 @@ def exact_hpolytope_vertices(H: np.ndarray, k: np.ndarray) -> list[list[Fraction
 
 
 def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_box=None,
-                     noise_w=None, noise_v=None, Du=None, r_inc_set=None, y_rtol=0.0):
-    """``(lo, hi)`` of ``d_k`` over the whole history by a sparse float LP (HiGHS).
+                     noise_w=None, noise_v=None, Du=None, r_inc_set=None, y_rtol=0.0,
+                     states=False):
+    """``(lo, hi)`` of ``d_k`` (``states``: of ``x_k``) over the whole history by a
+    sparse float LP (HiGHS).
 
     For long horizons where :func:`exact_history_bounds` is too slow. Every
     state is a variable (``x_0 .. x_k``, ``d_0 .. d_k``, the increments and the
@@ -395,11 +397,12 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     for t, eb in enumerate(e_bounds):
         bounds[o_e + t] = (-eb, eb)
     opts = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
-    lo, hi = np.empty(q), np.empty(q)
-    for i in range(q):
+    first, count = (ix(k), n) if states else (idd(k), q)
+    lo, hi = np.empty(count), np.empty(count)
+    for i in range(count):
         for sgn in (1.0, -1.0):
             cst = np.zeros(nvar)
-            cst[idd(k) + i] = sgn
+            cst[first + i] = sgn
             res = linprog(cst, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=np.asarray(rhs),
                           bounds=bounds, method="highs", options=opts)
             if res.status == 3:

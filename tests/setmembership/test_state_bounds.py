@@ -1,7 +1,8 @@
 """Certified state bounds (issue 33, item 2): ``SMFDO(..., state_bounds=True)``, and a
 system without disturbances (q = 0) as a set-membership state observer.
 
-Oracle: the whole-history LP of the state, written here with scipy (no setobs code):
+Oracle: the whole-history LP of the state (``tests.oracles.history_lp_highs``, scipy's
+HiGHS with every state a variable; no setobs code):
 variables ``x_0`` (free), ``d_0`` (free), the increments and the process noise; the
 outputs within the measurement-noise radius."""
 
@@ -11,36 +12,18 @@ import numpy as np
 import pytest
 
 import setobs as so
-from tests.oracles import slab_lp_extremes
+from tests.oracles import history_lp_highs
 
 
 def state_history_lp(Phi, G, Xi, Y, k, rw, rv, r_inc=1.0):
     """Bounds of ``x_k`` over every history consistent with ``Y[:k+1]``:
     ``x+ = Phi x + G d + w`` (``|w| <= rw``), ``d+ = d + dd`` (``|dd| <= r_inc``),
-    ``|y - Xi x| <= rv``; ``x_0``, ``d_0`` free."""
-    n, q = Phi.shape[0], G.shape[1]
-    nv = n + q + k * (q + n)  # x0, d0, then per step (dd_j, w_j)
-    Mx = np.zeros((n, nv))
-    Mx[:, :n] = np.eye(n)
-    Md = np.zeros((q, nv))
-    Md[:, n:n + q] = np.eye(q)
-    rows, rhs = [], []
-    for j in range(k + 1):
-        rows.append(Xi @ Mx)
-        rhs.append(Y[j])
-        if j == k:
-            break
-        o = n + q + j * (q + n)
-        Mx = Phi @ Mx + G @ Md
-        Mx[:, o + q:o + q + n] += np.eye(n)
-        Md = Md.copy()
-        Md[:, o:o + q] += np.eye(q)
-    A, b = np.vstack(rows), np.concatenate(rhs)
-    tol = np.full(b.size, rv)
-    bounds = [(None, None)] * (n + q)
-    for _ in range(k):
-        bounds += [(-r_inc, r_inc)] * q + [(-rw, rw)] * n
-    return slab_lp_extremes(Mx, A, b, tol, bounds)
+    ``|y - Xi x| <= rv``; ``x_0``, ``d_0`` free (``tests.oracles.history_lp_highs``)."""
+    n, l = Phi.shape[0], Xi.shape[0]
+    return history_lp_highs(
+        Phi, G, Xi, Y, k, r_inc, states=True,
+        noise_w=(np.eye(n), np.full(n, rw)) if rw else None,
+        noise_v=(np.eye(l), np.full(l, rv)) if rv else None)
 
 
 def _record(Phi, G, Xi, N, rw, rv, rng, r_inc=1.0):

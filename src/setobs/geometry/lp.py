@@ -406,6 +406,7 @@ class FactorPolytope:
         self.n_c, self.n_g = A.shape
         self._unb = np.isinf(h)
         self._unb_pinv: NDArray[np.float64] | None = None
+        self._pivot: tuple | None = None  # (see _free_pivot)
         self._model: highspy.Highs | None = None
         self._emptiness: dict[float, EmptinessReport] = {}
         self._lock = threading.RLock()
@@ -567,14 +568,20 @@ class FactorPolytope:
         if not np.isfinite(bound) or obj - bound <= rtol * gap_tol:
             return bound
         if hs is not None:
-            y_ref = self._basis_duals(hs, w)
-            if y_ref is not None:
-                b_ref = self.certify(w, y_ref, w_err, w_pair)
-                if b_ref > bound:
-                    bound, y = b_ref, y_ref
+            bound, y = self._basis_bound(w, w_err, w_pair, hs, y, bound)
         if obj - bound > RELAXED_EXACT_GAP * gap_tol:
             bound = max(bound, self.certify(w, y, w_err, w_pair, exact_residual=True))
         return bound
+
+    def _basis_bound(self, w, w_err, w_pair, hs, y, bound: float):
+        """``(bound, y)``, or the certified bound of the duals of the optimal basis of
+        ``hs`` (refined in extended precision) with those duals, when it is higher."""
+        y_ref = self._basis_duals(hs, w)
+        if y_ref is not None:
+            b_ref = self.certify(w, y_ref, w_err, w_pair)
+            if b_ref > bound:
+                return b_ref, y_ref
+        return bound, y
 
     def _certify(self, w, y, w_err=None, w_pair=None, exact_residual=False
                  ) -> tuple[float, NDArray[np.float64]]:
@@ -786,12 +793,7 @@ class FactorPolytope:
         resid = np.abs(self.A @ x - self.b)
         if self.b_err is not None:
             resid = np.maximum(resid - self.b_err, 0.0)
-        yb = y
-        y_ref = self._basis_duals(hs, w)
-        if y_ref is not None:
-            b_ref = self.certify(w, y_ref, w_err, w_pair)
-            if b_ref > bound:
-                bound, yb = b_ref, y_ref
+        bound, yb = self._basis_bound(w, w_err, w_pair, hs, y, bound)
         obj = float(w @ x) + float(np.abs(yb) @ resid)
         if not np.isfinite(bound) or obj - bound > RELAXED_EXACT_GAP * (1.0 + abs(obj)):
             return None
@@ -868,29 +870,14 @@ class FactorPolytope:
         unb = self._unb
         be = self.b_err
         Au, Ab = self.A[:, unb], self.A[:, ~unb]
-        U, S, Vt = np.linalg.svd(Au)
-        eps = np.finfo(np.float64).eps
-        r = int(np.count_nonzero(S > S[0] * max(Au.shape) * eps)) if S[0] > 0 else 0
-        Ur, Vr, Sr, N = U[:, :r], Vt[:r].T, S[:r], U[:, r:]
+        Ur, Sr, Vr, N, xi0, r0, A2, b2, pos = self._free_pivot()
         wu = w[unb]
         M = Ur @ ((Vr.T @ wu) / Sr)
-        # Centred at the least-squares point xi_0 of A_u xi_u = b (refined, residual
-        # correctly rounded): N^T A_u is zero only to rounding, and times xi_u ~ 1e11
-        # that would shift the reduced rows by 1e-4; times xi_u - xi_0 it does not.
-        xi0 = Vr @ ((Ur.T @ self.b) / Sr)
-        for _ in range(2):
-            r0 = _exact_residual(self.b, Au.T, [xi0])
-            xi0 = xi0 + Vr @ ((Ur.T @ r0) / Sr)
-        r0 = _exact_residual(self.b, Au.T, [xi0])
         # w_u outside the row space of A_u: unbounded below (the other paths decide)
-        if np.abs(Au.T @ M - wu).max(initial=0.0) > 1e3 * eps * float(
+        if np.abs(Au.T @ M - wu).max(initial=0.0) > 1e3 * np.finfo(np.float64).eps * float(
                 (np.abs(wu) + np.abs(Au).T @ np.abs(M)).max(initial=0.0)):
             return None
         hb = self.h[~unb]
-        pos = be > 0.0  # e_i = b_err_i t_i, |t_i| <= 1 (columns of the data's size)
-        Ne = -N.T[:, pos] * be[pos]
-        A2 = np.hstack([N.T @ Ab, Ne])
-        b2 = N.T @ r0
         w2 = np.concatenate([w[~unb] - Ab.T @ M, M[pos] * be[pos]])
         ones = np.ones(int(pos.sum()))
         scale = self.objective_scale(w2)
@@ -911,6 +898,32 @@ class FactorPolytope:
         e[pos] = col[hb.size:] * be[pos]
         x[unb] = xi0 + Vr @ ((Ur.T @ (r0 + e - Ab @ x[~unb])) / Sr)
         return self._decided_within_b_err(w, w_err, w_pair, y, x)
+
+    def _free_pivot(self):
+        """The objective-independent parts of :meth:`_within_b_err_reduced`, computed
+        once per polytope: ``A_u = U_r S_r V_r^T`` (numerical rank ``r``), the left
+        null space ``N``, the centre ``xi_0`` and its residual ``r_0``, the reduced
+        rows ``[N^T A_b, -N^T diag(b_err)]`` and right-hand side ``N^T r_0``, and the
+        rows with ``b_err > 0``."""
+        if self._pivot is None:
+            unb, be = self._unb, self.b_err
+            Au, Ab = self.A[:, unb], self.A[:, ~unb]
+            U, S, Vt = np.linalg.svd(Au)
+            eps = np.finfo(np.float64).eps
+            r = int(np.count_nonzero(S > S[0] * max(Au.shape) * eps)) if S[0] > 0 else 0
+            Ur, Vr, Sr, N = U[:, :r], Vt[:r].T, S[:r], U[:, r:]
+            # Centred at the least-squares point xi_0 of A_u xi_u = b (refined, residual
+            # correctly rounded): N^T A_u is zero only to rounding, and times xi_u ~ 1e11
+            # that would shift the reduced rows by 1e-4; times xi_u - xi_0 it does not.
+            xi0 = Vr @ ((Ur.T @ self.b) / Sr)
+            for _ in range(2):
+                r0 = _exact_residual(self.b, Au.T, [xi0])
+                xi0 = xi0 + Vr @ ((Ur.T @ r0) / Sr)
+            r0 = _exact_residual(self.b, Au.T, [xi0])
+            pos = be > 0.0  # e_i = b_err_i t_i, |t_i| <= 1 (columns of the data's size)
+            A2 = np.hstack([N.T @ Ab, -N.T[:, pos] * be[pos]])
+            self._pivot = (Ur, Sr, Vr, N, xi0, r0, A2, N.T @ r0, pos)
+        return self._pivot
 
     def point_is_feasible(self, x: NDArray[np.float64],
                           row_allowance: NDArray[np.float64] | None = None) -> bool:

@@ -7,7 +7,6 @@ from numpy.typing import NDArray
 
 from .._rounding import gamma, round_down, round_up
 from ..geometry import ConstrainedZonotope
-from ..geometry.box import trusted_box
 from ..geometry.zonotope import hull_with_status
 from ..tolerances import (
     HREP_CONVERT_RTOL,
@@ -179,8 +178,7 @@ class ExactSteps:
         inc, B_step, Vn = self._step_set, self._B_step, self._V_fixed
         # rows beyond z: P (unless it selects coordinates), the state map (state
         # bounds, unless it selects coordinates), then the new facet normals
-        extra = self.state_rows()
-        P_ext = np.vstack([extra, H_new])
+        P_ext = np.vstack([self._hull_rows, H_new])
         mkey = m.tobytes()
         key = ("hrep", st.H.shape, st.H.tobytes(), H_new.shape, H_new.tobytes(), mkey)
         H_prev = st.H
@@ -217,24 +215,7 @@ class ExactSteps:
         lo, hi = out
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return None
-        box_o = trusted_box(lo[:N], hi[:N])
-        q = self.P.shape[0]
-        at = N
-        if self._P_coords is not None:
-            j = self._P_coords
-            box = trusted_box(lo[j], hi[j])
-        else:
-            box = trusted_box(lo[N:N + q], hi[N:N + q])
-            at += q
-        box_x = None
-        if self.state_bounds:
-            if self._X_coords is not None:
-                j = self._X_coords
-                box_x = trusted_box(lo[j], hi[j])
-            else:
-                n = self.sys.n
-                box_x = trusted_box(lo[at:at + n], hi[at:at + n])
-                at += n
+        box_o, box, box_x, at = self.split_hull(lo, hi)
         g = hi[at:]
         Zd = self.P @ model.to_cz(c, b, h, c_err, b_err) if self.keep_sets else None
         # The carried set covers the rounding of the objectives' products with the

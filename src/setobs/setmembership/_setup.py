@@ -17,6 +17,7 @@ from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
 from ..exceptions import DimensionError, ExistenceError
 from ..geometry import Box, ConstrainedZonotope
+from ..geometry.box import trusted_box
 from ..geometry.zonotope import trusted_cz
 from ..systems import LinearSystem
 from ._window import WindowModel
@@ -169,13 +170,40 @@ class ModelSetup:
     measured data as step entries."""
 
     # ------------------------------------------------------------------ setup helpers
-    def state_rows(self) -> NDArray[np.float64]:
-        """The rows the fast path bounds beyond the coordinates of ``z``: ``P`` unless it
-        selects coordinates, then the state map unless it does (state bounds)."""
+    def _extra_rows(self) -> NDArray[np.float64]:
+        """The rows the fast paths bound beyond the coordinates of ``z``: ``P`` unless it
+        selects coordinates, then the state map unless it does (state bounds); kept
+        as ``_hull_rows``."""
         parts = [] if self._P_coords is not None else [self.P]
         if self.state_bounds and self._X_coords is None:
             parts.append(self._Mx)
         return np.vstack(parts) if parts else np.zeros((0, self.A_o.shape[0]))
+
+    def split_hull(self, lo: NDArray[np.float64], hi: NDArray[np.float64]):
+        """The fast paths' hull bounds (the coordinates of ``z``, then the rows of
+        ``_hull_rows``, then any rows of the caller's) as ``(box_o, box, box_x,
+        rest)``: the hulls of ``z``, of ``P z`` and (``state_bounds``, else ``None``)
+        of the state, and the index of the caller's rows."""
+        N = self.A_o.shape[0]
+        box_o = trusted_box(lo[:N], hi[:N])
+        at = N
+        if self._P_coords is not None:
+            j = self._P_coords
+            box = trusted_box(lo[j], hi[j])
+        else:
+            q = self.P.shape[0]
+            box = trusted_box(lo[N:N + q], hi[N:N + q])
+            at += q
+        box_x = None
+        if self.state_bounds:
+            if self._X_coords is not None:
+                j = self._X_coords
+                box_x = trusted_box(lo[j], hi[j])
+            else:
+                n = self.sys.n
+                box_x = trusted_box(lo[at:at + n], hi[at:at + n])
+                at += n
+        return box_o, box, box_x, at
 
     def _v_internal(self, V: ConstrainedZonotope | None) -> ConstrainedZonotope | None:
         """``F_b V``: a measurement-noise set in balanced output units."""
@@ -232,7 +260,7 @@ class ModelSetup:
         inc = self._step_set
         Z0 = self._Z0_prior
         parts = [self.A_o, self._B_step, self.C_o, self.Gamma_o, self.P, Z0.G, Z0.A,
-                 np.isinf(Z0.h), self.state_rows()]
+                 np.isinf(Z0.h), self._hull_rows]
         for S in (inc, self._V_fixed):
             if S is not None:
                 parts += [S.G, S.c, S.A, S.b, S.h, S.b_err, S.c_err]
@@ -382,6 +410,7 @@ class ModelSetup:
         self._P_coords = np.argmax(P, axis=1) if sel.all() else None
         self.T_o = T_o
         self.A_o, self.B_o, self.Gamma_o, self.C_o = dec.A_o, dec.B_o, dec.Gamma_o, dec.C_o
+        self._hull_rows = self._extra_rows()
         X0 = ConstrainedZonotope.full_space(n) if X0 is None else X0
         if q:
             D0 = ConstrainedZonotope.full_space(q) if D0 is None else D0

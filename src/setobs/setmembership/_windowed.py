@@ -7,7 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.box import box_center_radius, trusted_box
+from ..geometry.box import box_center_radius
 from ..tolerances import UNBOUNDED_RADIUS
 from ._setup import MODEL_CACHE, Entry
 from ._window import WindowModel
@@ -52,8 +52,7 @@ class WindowedSteps:
             # k = 100 on the paper example): the reference path is used.
             return None
         N = self.A_o.shape[0]
-        rows = self.state_rows()
-        P_extra = rows if rows.shape[0] else None
+        P_extra = self._hull_rows if self._hull_rows.shape[0] else None
         inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         hist = self._window_hist(entry) if mode == "box" else [*self._hist, entry]
         Y = np.array([e.y for e in hist])
@@ -121,21 +120,7 @@ class WindowedSteps:
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
-        lo, hi = out
-        box_o = trusted_box(lo[:N], hi[:N])
-        q = self.sys.q
-        extra = N
-        if self._P_coords is not None:
-            j = self._P_coords
-            box = trusted_box(lo[j], hi[j])
-        else:
-            box = trusted_box(lo[N:N + q], hi[N:N + q])
-            extra += q
-        box_x = None
-        if self.state_bounds:
-            j = self._X_coords
-            box_x = trusted_box(lo[j], hi[j]) if j is not None else trusted_box(
-                lo[extra:], hi[extra:])
+        box_o, box, box_x, _ = self.split_hull(*out)
         return (model, c, b, h, c_err, b_err), box, box_o, box_x
 
     @staticmethod
