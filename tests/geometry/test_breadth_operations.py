@@ -324,6 +324,22 @@ def test_constraint_elimination_is_outer(seed):
         assert all(R.contains(v) for v in V)
 
 
+def test_constraint_elimination_works_on_a_set_that_already_carries_rounding_error():
+    """A set whose right-hand side carries a certified error larger than the elimination
+    budget's relative size (a filter after 25 steps: 2e-12 against 1e-12) still has
+    its constraints eliminated (it stalled: the budget was the larger of the two, not
+    the carried error plus the room), and stays outer (vertices inside)."""
+    from setobs.geometry.zonotope import trusted_cz
+
+    Z, V = _polytope_cz(1)
+    Ze = trusted_cz(Z.G, Z.c, Z.A, Z.b, Z.h, Z.unbounded_radius, Z.c_err,
+                    np.full(Z.n_con, 1e-9))
+    for target in (Z.n_con - 1, 2, 0):
+        R = eliminate_constraints(Ze, target)
+        assert R.n_con <= target
+        assert all(R.contains(v) for v in V)
+
+
 def test_reduce_order_can_shrink_sets_converted_from_polytopes():
     Z, V = _polytope_cz(4, n=3, points=40)
     assert Z.n_gen == Z.dim + Z.n_con   # the old floor: nothing could be reduced

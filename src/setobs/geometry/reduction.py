@@ -336,12 +336,15 @@ def _drop_zero_rows(A, b, berr):
 
 
 def _budgets(G, c, A, b, h, cerr, berr) -> tuple[float, float]:
-    """Rounding budgets of ``c`` and ``b`` for a chain of eliminations."""
+    """Rounding budgets of ``c`` and ``b`` for a chain of eliminations: the error already
+    carried plus ``ELIMINATION_ERR_RTOL`` of the data's size. (It was the larger of
+    the two, so a set that had carried its error past that size, e.g. after 25 steps
+    of a filter, had no room left and every later elimination stalled.)"""
     fin = np.where(np.isfinite(h), h, 0.0)
-    c_budget = max(float(cerr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
-        1.0 + float(np.abs(c).max(initial=0.0)) + float((np.abs(G) @ fin).max(initial=0.0))))
-    b_budget = max(float(berr.max(initial=0.0)), ELIMINATION_ERR_RTOL * (
-        1.0 + float(np.abs(b).max(initial=0.0)) + float((np.abs(A) @ fin).max(initial=0.0))))
+    c_budget = float(cerr.max(initial=0.0)) + ELIMINATION_ERR_RTOL * (
+        1.0 + float(np.abs(c).max(initial=0.0)) + float((np.abs(G) @ fin).max(initial=0.0)))
+    b_budget = float(berr.max(initial=0.0)) + ELIMINATION_ERR_RTOL * (
+        1.0 + float(np.abs(b).max(initial=0.0)) + float((np.abs(A) @ fin).max(initial=0.0)))
     return c_budget, b_budget
 
 
