@@ -405,3 +405,54 @@ def test_check_continuous_model_needs_and_takes_dt(tmp_path, capsys):
     # position measured, d enters the velocity: (x, d) is observable from y, so Theorem 1
     # holds (rank [O, IbarOG] = rank O + q)
     assert {d["design"]: d["exists"] for d in out["designs"]}["SMFDO"] is True
+
+
+def test_estimate_a_model_without_disturbances_is_a_state_estimation(tmp_path, capsys):
+    """A model file with ``disturbance_inputs: []`` (q = 0): no --increment (it is refused
+    there, and required with a disturbance), --process-noise on the states, the state
+    bounds written without --states and holding the own simulation's states, and a plot
+    with one panel per state."""
+    A = [[0.9, 0.2], [-0.1, 0.8]]
+    model = tmp_path / "q0.yaml"
+    model.write_text(yaml.safe_dump({"A": A, "B": [[0.0], [1.0]], "C": [[1.0, 0.0]],
+                                     "Ts": 0.1, "disturbance_inputs": [],
+                                     "input_names": ["u"], "output_names": ["y"]}))
+    rng = np.random.default_rng(4)
+    N, rw, rv = 120, 0.01, 0.02
+    x, X, lines = np.array([0.5, -0.5]), [], ["y,u"]
+    for _k in range(N):
+        u = float(np.sin(0.1 * _k))
+        X.append(x.copy())
+        lines.append(f"{float(x[0] + rng.uniform(-rv, rv))!r},{u!r}")
+        x = np.array(A) @ x + np.array([0.0, 1.0]) * u + rng.uniform(-rw, rw, 2)
+    X = np.array(X)
+    rec = tmp_path / "rec.csv"
+    rec.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "out"
+    base = ["estimate", str(rec), "--model", str(model), "--outputs", "y", "--inputs", "u",
+            "--noise", str(rv), "--process-noise", str(rw), "--no-progress"]
+    assert main([*base, "--out", str(out), "--window", "3"]) == 0
+    import pandas as pd
+
+    df = pd.read_csv(out / "estimate.csv")
+    assert list(df.columns) == ["time", "error_bound", "status", "x0_lo", "x0_hi", "x1_lo",
+                                "x1_hi"]
+    for i in range(2):
+        lo, hi = df[f"x{i}_lo"].to_numpy(), df[f"x{i}_hi"].to_numpy()
+        ok = np.isfinite(lo) & np.isfinite(hi)
+        assert ok.sum() >= N - 2
+        assert np.all(lo[ok] <= X[ok, i]) and np.all(X[ok, i] <= hi[ok])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["restart"] == "polytope" and summary["process_noise"] == [rw, rw]
+    import matplotlib.image as mpimg
+
+    h, w = mpimg.imread(out / "estimate.png").shape[:2]
+    assert h == round(2 * 2.6 * 110) and w == 8 * 110  # one panel per state
+    capsys.readouterr()
+    assert main([*base, "--increment", "1e-3", "--out", str(tmp_path / "b")]) == 2
+    assert "no disturbance" in capsys.readouterr().err
+    motor = tmp_path / "m.yaml"
+    motor.write_text(yaml.safe_dump(MOTOR_CT))
+    assert main(["estimate", str(rec), "--model", str(motor), "--outputs", "y",
+                 "--inputs", "u", "--dt", "1e-3", "--out", str(tmp_path / "c")]) == 2
+    assert "--increment" in capsys.readouterr().err

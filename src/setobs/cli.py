@@ -55,7 +55,8 @@ def demo(out: str | Path = "setobs_demo.png", steps: int = 120, seed: int = 0) -
     print(f"setobs {__version__} — Li-Cong-Dong example (eq. (25)), |dd_i| <= 1, "
           f"{steps} steps, seed {seed}\n")
     print(repr(diagnose(sys_)).split("\n")[1])
-    res = {w: SMFDO(sys_, window=w, **kw).run(traj.Y) for w in (3, 10, None)}
+    # the paper's Algorithm 1 as printed: windows restart from the box (eq. (24))
+    res = {w: SMFDO(sys_, window=w, restart="box", **kw).run(traj.Y) for w in (3, 10, None)}
     exact = res[None]
     est = {f"SMFDO window={w}": r.estimate for w, r in res.items() if w is not None}
     est["SMFDO exact"] = exact.estimate
@@ -167,13 +168,17 @@ SKIP_WARN_FRACTION = 0.01
 
 def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None,
              time_col: str | None = None, dt: float | None = None,
-             variable: str | None = None, decimate: int = 1, increment: str,
+             variable: str | None = None, decimate: int = 1, increment: str | None = None,
              noise: str | None = None, calibrate: bool = False, window: int | None = 10,
              out: str | None = None, plot: bool = True, progress: bool | None = None,
              on_inconsistent: str = "raise", unit: str | None = None,
-             states: bool = False) -> int:
+             states: bool = False, process_noise: str | None = None,
+             restart: str = "polytope") -> int:
     """Certified disturbance bounds from a measured record (CSV + plot + summary);
     with ``states``, the certified state bounds too (``<state>_lo``/``_hi`` columns).
+    A model without disturbances (``disturbance_inputs: []``) is a state estimation:
+    the state bounds are written (``--states`` implied) and ``--increment`` does not
+    apply.
 
     The record's time axis comes from its time column, else ``dt``, else the model
     file's ``Ts``; without any of them it is the sample index. With
@@ -204,7 +209,19 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     if rec.U is not None and rec.U.shape[1] != sys_.p:
         raise CLIError(f"the model has {sys_.p} input(s), the record {rec.U.shape[1]} "
                        f"(--inputs {inputs})")
-    inc = _per_channel("--increment", _numbers("--increment", increment), sys_.q)
+    if sys_.q == 0:
+        if increment is not None:
+            raise CLIError("the model has no disturbance (disturbance_inputs: []): "
+                           "--increment does not apply")
+        inc = np.zeros(0)
+        states = True
+    elif increment is None:
+        raise CLIError(f"the model has {sys_.q} disturbance(s): give their increment bound "
+                       "per sample with --increment")
+    else:
+        inc = _per_channel("--increment", _numbers("--increment", increment), sys_.q)
+    w = None if process_noise is None else _per_channel(
+        "--process-noise", _numbers("--process-noise", process_noise), sys_.n)
     if calibrate and noise is not None:
         shape = _per_channel("--noise (shape for --calibrate)", _numbers("--noise", noise),
                              sys_.l)
@@ -221,7 +238,8 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     else:
         v = None
     obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
-                on_inconsistent=on_inconsistent, state_bounds=states)
+                process_noise=w, on_inconsistent=on_inconsistent, state_bounds=states,
+                restart=restart)
     N = rec.Y.shape[0]
     if progress is None:  # automatic: long records on a terminal, when tqdm is installed
         import importlib.util
@@ -262,7 +280,9 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     skipped = statuses.get("skipped", 0) + statuses.get("reset", 0)
     summary = {"record": str(record), "model": str(model), "steps": int(N),
                "sampling_time": None if rec.dt is None else round_time(rec.dt),
-               "window": window, "increment": inc.tolist(),
+               "window": window, "restart": restart if window is not None else None,
+               "increment": inc.tolist(),
+               "process_noise": None if w is None else np.asarray(w).tolist(),
                "noise": None if v is None else np.asarray(v).tolist(),
                "calibrated": bool(calibrate), "statuses": statuses,
                "first_inconsistent_step": first,
@@ -289,12 +309,17 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
 
         from .plotting import plot_estimate_band
 
-        fig, axes = plt.subplots(sys_.q, 1, figsize=(8, 2.6 * sys_.q), sharex=True,
+        n_pan = sys_.q + (sys_.n if states else 0)
+        fig, axes = plt.subplots(n_pan, 1, figsize=(8, 2.6 * n_pan), sharex=True,
                                  squeeze=False)
         for i in range(sys_.q):
             plot_estimate_band(res, component=i, ax=axes[i, 0],
                                t=rec.t if times_known else None, unit=unit)
-        axes[0, 0].set_title(f"certified disturbance bounds: {Path(record).name}")
+        for i in range(sys_.n if states else 0):
+            res.plot(ax=axes[sys_.q + i, 0], component=i, states=True)
+        what = "disturbance" if not states else ("state" if not sys_.q else
+                                                 "disturbance and state")
+        axes[0, 0].set_title(f"certified {what} bounds: {Path(record).name}")
         fig.tight_layout()
         fig.savefig(out_dir / "estimate.png", dpi=110)
         plt.close(fig)
@@ -400,8 +425,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     pe.add_argument("--variable", help="data matrix in a .mat/.npz record")
     pe.add_argument("--decimate", type=int, default=1, help="keep every k-th sample "
                                                            "(continuous models)")
-    pe.add_argument("--increment", required=True,
-                    help="disturbance increment bound per sample (one or q numbers)")
+    pe.add_argument("--increment",
+                    help="disturbance increment bound per sample (one or q numbers; "
+                         "required unless the model has no disturbance)")
+    pe.add_argument("--process-noise",
+                    help="process-noise radii on the states (one or n numbers)")
+    pe.add_argument("--restart", choices=["polytope", "box"], default="polytope",
+                    help="what each window restarts from: 'polytope' (default: keeps the "
+                         "set's shape) or 'box' (the paper's eq. (24))")
     pe.add_argument("--noise", help="measurement-noise radii (one or l numbers); with "
                                     "--calibrate: the shape to scale")
     pe.add_argument("--calibrate", action="store_true",
@@ -451,7 +482,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                             noise=args.noise, calibrate=args.calibrate, window=window,
                             out=args.out, plot=not args.no_plot, progress=args.progress,
                             on_inconsistent=args.on_inconsistent, unit=args.unit,
-                            states=args.states)
+                            states=args.states, process_noise=args.process_noise,
+                            restart=args.restart)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

@@ -366,12 +366,13 @@ def _window_lp_bounds(sys, box, Y_window, step):
 @pytest.mark.parametrize("fast", [True, False])
 @pytest.mark.parametrize("window", [3, 10])
 def test_windowed_step_equals_an_independent_lp_over_the_window(window, fast):
-    """Eq. (24): step k equals the LP over (restart box, the window's increments and
-    measurements), built here from the original model, not from the observer's sets."""
+    """Eq. (24) (``restart="box"``): step k equals the LP over (restart box, the
+    window's increments and measurements), built here from the original model, not
+    from the observer's sets."""
     rng = np.random.default_rng(13)
     sys = so.examples.chang2006()
     Y, D = simulate(sys, 60, rng, x0=[0.2, -0.5, 0.3], d0=[1.0, -2.0])
-    obs = so.SMFDO(sys, window=window, fast=fast)
+    obs = so.SMFDO(sys, window=window, fast=fast, restart="box")
     # the internal coordinates are the original ones here (checked, not assumed)
     assert np.array_equal(obs.T_o, np.eye(5))
     assert np.array_equal(obs.decomposition.state_scale, np.ones(5))

@@ -231,7 +231,7 @@ def test_time_varying_increment_set_uses_the_reference_path():
     obs = so.SMFDO(sys, window=5, increment_set=lambda k: box)
     r1 = obs.run(trs[0].Y)
     assert (obs.stats["fast"], obs.stats["reference"], obs.stats["fallback"]) == (0, 100, 0)
-    r2 = so.SMFDO(sys, window=5).run(trs[0].Y)
+    r2 = so.SMFDO(sys, window=5, restart="box").run(trs[0].Y)  # (callables: the box)
     _close(r1.lo, r2.lo)
     _close(r1.hi, r2.hi)
 

@@ -164,11 +164,34 @@ def state_case(seed: int) -> tuple[int, int, list[str]]:
         x = Phi @ x + G @ d + w
         d = d + rng.uniform(-0.1, 0.1, q)
     X, Y = np.array(X), np.array(Y)
+    # A third of the cases (own generator, so the others stay as they were): an
+    # unmeasured, stable block driven by the measured one, and a bounded X0 around
+    # the truth, so that the unobservable state is tracked (issue 33, item 3).
+    extra = np.random.default_rng(9000 + seed)
+    X0 = None
+    if extra.random() < 0.34:
+        m = int(extra.integers(1, 3))
+        A22 = extra.normal(size=(m, m))
+        A22 *= extra.uniform(0.2, 0.95) / max(np.abs(np.linalg.eigvals(A22)).max(), 1e-9)
+        A21 = extra.normal(size=(m, n))
+        Phi = np.block([[Phi, np.zeros((n, m))], [A21, A22]])
+        G = np.vstack([G, np.zeros((m, q))])
+        Xi = np.hstack([Xi, np.zeros((l, m))])
+        sys = LinearSystem(Phi, G, Xi)
+        xu = extra.uniform(-1, 1, m)
+        Xu = []
+        for k in range(N):
+            Xu.append(xu.copy())
+            xu = A21 @ X[k] + A22 @ xu + extra.choice([-rw, rw], m)
+        X = np.hstack([X, np.array(Xu)])
+        r0 = np.abs(X[0]) + 1.0
+        X0 = so.Box(-r0, r0)
     steps, violations, problems = 0, 0, []
     for win in (3, 10, None):
         try:
             obs = so.SMFDO(sys, window=win, process_noise=rw, measurement_noise=rv,
-                           increment_set=np.full(q, 0.1), state_bounds=True)
+                           increment_set=np.full(q, 0.1), state_bounds=True,
+                           initial_state_set=X0)
         except (so.DimensionError, so.ExistenceError):
             continue
         try:

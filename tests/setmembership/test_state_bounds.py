@@ -105,9 +105,8 @@ def test_state_bounds_with_a_disturbance_equal_the_history_lp():
                 assert (r.state_lo[k] <= lo + 1e-9).all() and (r.state_hi[k] >= hi - 1e-9).all()
 
 
-def test_a_state_of_the_unobservable_part_is_reported_unbounded():
-    """x_1 never reaches the output: with X0 = R^n it is unbounded (open: bounded by a
-    bounded initial set and a stable unobservable part, issue 33 item 3)."""
+def test_a_state_of_the_unobservable_part_is_unbounded_without_a_bounded_initial_set():
+    """x_1 never reaches the output: with X0 = R^n nothing bounds it."""
     sys = so.LinearSystem(np.diag([0.5, 0.9]), np.zeros((2, 0)), [[1.0, 0.0]])
     r = so.SMFDO(sys, window=3, measurement_noise=0.1, state_bounds=True).run(
         np.zeros((6, 1)))
@@ -116,6 +115,49 @@ def test_a_state_of_the_unobservable_part_is_reported_unbounded():
     ref = 0.1 * 0.5 ** np.arange(6)
     assert np.all(r.state_hi[:, 0] >= ref) and np.all(r.state_hi[:, 0] <= ref + 1e-8)
     assert np.all(r.state_lo[:, 0] <= -ref) and np.all(r.state_lo[:, 0] >= -ref - 1e-8)
+
+
+def test_a_stable_unobservable_state_is_bounded_by_the_initial_set_and_the_noise():
+    """Issue 33, item 3: x_1+ = 0.9 x_1 + w_1, |x_1(0)| <= 1, |w| <= 0.05, unmeasured:
+    |x_1(k)| <= 0.9^k + 0.05 (1 - 0.9^k) / 0.1 (closed form), in every mode."""
+    sys = so.LinearSystem(np.diag([0.5, 0.9]), np.zeros((2, 0)), [[1.0, 0.0]])
+    k = np.arange(40)
+    ref = 0.9 ** k + 0.5 * (1 - 0.9 ** k)
+    for w in (3, None):
+        r = so.SMFDO(sys, window=w, measurement_noise=0.1, process_noise=0.05,
+                     state_bounds=True, initial_state_set=so.Box([-1, -1], [1, 1])).run(
+            np.zeros((40, 1)))
+        assert np.all(r.state_hi[:, 1] >= ref) and np.all(r.state_hi[:, 1] <= ref + 1e-8)
+        assert np.all(r.state_lo[:, 1] <= -ref) and np.all(r.state_lo[:, 1] >= -ref - 1e-8)
+
+
+def test_an_unobservable_state_driven_by_the_observable_one_holds_the_history_lp():
+    """x_1+ = 0.3 x_0 + 0.9 x_1 + w_1 with only x_0 measured: the tracked bound of x_1
+    (observable part's hull through A_21, a zonotope of x_1) contains the
+    whole-history LP of the state and the truth, within 2 % of its width."""
+    Phi = np.array([[0.5, 0.0], [0.3, 0.9]])
+    C = np.array([[1.0, 0.0]])
+    rng = np.random.default_rng(0)
+    rw, rv = 0.05, 0.1
+    x, X, Y = rng.uniform(-1, 1, 2), [], []
+    for _ in range(30):
+        X.append(x.copy())
+        Y.append(C @ x + rng.uniform(-rv, rv, 1))
+        x = Phi @ x + rng.uniform(-rw, rw, 2)
+    X, Y = np.array(X), np.array(Y)
+    sys = so.LinearSystem(Phi, np.zeros((2, 0)), C)
+    box = (-np.ones(2), np.ones(2))
+    for w in (3, None):
+        r = so.SMFDO(sys, window=w, process_noise=rw, measurement_noise=rv, state_bounds=True,
+                     initial_state_set=so.Box(*box)).run(Y)
+        assert np.all((X >= r.state_lo) & (X <= r.state_hi))
+        for k in (0, 5, 29):
+            lo, hi = history_lp_highs(Phi, np.zeros((2, 0)), C, Y, k, 0.0, states=True,
+                                      x_box=box, noise_w=(np.eye(2), np.full(2, rw)),
+                                      noise_v=(np.eye(1), np.full(1, rv)))
+            width = hi - lo
+            assert (r.state_lo[k] <= lo + 1e-9).all() and (r.state_hi[k] >= hi - 1e-9).all()
+            assert ((r.state_hi[k] - r.state_lo[k]) <= 1.02 * width).all()
 
 
 def test_disturbance_observers_refuse_a_system_without_disturbances():

@@ -94,14 +94,18 @@ def test_campaign_states_the_information_and_runs_the_kalman_baseline():
 
 def test_the_forty_percent_claim_holds_only_against_the_printed_pole_pio():
     """Li-Cong-Dong Fig. 1(b): "SMFDO improves the accuracy by over 40 %". Pinned finding
-    (40 runs x 200 steps, 95 % bootstrap intervals): against the PIO at the printed poles
-    it holds (59 %); on equal information against the steady-state Kalman filter it does
-    not (31 %, interval below 40 %), nor against a PIO tuned on separate runs (38 %);
-    with window 3 the SMFDO is no better than the Kalman filter."""
+    (40 runs x 200 steps, 95 % bootstrap intervals), for the paper's Algorithm 1 (the
+    window restarts from a box, eq. (24)): against the PIO at the printed poles it holds
+    (59 %); on equal information against the steady-state Kalman filter it does not
+    (31 %, interval below 40 %), nor against a PIO tuned on separate runs (38 %); with
+    window 3 the SMFDO is no better than the Kalman filter. With the polytope restart
+    (the library's default, issue 33) window 3 is better than the Kalman filter (13 %,
+    interval above 5 %): the box restart is what made window 3 weak."""
     sweep = pio_pole_sweep(SC, [0.3, 0.4, 0.5, 0.6, 0.7], runs=12, base_seed=1)
     assert 0.4 <= sweep.best_radius <= 0.6
-    specs = [ObserverSpec("SMFDO d=3", "smfdo", {"window": 3}),
-             ObserverSpec("SMFDO d=10", "smfdo", {"window": 10}),
+    specs = [ObserverSpec("SMFDO d=3", "smfdo", {"window": 3, "restart": "box"}),
+             ObserverSpec("SMFDO d=10", "smfdo", {"window": 10, "restart": "box"}),
+             ObserverSpec("SMFDO d=3 polytope", "smfdo", {"window": 3}),
              ObserverSpec("PIO (paper)", "pio", {"information": "predicted"}),
              ObserverSpec("PIO (tuned)", "pio",
                           {"poles": list(cluster_poles(sweep.best_radius, 5))}),
@@ -111,7 +115,9 @@ def test_the_forty_percent_claim_holds_only_against_the_printed_pole_pio():
     vs_kalman = camp.improvement("SMFDO d=10", "Kalman filter")
     vs_tuned = camp.improvement("SMFDO d=10", "PIO (tuned)")
     small_vs_kalman = camp.improvement("SMFDO d=3", "Kalman filter")
+    poly_vs_kalman = camp.improvement("SMFDO d=3 polytope", "Kalman filter")
     assert vs_paper.lo > 0.40
     assert vs_kalman.hi < 0.40 and vs_kalman.lo > 0.2
     assert vs_tuned.value < 0.40 and vs_tuned.lo > 0.3
     assert small_vs_kalman.lo < 0.05 < 0.40
+    assert poly_vs_kalman.lo > 0.05

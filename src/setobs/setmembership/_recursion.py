@@ -92,8 +92,9 @@ class SetRecursion:
             Zp = self._Z0_prior
             depth = 0
         elif mode == "box":
-            # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta)).
-            Z = self._box_cz(self._hulls[0])
+            # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta))
+            # (cut by the carried-back rows of the polytope restart).
+            Z = self._restart_cz()
             Zp = None
             hist = self._window_hist(e)
             for i, ei in enumerate(hist):
@@ -130,6 +131,7 @@ class SetRecursion:
                 # The window restarts from the reset set: eq. (24) is applied again
                 # only once delta consistent steps have been collected.
                 self._hulls.clear()
+                self._hull_u.clear()
                 self._hist.clear()
                 self._from_initial = False
                 self._windowing = False
@@ -170,6 +172,7 @@ class SetRecursion:
             # box without margin can make a thin set (states pinned to rounding
             # level) empty at a later step.
             self._hulls.append(trusted_box(*self._outward(box_o.lo, box_o.hi)))
+            self._hull_u.append(np.zeros(self.sys.p) if e.u is None else e.u)
             if self._windowing and len(self._hist) > self.window:
                 del self._hist[:len(self._hist) - self.window]
         lo, hi = self._outward(box.lo, box.hi)
@@ -180,15 +183,52 @@ class SetRecursion:
         x_lo = x_hi = None
         if box_x is not None:
             x_lo, x_hi = self._outward(box_x.lo, box_x.hi)
-            x_lo[self._x_free], x_hi[self._x_free] = -np.inf, np.inf
+            if self._ubar is None:
+                x_lo[self._x_free], x_hi[self._x_free] = -np.inf, np.inf
+            else:
+                x_lo, x_hi = self._add_unobservable(k, e, box_o, x_lo, x_hi)
         return SMFDOStep(k, est, lo, hi, rad, Zd, status, x_lo, x_hi)
+
+    def _add_unobservable(self, k: int, e: Entry, box_o: Box, x_lo, x_hi):
+        """States on the unobservable part: the observable part's bound (``x_lo``,
+        ``x_hi`` on those rows) plus the tracked range of ``Mx_bar zbar_k``
+        (:mod:`setobs.setmembership._unobservable`); advances the tracker."""
+        T = self._ubar
+        if k == 0:
+            T.reset()
+        elif self._ubar_prev is None:  # (no hull of the previous step: unbounded, soundly)
+            T.lost = True
+        else:
+            dd = None if e.dd is None else self._hull_pair(e.dd)
+            w = None if e.w is None else self._hull_pair(e.w)
+            T.advance(*self._ubar_prev, e.u, dd, w)
+        self._ubar_prev = (box_o.lo, box_o.hi)
+        lo_b, hi_b = T.support(self._Mx_bar)
+        f = self._x_free
+        x_lo, x_hi = x_lo.copy(), x_hi.copy()
+        x_lo[f], x_hi[f] = self._outward(x_lo[f] + lo_b, x_hi[f] + hi_b)
+        return x_lo, x_hi
+
+    def _hull_pair(self, S: ConstrainedZonotope):
+        """Certified hull of a per-step set (the fixed sets' once)."""
+        if S.dim == 0:
+            return None
+        hit = self._set_hulls.get(id(S))
+        if hit is not None and hit[0] is S:
+            return hit[1]
+        box = S.interval_hull()
+        if len(self._set_hulls) > 8:
+            self._set_hulls.clear()
+        self._set_hulls[id(S)] = (S, (box.lo, box.hi))
+        return box.lo, box.hi
 
     def _bounds(self, Z: ConstrainedZonotope):
         """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, whether
         an LP fell back, and (``state_bounds``) the hull of the state ``M_x Z``."""
         fb_o = False
         box_o = None
-        if self.window is not None or (self.state_bounds and self._X_coords is not None):
+        if self.window is not None or (self.state_bounds and (
+                self._X_coords is not None or self._ubar is not None)):
             box_o, fb_o = hull_with_status(Z)
         box_x, fb_x = None, False
         if self.state_bounds:
@@ -202,8 +242,7 @@ class SetRecursion:
             j = self._P_coords
             return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o or fb_x, box_x
         box_d, fb_d = hull_with_status(Zd)
-        return Zd, box_d, box_o if self.window is not None else None, fb_o or fb_d or fb_x, \
-            box_x
+        return Zd, box_d, box_o, fb_o or fb_d or fb_x, box_x
 
     def _outward(self, lo, hi):
         a, b = np.abs(lo), np.abs(hi)

@@ -209,6 +209,28 @@ class ModelSetup:
         """``F_b V``: a measurement-noise set in balanced output units."""
         return None if V is None else self._F_b @ V
 
+    def _unobservable_tracker(self, dec, dz, X0, D0, E):
+        """The tracker of the unobservable coordinates, or ``None`` when ``X0`` (with
+        ``D0``) does not bound them (:mod:`setobs.setmembership._unobservable`)."""
+        from ._unobservable import UnobservableTracker
+
+        n, q = self.sys.n, self.sys.q
+        if X0 is None or not X0.is_bounded:
+            return None
+        Tb = dec.T_obar / dz[None, :]
+        S = Tb[:, :n] @ X0
+        if q:
+            if np.any(Tb[:, n:] != 0.0):
+                if D0 is None or not D0.is_bounded:
+                    return None
+                S = S + Tb[:, n:] @ D0
+        hull = S.interval_hull()
+        if not (np.isfinite(hull.lo).all() and np.isfinite(hull.hi).all()):
+            return None
+        E_bar = Tb @ np.vstack([E, np.zeros((q, E.shape[1]))])
+        return UnobservableTracker(dec.A_21, dec.A_obar, dec.B_obar, dec.Gamma_obar, E_bar,
+                                   hull.lo, hull.hi, self.data_rtol)
+
     def _process_noise(self, k: int) -> ConstrainedZonotope | None:
         """``W_k`` (in the noise space of ``E``), or ``None``."""
         if not callable(self._w_spec):
@@ -396,9 +418,15 @@ class ModelSetup:
         # depends on the unobservable ones is reported unbounded.
         sel_n = np.hstack([np.eye(n), np.zeros((n, q))])
         Mx = sel_n @ (dz[:, None] * T_o.T)
-        x_leak = np.abs(sel_n @ (dz[:, None] * dec.T_obar.T)).max(axis=1, initial=0.0)
+        Mx_bar = sel_n @ (dz[:, None] * dec.T_obar.T)
+        x_leak = np.abs(Mx_bar).max(axis=1, initial=0.0)
         self._x_free = x_leak > 1e-8 * np.abs(dz[:n])
-        self._Mx = np.where(self._x_free[:, None], 0.0, Mx)
+        # ... unless the unobservable part is bounded by X0 (issue 33, item 3): then
+        # x = Mx z_o + Mx_bar zbar with zbar tracked outside the LPs.
+        self._ubar = self._unobservable_tracker(dec, dz, X0, D0, E) \
+            if self._x_free.any() else None
+        self._Mx_bar = Mx_bar[self._x_free]
+        self._Mx = Mx if self._ubar is not None else np.where(self._x_free[:, None], 0.0, Mx)
         selx = (np.count_nonzero(self._Mx, axis=1) == 1) & (self._Mx.max(axis=1) == 1.0) & \
             (np.abs(self._Mx).max(axis=1) == 1.0)
         self._X_coords = np.argmax(self._Mx, axis=1) if selx.all() else None

@@ -7,8 +7,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.box import box_center_radius
+from ..geometry.zonotope import trusted_cz
 from ..tolerances import UNBOUNDED_RADIUS
+from ._restart import RestartPolytope
 from ._setup import MODEL_CACHE, Entry
 from ._window import WindowModel
 
@@ -27,8 +28,8 @@ class WindowedSteps:
         """How step ``k`` is computed: ``"box"`` (eq. (24), restart from IH(Z_(k-delta))),
         ``"init"`` (the whole history from Z_0^-), or ``"recursive"`` (one more step)."""
         win = self.window
-        if win is not None and len(self._hulls) == win:
-            lo, _ = self._restart_bounds(self._hulls[0])
+        if win is not None and len(self._hulls) >= win:
+            lo, _ = self._restart_bounds(self._hulls[-win])
             if (self._windowing or not self._from_initial or k > self._grow_limit
                     or np.isfinite(lo).all()):
                 return "box"
@@ -51,7 +52,6 @@ class WindowedSteps:
             # it costs more than the set recursion with HiGHS (84 vs 28 ms per step at
             # k = 100 on the paper example): the reference path is used.
             return None
-        N = self.A_o.shape[0]
         P_extra = self._hull_rows if self._hull_rows.shape[0] else None
         inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         hist = self._window_hist(entry) if mode == "box" else [*self._hist, entry]
@@ -70,17 +70,17 @@ class WindowedSteps:
                 self._mask_keys.add(mkey)
         if mode == "box":
             win = self.window
-            lo, hi = self._restart_bounds(self._hulls[0])
-            free = np.isinf(lo)
-            c_S, h_S = box_center_radius(lo, hi)
-            b_S = np.zeros(0)
+            lo, hi, F, rlo, rhi = self._restart_rows()
+            c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
+            free = np.isinf(h_S)
             c_S_err = b_S_err = None
-            key = ("box", free.tobytes(), mkey)
+            key = ("box", F.shape[0], free.tobytes(), mkey)
             unbounded_radius = min(UNBOUNDED_RADIUS, inc.unbounded_radius)
 
             def build() -> WindowModel:
+                G_S, A_S = RestartPolytope.structure(F)
                 return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
-                                   G_S=np.eye(N), A_S=np.zeros((0, N)), free_S=free, s=win,
+                                   G_S=G_S, A_S=A_S, free_S=free, s=win,
                                    first_posterior=False, P=P_extra,
                                    unbounded_radius=unbounded_radius, noise=V, masks=masks)
         else:  # "init": the whole history from Z_0^-
@@ -122,6 +122,32 @@ class WindowedSteps:
             return None
         box_o, box, box_x, _ = self.split_hull(*out)
         return (model, c, b, h, c_err, b_err), box, box_o, box_x
+
+    def _restart_rows(self):
+        """The restart set at ``t = k - delta``: its hull's bounds, and the carried-back
+        rows ``F`` with their ranges (none with ``restart="box"``;
+        :mod:`setobs.setmembership._restart`)."""
+        win = self.window
+        box_t = self._hulls[-win]
+        lo, hi = self._restart_bounds(box_t)
+        R = self._restart_poly
+        if R is None or not R.lags:
+            return lo, hi, np.zeros((0, lo.size)), np.zeros(0), np.zeros(0)
+        n_h = len(self._hulls)
+        J = min(R.lags, n_h - win)
+        boxes = [self._hulls[n_h - win - j] for j in range(1, J + 1)]
+        inputs = [self._hull_u[n_h - win - i] for i in range(J)]
+        rlo, rhi = R.rows(Box(lo, hi), boxes, inputs)
+        return lo, hi, R.F_all, rlo, rhi
+
+    def _restart_cz(self) -> ConstrainedZonotope:
+        """The restart set as a constrained zonotope (the reference path)."""
+        lo, hi, F, rlo, rhi = self._restart_rows()
+        if not F.shape[0]:
+            return ConstrainedZonotope.from_box(lo, hi)
+        c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
+        G_S, A_S = RestartPolytope.structure(F)
+        return trusted_cz(G_S, c_S, A_S, b_S, h_S)
 
     @staticmethod
     def _restart_bounds(box: Box) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -35,7 +35,8 @@ FILTERED_KINDS = ("pio", "pio_printed", "kalman")
 #: SMFDO keywords an ObserverSpec may set (the scenario gives the initial state
 #: set; ``increment_set`` defaults to the scenario's increment box).
 SMFDO_PARAMS = ("window", "increment_set", "fast", "margin", "data_rtol", "on_inconsistent",
-                "reset", "reset_inflation", "measurement_noise", "process_noise")
+                "reset", "reset_inflation", "measurement_noise", "process_noise", "restart",
+                "restart_depth")
 
 
 def _point_ctor(kind: str):
