@@ -173,7 +173,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
              out: str | None = None, plot: bool = True, progress: bool | None = None,
              on_inconsistent: str = "raise", unit: str | None = None,
              states: bool = False, process_noise: str | None = None,
-             restart: str = "polytope") -> int:
+             restart: str = "auto") -> int:
     """Certified disturbance bounds from a measured record (CSV + plot + summary);
     with ``states``, the certified state bounds too (``<state>_lo``/``_hi`` columns).
     A model without disturbances (``disturbance_inputs: []``) is a state estimation:
@@ -430,9 +430,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "required unless the model has no disturbance)")
     pe.add_argument("--process-noise",
                     help="process-noise radii on the states (one or n numbers)")
-    pe.add_argument("--restart", choices=["polytope", "box"], default="polytope",
-                    help="what each window restarts from: 'polytope' (default: keeps the "
-                         "set's shape) or 'box' (the paper's eq. (24))")
+    pe.add_argument("--restart", choices=["auto", "polytope", "box"], default="auto",
+                    help="what each window restarts from: 'polytope' (keeps the set's "
+                         "shape), 'box' (the paper's eq. (24)) or 'auto' (default: the "
+                         "polytope where it is tighter, checked every 16 steps)")
     pe.add_argument("--noise", help="measurement-noise radii (one or l numbers); with "
                                     "--calibrate: the shape to scale")
     pe.add_argument("--calibrate", action="store_true",

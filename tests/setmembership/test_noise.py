@@ -129,10 +129,12 @@ def test_missing_samples_equal_the_lp_without_those_rows():
     assert np.all(full[1] - full[0] <= res.hi[5] - res.lo[5] + 1e-12)
     assert np.any(full[1] - full[0] < res.hi[5] - res.lo[5] - 1e-6)
     for window in (3, 10):
-        fast = so.SMFDO(sys, window=window, increment_set=r_inc, measurement_noise=r_v)
+        # (one restart for both paths: restart="auto" probes on the fast path only)
+        fast = so.SMFDO(sys, window=window, increment_set=r_inc, measurement_noise=r_v,
+                        restart="polytope")
         rf = fast.run(Ym)
         rr = so.SMFDO(sys, window=window, increment_set=r_inc, measurement_noise=r_v,
-                      fast=False).run(Ym)
+                      fast=False, restart="polytope").run(Ym)
         assert rf.violations(D) == rr.violations(D) == 0
         assert fast.stats["fast"] >= 55
         fin = np.isfinite(rr.lo)
@@ -164,7 +166,7 @@ def test_fast_path_with_noise_equals_the_reference_path(window):
     Y, D = simulate_noisy(sys, 120, rng, x0=[1.0, 0.0, -1.0], d0=[0.5, 0.5], r_inc=r_inc,
                           r_v=r_v, r_w=r_w)
     kw = {"window": window, "increment_set": r_inc, "measurement_noise": r_v,
-          "process_noise": r_w}
+          "process_noise": r_w, "restart": "polytope"}  # (auto probes on the fast path)
     fast = so.SMFDO(sys, **kw)
     rf = fast.run(Y)
     rr = so.SMFDO(sys, fast=False, **kw).run(Y)
@@ -179,7 +181,7 @@ def test_fast_path_with_noise_equals_the_reference_path(window):
     # polytope restart's
     rc = so.SMFDO(sys, window=window, increment_set=r_inc, measurement_noise=lambda k: r_v,
                   process_noise=lambda k: so.Box(-r_w, r_w)).run(Y)
-    rb = so.SMFDO(sys, restart="box", **kw).run(Y)
+    rb = so.SMFDO(sys, **{**kw, "restart": "box"}).run(Y)
     np.testing.assert_allclose(rc.lo[fin], rb.lo[fin], rtol=1e-7, atol=1e-8)
     assert (rc.lo[fin] <= rr.lo[fin] + 1e-8 * (1 + np.abs(rr.lo[fin]))).all()
 

@@ -185,6 +185,32 @@ def test_on_the_motor_record_window_10_is_the_exact_set():
     assert np.median((bx.hi - bx.lo)[ks] / we) > 2.0
 
 
+def test_auto_keeps_the_box_where_the_shape_does_not_matter():
+    """``restart="auto"`` (default): on the paper example at window 10 (where the box
+    restart is already within 0.05 % of the polytope's error) most window steps run
+    the box restart's cheaper LPs, and the bands are inside the box restart's; on the
+    two-mass plant every window step keeps the polytope."""
+    from tests.setmembership.test_smfdo import simulate
+
+    sys = so.examples.chang2006()
+    Y, D = simulate(sys, 150, np.random.default_rng(3), x0=[0.2, -0.5, 0.3], d0=[1.0, -2.0])
+    auto = so.SMFDO(sys, window=10)
+    ra = auto.run(Y)
+    rb = so.SMFDO(sys, window=10, restart="box").run(Y)
+    assert ra.violations(D) == 0
+    assert auto.stats["fast"] == 150 and auto.stats["polytope_restarts"] < 50
+    fin = np.isfinite(rb.lo)
+    tol = 1e-9 * (1 + np.abs(rb.lo[fin]))
+    assert (ra.lo[fin] >= rb.lo[fin] - tol).all() and (ra.hi[fin] <= rb.hi[fin] + tol).all()
+    Phi, Xi = two_mass(), np.array([[1.0, 0.0, 0.0, 0.0]])
+    _, Y2 = _record(Phi, Xi, 60, RW, RV, np.random.default_rng(0))
+    obs = so.SMFDO(so.LinearSystem(Phi, np.zeros((4, 0)), Xi), window=10, process_noise=RW,
+                   measurement_noise=RV, state_bounds=True,
+                   initial_state_set=so.Box(-2 * np.ones(4), 2 * np.ones(4)))
+    obs.run(Y2)
+    assert obs.stats["polytope_restarts"] == 60 - 10
+
+
 def test_a_singular_dynamics_restarts_from_the_box():
     """A pure delay (A_o singular): no carried-back rows; the same bands as the box
     restart."""

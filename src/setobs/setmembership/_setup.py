@@ -446,7 +446,7 @@ class ModelSetup:
         self._Z0_prior = normalize_free_columns((T_o / dz[None, :]) @ X0)
         self.fast = bool(fast)
         self.stats = {"fast": 0, "reference": 0, "fallback": 0, "skipped": 0, "reset": 0,
-                      "mask_reference": 0}
+                      "mask_reference": 0, "polytope_restarts": 0}
         # The per-step uncertainty of the closed form: [[dd]] (x W), entering by
         # B_o ([B_o, E_o] with process noise).
         inc = self._inc_fixed

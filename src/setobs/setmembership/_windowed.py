@@ -13,11 +13,17 @@ from ._restart import RestartPolytope
 from ._setup import MODEL_CACHE, Entry
 from ._window import WindowModel
 
-__all__ = ["MAX_MASK_STRUCTURES", "WindowedSteps"]
+__all__ = ["AUTO_GAIN", "AUTO_PROBE", "MAX_MASK_STRUCTURES", "WindowedSteps"]
 
 #: Distinct missing-sample patterns an SMFDO sets up fast-path structures for;
 #: steps with further patterns go to the reference path.
 MAX_MASK_STRUCTURES = 64
+
+#: ``restart="auto"``: every this many window steps the other restart is computed too.
+AUTO_PROBE = 16
+#: ``restart="auto"``: the polytope is kept while it is narrower than the box restart
+#: by more than this fraction of the box's width in some coordinate.
+AUTO_GAIN = 1e-2
 
 
 class WindowedSteps:
@@ -52,8 +58,6 @@ class WindowedSteps:
             # it costs more than the set recursion with HiGHS (84 vs 28 ms per step at
             # k = 100 on the paper example): the reference path is used.
             return None
-        P_extra = self._hull_rows if self._hull_rows.shape[0] else None
-        inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         hist = self._window_hist(entry) if mode == "box" else [*self._hist, entry]
         Y = np.array([e.y for e in hist])
         measured = ~np.isnan(Y)
@@ -68,9 +72,40 @@ class WindowedSteps:
                     self.stats["mask_reference"] += 1
                     return None
                 self._mask_keys.add(mkey)
+        if mode != "box" or self._restart_poly is None or self.restart != "auto":
+            out = self._window_solve(k, mode, hist, Y, measured, masks, mkey,
+                                     self.restart != "box")
+            if out is not None and mode == "box" and self._restart_poly is not None:
+                self.stats["polytope_restarts"] += 1
+            return out
+        # restart="auto": the current choice, and every AUTO_PROBE window steps the
+        # other one too; the polytope is kept while it is narrower somewhere by more
+        # than AUTO_GAIN of the box's width (both are sound: the tighter is reported)
+        first = self._window_solve(k, mode, hist, Y, measured, masks, mkey, self._auto_poly)
+        self._auto_count += 1
+        if first is None or self._auto_count % AUTO_PROBE:
+            self.stats["polytope_restarts"] += first is not None and self._auto_poly
+            return first
+        other = self._window_solve(k, mode, hist, Y, measured, masks, mkey,
+                                   not self._auto_poly)
+        if other is None:
+            return first
+        poly, box = (first, other) if self._auto_poly else (other, first)
+        wp, wb = poly[-1], box[-1]
+        fin = np.isfinite(wb) & np.isfinite(wp)
+        self._auto_poly = bool(np.any(wb[fin] - wp[fin] > AUTO_GAIN * wb[fin]))
+        self.stats["polytope_restarts"] += 1
+        return poly
+
+    def _window_solve(self, k: int, mode: str, hist, Y, measured, masks, mkey, poly: bool):
+        """One closed-form step (the window's from its restart set, with the carried-back
+        rows if ``poly``, or the history's from ``Z_0^-``): the posterior's data, its
+        hulls and their widths, or ``None``."""
+        P_extra = self._hull_rows if self._hull_rows.shape[0] else None
+        inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         if mode == "box":
             win = self.window
-            lo, hi, F, rlo, rhi = self._restart_rows()
+            lo, hi, F, rlo, rhi = self._restart_rows(poly)
             c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
             free = np.isinf(h_S)
             c_S_err = b_S_err = None
@@ -121,17 +156,17 @@ class WindowedSteps:
         if out is None:
             return None
         box_o, box, box_x, _ = self.split_hull(*out)
-        return (model, c, b, h, c_err, b_err), box, box_o, box_x
+        return (model, c, b, h, c_err, b_err), box, box_o, box_x, out[1] - out[0]
 
-    def _restart_rows(self):
+    def _restart_rows(self, poly: bool = True):
         """The restart set at ``t = k - delta``: its hull's bounds, and the carried-back
-        rows ``F`` with their ranges (none with ``restart="box"``;
+        rows ``F`` with their ranges (none with ``poly`` false or ``restart="box"``;
         :mod:`setobs.setmembership._restart`)."""
         win = self.window
         box_t = self._hulls[-win]
         lo, hi = self._restart_bounds(box_t)
         R = self._restart_poly
-        if R is None or not R.lags:
+        if R is None or not R.lags or not poly:
             return lo, hi, np.zeros((0, lo.size)), np.zeros(0), np.zeros(0)
         n_h = len(self._hulls)
         J = min(R.lags, n_h - win)
@@ -142,7 +177,8 @@ class WindowedSteps:
 
     def _restart_cz(self) -> ConstrainedZonotope:
         """The restart set as a constrained zonotope (the reference path)."""
-        lo, hi, F, rlo, rhi = self._restart_rows()
+        lo, hi, F, rlo, rhi = self._restart_rows(self.restart == "polytope" or (
+            self.restart == "auto" and self._auto_poly))
         if not F.shape[0]:
             return ConstrainedZonotope.from_box(lo, hi)
         c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)

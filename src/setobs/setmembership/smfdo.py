@@ -158,10 +158,10 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         reported unbounded otherwise. In
         exact mode the state map is extra rows of the H-representation path's
         LPs as well.
-    restart : {"polytope", "box"}
+    restart : {"auto", "polytope", "box"}
         The set each window restarts from (windowed mode). ``"box"``: the
         interval hull of ``Z_(k-delta)``, eq. (24) of Li-Cong-Dong literally (it
-        forgets every correlation of the state). ``"polytope"`` (default): that
+        forgets every correlation of the state). ``"polytope"``: that
         box cut by ``(restart_depth - 1) N_o`` rows whose normals are the
         coordinate axes carried back through the dynamics (rows of
         ``A_o^-j``), with ranges from the hulls of the ``restart_depth - 1``
@@ -175,7 +175,15 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         paper example at window 10) the two agree. Its LPs are larger (about 3
         to 10 times the box restart's time per step). Used with fixed
         uncertainty sets and an invertible, well-conditioned ``A_o``; otherwise
-        (callables, a pure delay) the window restarts from the box.
+        (callables, a pure delay) the window restarts from the box. ``"auto"``
+        (default): the polytope, and every ``AUTO_PROBE = 16`` window steps on the
+        fast path the box restart too; the polytope stays in use while it is
+        narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of the
+        width in some coordinate, else the box is used until the next probe
+        (where the shape does not matter, e.g. the paper example at window 10,
+        the step keeps the box restart's cost). Either way the bounds are
+        certified; on a probe step the narrower one is reported. The probes run
+        on the fast path; the reference path (``fast=False``) keeps the polytope.
     restart_depth : int
         ``m >= 1``: the hull at ``k - delta`` and up to ``m - 1`` earlier ones
         (default 30; at most ``120 // N_o`` earlier ones, so that a large state
@@ -188,7 +196,9 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         steps (an LP failed under every solver setting), ``"skipped"`` and
         ``"reset"`` steps (inconsistent measurements) and ``"mask_reference"``
         (steps with a missing-sample pattern beyond the fast path's budget of
-        :data:`MAX_MASK_STRUCTURES` structures, computed on the reference path).
+        :data:`MAX_MASK_STRUCTURES` structures, computed on the reference path),
+        ``"polytope_restarts"`` (fast window steps whose reported set restarted from
+        the polytope, see ``restart``).
     first_inconsistent : int or None
         First step (since the last :meth:`reset_state`) whose measurement was
         inconsistent with the model (skipped or reset).
@@ -267,7 +277,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         keep_sets: bool = False,
         fast: bool = True,
         state_bounds: bool = False,
-        restart: str = "polytope",
+        restart: str = "auto",
         restart_depth: int = DEFAULT_RESTART_DEPTH,
         disturbance_inputs: DisturbanceInputs = None,
     ) -> None:
@@ -292,8 +302,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             raise TypeError(f"state_bounds must be True or False, got {state_bounds!r}")
         self.state_bounds = bool(state_bounds)
         self.data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
-        if restart not in ("polytope", "box"):
-            raise ValueError(f"restart must be 'polytope' or 'box', got {restart!r}")
+        if restart not in ("auto", "polytope", "box"):
+            raise ValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
         if isinstance(restart_depth, bool) or not isinstance(restart_depth, numbers.Integral) \
                 or restart_depth < 1:
             raise ValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
@@ -307,7 +317,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             initial_disturbance_set, measurement_noise, process_noise,
             measurement_noise_matrix, process_noise_matrix, keep_sets, fast)
         self._restart_poly: RestartPolytope | None = None
-        if (window is not None and restart == "polytope" and self._step_set is not None
+        if (window is not None and restart != "box" and self._step_set is not None
                 and not self._noise_varies and self.restart_depth > 1):
             self._restart_poly = RestartPolytope(
                 self.A_o, self.Gamma_o, self._B_step, self._step_set, self.restart_depth,
@@ -348,6 +358,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self.first_inconsistent: int | None = None
         self._last_y = np.zeros(0)  # the last step's measurement (balanced units)
         self._ubar_prev = None  # (the hull of Z_(k-1): the tracker's input)
+        self._auto_poly = True  # restart="auto": the polytope restart is in use
+        self._auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
         self._set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
         self._h_fails = 0  # failed conversions to the H-representation in a row
         self._h_retry_at = 0  # first step at which the next conversion is tried
@@ -468,7 +480,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         fast = self._fast_step(k, mode, e)
         if fast is not None:
             self.stats["fast"] += 1
-            Z_src, box, box_o, box_x = fast
+            Z_src, box, box_o, box_x, _ = fast
             Zd = None
             if self.keep_sets:
                 model, c, b, h, c_err, b_err = Z_src
