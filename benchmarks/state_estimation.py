@@ -1,0 +1,261 @@
+"""Benchmark: guaranteed state estimation, tightness against cost (issue 33).
+
+Physical systems of our own, all with bounded process noise on every state and
+bounded measurement noise on every output (``q = 0``, ``state_bounds=True``):
+
+* ``two_mass``: two masses and springs, lightly damped (4 states, 1 output), 0.1 s;
+* ``vehicle``: a linear bicycle model (lateral velocity, yaw rate, heading, lateral
+  position; 4 states; yaw rate and position measured; steering the known input),
+  0.05 s;
+* ``tanks_n``: a cascade of ``n`` linearised tanks (level of every third tank
+  measured, inflow to the first the known input), 1 s;
+* ``random_6``: a random stable system with 6 states and 4 outputs.
+
+For each: the SMFDO with windows 3 / 10 / 20 and the polytope restart and the box
+restart (eq. (24)), window 10 with ``restart="auto"`` (the default), exact mode where
+it finishes, and a constrained-zonotope filter in the style of Scott et al. (2016)
+written with setobs's own geometry (prior ``A Z + Gamma u + W``, generalised
+intersection with the measurement, constraints eliminated to ``n`` and generators
+reduced to ``8 n`` (or what the constraints left need), interval hull by certified
+LPs). Width of every state's band against the whole-history LP of the state
+(``tests.oracles.history_lp_highs``) at every fifth step after a burn-in (three steps
+for n > 6; mean and worst ratio), and time per step; in the same run the median time of one 45 x 40
+``scipy.optimize.linprog`` (HiGHS), the unit of the issue's speed targets.
+
+Writes ``benchmarks/results/state_estimation.json``.
+
+Run: ``python benchmarks/state_estimation.py [--steps N] [--quick]`` (plants with
+more than 6 states: 40 steps, the box and the default restart only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import statistics
+import sys as _sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.linalg import expm
+from scipy.optimize import linprog
+
+import setobs as so
+
+_sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from tests.oracles import history_lp_highs
+
+
+def c2d(Ac, Bc, Ts):
+    n, p = Bc.shape
+    M = np.zeros((n + p, n + p))
+    M[:n, :n], M[:n, n:] = Ac, Bc
+    E = expm(M * Ts)
+    return E[:n, :n], E[:n, n:]
+
+
+def two_mass():
+    k1, k2, c1, c2, m1, m2 = 1.0, 0.5, 0.2, 0.1, 1.0, 0.5
+    Ac = np.array([[0, 1, 0, 0], [-(k1 + k2) / m1, -(c1 + c2) / m1, k2 / m1, c2 / m1],
+                   [0, 0, 0, 1], [k2 / m2, c2 / m2, -k2 / m2, -c2 / m2]])
+    A, B = c2d(Ac, np.array([[0.0], [1.0], [0.0], [0.0]]), 0.1)
+    return A, B, np.array([[1.0, 0.0, 0.0, 0.0]]), 0.002, 0.01
+
+
+def vehicle():
+    # bicycle model at 20 m/s: m = 1500 kg, Iz = 2500 kg m^2, a = 1.2, b = 1.6 m,
+    # cornering stiffnesses 80 / 90 kN/rad; states (v_y, r, psi, y)
+    m, Iz, a, b, Cf, Cr, V = 1500.0, 2500.0, 1.2, 1.6, 8e4, 9e4, 20.0
+    Ac = np.array([
+        [-(Cf + Cr) / (m * V), -V - (a * Cf - b * Cr) / (m * V), 0, 0],
+        [-(a * Cf - b * Cr) / (Iz * V), -(a * a * Cf + b * b * Cr) / (Iz * V), 0, 0],
+        [0, 1, 0, 0], [1, 0, V, 0]])
+    Bc = np.array([[Cf / m], [a * Cf / Iz], [0.0], [0.0]])
+    A, B = c2d(Ac, Bc, 0.05)
+    C = np.array([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    return A, B, C, 0.005, 0.02
+
+
+def tanks(n):
+    # x_i' = (q_(i-1) - q_i) / S with q_i = k x_i (linearised outflow), inflow u to tank 0
+    Ac = (np.diag(-np.ones(n)) + np.diag(np.ones(n - 1), -1)) * 0.2
+    Bc = np.zeros((n, 1))
+    Bc[0, 0] = 0.5
+    A, B = c2d(Ac, Bc, 1.0)
+    C = np.eye(n)[::3]
+    return A, B, C, 0.01, 0.02
+
+
+def random_system(n, l, seed):
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(n, n))
+    A *= 0.95 / np.abs(np.linalg.eigvals(A)).max()
+    return A, rng.normal(size=(n, 1)) * 0.2, rng.normal(size=(l, n)), 0.01, 0.05
+
+
+def record(A, B, C, rw, rv, N, seed):
+    rng = np.random.default_rng(seed)
+    n, l = A.shape[0], C.shape[0]
+    U = np.sin(0.05 * np.arange(N))[:, None] + 0.2 * rng.normal(size=(N, B.shape[1]))
+    x = rng.uniform(-1, 1, n)
+    X, Y = [], []
+    for k in range(N):
+        X.append(x.copy())
+        Y.append(C @ x + rng.uniform(-rv, rv, l))
+        x = A @ x + B @ U[k] + rng.uniform(-rw, rw, n)
+    return np.array(X), np.array(Y), U
+
+
+def cz_filter(A, B, C, rw, rv, X0, Y, U, max_con, max_gen):
+    """Scott-2016-style constrained-zonotope filter on setobs's geometry: the peer."""
+    n = A.shape[0]
+    W = so.ConstrainedZonotope.from_box(-rw * np.ones(n), rw * np.ones(n))
+    Z = X0
+    lo, hi = [], []
+    stalled = 0
+    for k in range(len(Y)):
+        if k:
+            Z = (A @ Z + W).minkowski_sum(B @ U[k - 1])
+        Yset = so.ConstrainedZonotope.from_box(Y[k] - rv, Y[k] + rv)
+        Z = Z.intersect(Yset, R=C)
+        if Z.n_con > max_con:
+            Z = Z.eliminate_constraints(max_con)
+            stalled += Z.n_con > max_con  # (it stops at its rounding budget)
+        if Z.n_gen > max_gen:
+            Z = Z.reduce_order(max(max_gen, n + Z.n_con + n))
+        box = Z.interval_hull()
+        lo.append(box.lo)
+        hi.append(box.hi)
+    return np.array(lo), np.array(hi), stalled
+
+
+def linprog_unit(repeats=30):
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(45, 40))
+    x0 = rng.uniform(-0.5, 0.5, 40)
+    b = A @ x0 + rng.uniform(0.0, 0.5, 45)
+    c = rng.normal(size=40)
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r = linprog(c, A_ub=A, b_ub=b, bounds=[(-1, 1)] * 40, method="highs")
+        ts.append(time.perf_counter() - t0)
+        assert r.status == 0
+    return statistics.median(ts)
+
+
+def ratios(lo, hi, ref, ks):
+    if ref is None:
+        return float("nan"), float("nan"), float("nan")
+    r = np.array([(hi[k] - lo[k]) / (ref[k][1] - ref[k][0]) for k in ks])
+    return float(r.mean()), float(r.max()), float(r.min())
+
+
+def study(name, A, B, C, rw, rv, N, windows, exact, peer, unit, seed=0,
+          restarts=("polytope", "box")):
+    n = A.shape[0]
+    X, Y, U = record(A, B, C, rw, rv, N, seed)
+    X0 = so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n))
+    sys = so.LinearSystem(A, np.zeros((n, 0)), C, B)
+    burn = min(25, N // 3)
+    ks = list(range(burn, N, 5)) if n <= 6 else list(np.linspace(burn, N - 1, 3).astype(int))
+    t0 = time.perf_counter()
+    try:
+        ref = {k: history_lp_highs(A, np.zeros((n, 0)), C, Y, k, 0.0, U=U, Gamma=B,
+                                   states=True, x_box=(X0.lo, X0.hi),
+                                   noise_w=(np.eye(n), np.full(n, rw)),
+                                   noise_v=(np.eye(C.shape[0]), np.full(C.shape[0], rv)))
+               for k in ks}
+    except RuntimeError as exc:  # (the oracle's HiGHS fails on some large LPs)
+        print(f"{name}: no history LP ({exc}); timings only", flush=True)
+        ref = None
+    t_lp = (time.perf_counter() - t0) / len(ks)
+    rows = []
+    kw = dict(process_noise=rw, measurement_noise=rv, state_bounds=True,
+              initial_state_set=X0)
+    runs = [(w, r) for w in windows for r in restarts]
+    runs += [(10, "auto")] if 10 in windows else []
+    if exact:
+        runs.append((None, "exact"))
+    for w, restart in runs:
+        obs = so.SMFDO(sys, window=w, **kw) if w is None else so.SMFDO(
+            sys, window=w, restart=restart, **kw)
+        t0 = time.perf_counter()
+        res = obs.run(Y, U)
+        dt = (time.perf_counter() - t0) / N
+        inside = bool(np.all((X >= res.state_lo) & (X <= res.state_hi)))
+        mean, worst, best = ratios(res.state_lo, res.state_hi, ref, ks)
+        rows.append({"system": name, "n": n, "l": C.shape[0], "estimator": "SMFDO",
+                     "window": w, "restart": restart, "ms_per_step": 1e3 * dt,
+                     "per_linprog": dt / unit, "width_ratio_mean": mean,
+                     "width_ratio_worst": worst, "width_ratio_min": best,
+                     "truth_inside": inside, "stats": dict(obs.stats)})
+        print(f"{name:9s} w={w!s:4s} {restart:8s} {1e3 * dt:8.2f} ms/step "
+              f"({dt / unit:6.2f} LP)  ratio {mean:.3f} / {worst:.3f} (min {best:.4f})"
+              f"  inside {inside}", flush=True)
+    if peer:
+        t0 = time.perf_counter()
+        lo, hi, stalled = cz_filter(A, B, C, rw, rv, so.ConstrainedZonotope.from_box(X0.lo, X0.hi),
+                           Y, U, max_con=n, max_gen=8 * n)
+        dt = (time.perf_counter() - t0) / N
+        mean, worst, best = ratios(lo, hi, ref, ks)
+        inside = bool(np.all((X >= lo - 1e-9) & (X <= hi + 1e-9)))
+        rows.append({"system": name, "n": n, "l": C.shape[0], "estimator": "CZ filter",
+                     "window": None, "restart": None, "ms_per_step": 1e3 * dt,
+                     "per_linprog": dt / unit, "width_ratio_mean": mean,
+                     "width_ratio_worst": worst, "width_ratio_min": best,
+                     "truth_inside": inside, "elimination_stalled_steps": int(stalled)})
+        print(f"{name:9s} CZ filter          {1e3 * dt:8.2f} ms/step ({dt / unit:6.2f} LP)"
+              f"  ratio {mean:.3f} / {worst:.3f}", flush=True)
+    return rows, t_lp
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--steps", type=int, default=120)
+    ap.add_argument("--quick", action="store_true", help="two-mass and vehicle only")
+    ap.add_argument("--n60", action="store_true",
+                    help="also the 60-tank cascade (tens of minutes today)")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results"
+                                         / "state_estimation.json"))
+    args = ap.parse_args()
+    unit = linprog_unit()
+    print(f"one 45 x 40 linprog (HiGHS): {1e3 * unit:.3f} ms", flush=True)
+    N = args.steps
+    cases = [("two_mass", *two_mass(), (3, 10, 20), True, True),
+             ("vehicle", *vehicle(), (3, 10, 20), True, True)]
+    if not args.quick:
+        cases += [("random_6", *random_system(6, 4, 3), (3, 10), True, False),
+                  ("tanks_6", *tanks(6), (10,), False, True),
+                  ("tanks_15", *tanks(15), (10,), False, False),
+                  ("tanks_30", *tanks(30), (10,), False, False)]
+    if args.n60:
+        cases.append(("tanks_60", *tanks(60), (10,), False, False))
+    rows, lp_times = [], {}
+    for name, A, B, C, rw, rv, windows, exact, peer in cases:
+        big = A.shape[0] > 6  # (large plants: 40 steps, no polytope-only run)
+        r, t_lp = study(name, A, B, C, rw, rv, min(N, 40) if big else N, windows, exact,
+                        peer, unit, restarts=("box",) if big else ("polytope", "box"))
+        rows += r
+        lp_times[name] = t_lp
+    # growth of the window-10 step with n (tanks; the default restart="auto")
+    pts = [(r["n"], r["ms_per_step"]) for r in rows
+           if r["system"].startswith("tanks") and r["window"] == 10
+           and r["restart"] == "auto"]
+    growth = None
+    if len(pts) >= 2:
+        ln = np.log(np.array(pts, dtype=float))
+        growth = float(np.polyfit(ln[:, 0], ln[:, 1], 1)[0])
+    out = {"linprog_45x40_ms": 1e3 * unit, "steps": N, "rows": rows,
+           "history_lp_s_per_step_checked": lp_times,
+           "tanks_window10_growth_exponent": growth,
+           "machine": platform.platform(), "python": platform.python_version()}
+    Path(args.out).write_text(json.dumps(out, indent=1))
+    print(f"growth exponent (tanks, window 10): {growth}")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
