@@ -33,7 +33,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._rounding import UNIT_ROUNDOFF, gamma
+from .._rounding import gamma
+from ..geometry.box import box_center_radius
 
 __all__ = ["UnobservableTracker"]
 
@@ -63,10 +64,8 @@ class UnobservableTracker:
         n_u = A_bar.shape[0]
         self._g = 2.0 * gamma(n_u + A_21.shape[1] + B_bar.shape[1] + Gamma_bar.shape[1]
                               + E_bar.shape[1] + MAX_ORDER * 2 * n_u + 8)
-        c = 0.5 * lo0 + 0.5 * hi0
-        r = np.maximum(hi0 - c, c - lo0)
-        self.c0 = c
-        self.G0 = np.diag(np.nextafter(r, np.inf))
+        self.c0, r = box_center_radius(lo0, hi0)
+        self.G0 = np.diag(r)
         self.reset()
 
     def reset(self) -> None:
@@ -95,10 +94,7 @@ class UnobservableTracker:
                 self.lost = True  # (a coupled coordinate is unbounded: so is zbar)
                 self.c = np.full_like(c, np.nan)
                 return
-            lo_f, hi_f = np.where(used, lo, 0.0), np.where(used, hi, 0.0)
-            m = 0.5 * lo_f + 0.5 * hi_f
-            r = np.maximum(hi_f - m, m - lo_f)
-            r = np.nextafter(r + UNIT_ROUNDOFF * np.abs(m), np.inf)
+            m, r = box_center_radius(np.where(used, lo, 0.0), np.where(used, hi, 0.0))
             parts_c.append(M @ m)
             cols.append(M * r[None, :])
             mag = mag + aM @ (np.abs(m) + r)

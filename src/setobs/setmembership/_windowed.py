@@ -74,7 +74,7 @@ class WindowedSteps:
                 self._mask_keys.add(mkey)
         if mode != "box" or self._restart_poly is None or self.restart != "auto":
             out = self._window_solve(k, mode, hist, Y, measured, masks, mkey,
-                                     self.restart != "box")
+                                     self._polytope_now())
             if out is not None and mode == "box" and self._restart_poly is not None:
                 self.stats["polytope_restarts"] += 1
             return out
@@ -158,6 +158,11 @@ class WindowedSteps:
         box_o, box, box_x, _ = self.split_hull(*out)
         return (model, c, b, h, c_err, b_err), box, box_o, box_x, out[1] - out[0]
 
+    def _polytope_now(self) -> bool:
+        """Whether the next restart carries the polytope's rows (``restart="auto"``: the
+        choice of the last probe)."""
+        return self.restart == "polytope" or (self.restart == "auto" and self._auto_poly)
+
     def _restart_rows(self, poly: bool = True):
         """The restart set at ``t = k - delta``: its hull's bounds, and the carried-back
         rows ``F`` with their ranges (none with ``poly`` false or ``restart="box"``;
@@ -177,8 +182,7 @@ class WindowedSteps:
 
     def _restart_cz(self) -> ConstrainedZonotope:
         """The restart set as a constrained zonotope (the reference path)."""
-        lo, hi, F, rlo, rhi = self._restart_rows(self.restart == "polytope" or (
-            self.restart == "auto" and self._auto_poly))
+        lo, hi, F, rlo, rhi = self._restart_rows(self._polytope_now())
         if not F.shape[0]:
             return ConstrainedZonotope.from_box(lo, hi)
         c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
