@@ -443,7 +443,8 @@ def test_estimate_a_model_without_disturbances_is_a_state_estimation(tmp_path, c
         assert ok.sum() >= N - 2
         assert np.all(lo[ok] <= X[ok, i]) and np.all(X[ok, i] <= hi[ok])
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["restart"] == "auto" and summary["process_noise"] == [rw, rw]
+    assert summary["restart"] == "auto"
+    assert summary["process_noise"] == pytest.approx([rw, rw], rel=1e-12)
     import matplotlib.image as mpimg
 
     h, w = mpimg.imread(out / "estimate.png").shape[:2]

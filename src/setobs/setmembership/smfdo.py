@@ -171,7 +171,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         noise (``benchmarks/state_estimation.py``), window 10 ends 1.04 times as
         wide as the exact set on average (box: 3.3), window 3 1.1 (box: 23); on
         the HSM150 servo record window 10 is the exact set to 0.1 % in the median
-        (box: 2.3 times); where the box restart is already nearly exact (the
+        (box: more than twice as wide); where the box restart is already nearly exact (the
         paper example at window 10) the two agree. Its LPs are larger (about 3
         to 10 times the box restart's time per step). Used with fixed
         uncertainty sets and an invertible, well-conditioned ``A_o``; otherwise
