@@ -8,10 +8,13 @@ Algorithms*, 2nd ed., SIAM 2002, Lemma 3.1 and eq. (3.4)).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["UNIT_ROUNDOFF", "gamma", "pow2_inverse", "round_down", "round_up"]
+__all__ = ["UNIT_ROUNDOFF", "exact_dot", "gamma", "pow2_inverse", "round_down", "round_up",
+           "two_prod"]
 
 #: Unit roundoff ``u = eps / 2`` of IEEE double precision.
 UNIT_ROUNDOFF: float = float(np.finfo(np.float64).eps / 2.0)
@@ -132,3 +135,51 @@ def pow2_inverse(v: NDArray[np.float64]) -> NDArray[np.float64]:
     pos = v > 0
     out[pos] = np.ldexp(1.0, -np.frexp(v[pos])[1])
     return out
+
+
+def _split(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Dekker's split of doubles into 26-bit halves (``a = hi + lo`` exactly)."""
+    t = 134217729.0 * a  # 2**27 + 1
+    hi = t - (t - a)
+    return hi, a - hi
+
+
+def two_prod(M: NDArray[np.float64], v: NDArray[np.float64]
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Exact products ``M * v[:, None] = p + e`` (Dekker's TwoProduct).
+
+    Parameters
+    ----------
+    M : ndarray, shape (m, n)
+        Matrix.
+    v : ndarray, shape (m,)
+        Row factors.
+
+    Returns
+    -------
+    p, e : ndarray
+        The rounded products and their exact errors (barring underflow).
+    """
+    p = M * v[:, None]
+    mh, ml = _split(M)
+    vh, vl = _split(np.broadcast_to(v[:, None], M.shape))
+    return p, ((mh * vh - p) + mh * vl + ml * vh) + ml * vl
+
+
+def exact_dot(ys: list[NDArray[np.float64]], b: NDArray[np.float64]) -> float:
+    """Correctly rounded ``(y_1 + y_2 + ...)^T b`` (exact Dekker products, :func:`math.fsum`).
+
+    Parameters
+    ----------
+    ys : list of ndarray
+        The terms of the multiplier.
+    b : ndarray
+        The vector.
+    """
+    if b.size == 0:
+        return 0.0
+    terms: list[float] = []
+    for y in ys:
+        p, e = two_prod(b[:, None], y)
+        terms += p[:, 0].tolist() + e[:, 0].tolist()
+    return math.fsum(terms)

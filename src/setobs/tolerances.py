@@ -42,6 +42,7 @@ __all__ = [
     "FASTLP_UNBOUNDED_CLEAR",
     "FEASIBILITY_TOL",
     "FRAGILE_MARGIN_DECADES",
+    "HISTORY_GAP_RTOL",
     "HREP_ACTIVE_RTOL",
     "HREP_CLIP_RTOL",
     "HREP_CONVERT_RTOL",
@@ -151,6 +152,13 @@ FASTLP_CONSISTENCY_RTOL: float = 1e-11
 #: of 1e-17 entries left by a rotated basis must not become a unit column, whose
 #: factor would then have a range of 1e-17 and an objective weight of 1e17).
 EQUILIBRATION_FLOOR: float = 1e-10
+
+# ---- exact mode with noise (setobs.setmembership._history)
+#: Largest accepted certification gap (certified bound against the solver's optimum)
+#: of one whole-history LP, relative to ``1 + |optimum|``; above it the solve is
+#: retried (dual simplex, fresh model, ranged rows) and then the step goes to the
+#: set recursion (still certified, only slower).
+HISTORY_GAP_RTOL: float = 1e-8
 
 # ---- the HiGHS reference LPs (setobs.geometry.lp)
 #: Relative certification gap above which duals are recomputed from the basis.

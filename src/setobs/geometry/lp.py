@@ -71,7 +71,7 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import lazy_module
-from .._rounding import UNIT_ROUNDOFF, gamma, round_down
+from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, two_prod
 from ..exceptions import EmptySetError
 from ..tolerances import (
     FEASIBILITY_TOL,
@@ -157,21 +157,6 @@ class EmptinessReport:
     witness: NDArray[np.float64] | None = None
 
 
-def _split(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Dekker's split of doubles into 26-bit halves (``a = hi + lo`` exactly)."""
-    t = 134217729.0 * a  # 2**27 + 1
-    hi = t - (t - a)
-    return hi, a - hi
-
-
-def _two_prod(M: NDArray[np.float64], v: NDArray[np.float64]):
-    """Exact products ``M * v[:, None] = p + e`` (Dekker's TwoProduct)."""
-    p = M * v[:, None]
-    mh, ml = _split(M)
-    vh, vl = _split(np.broadcast_to(v[:, None], M.shape))
-    return p, ((mh * vh - p) + mh * vl + ml * vh) + ml * vl
-
-
 def _exact_residual(
     w: NDArray[np.float64],
     A: NDArray[np.float64],
@@ -189,8 +174,8 @@ def _exact_residual(
     """
     neg = []
     for y in ys:
-        neg.extend(_two_prod(A, y))
-    pos = list(_two_prod(*w_pair)) if w_pair is not None else []
+        neg.extend(two_prod(A, y))
+    pos = list(two_prod(*w_pair)) if w_pair is not None else []
     out = np.empty(w.size)
     for j in range(w.size):
         terms = [] if w_pair is not None else [w[j]]
@@ -200,17 +185,6 @@ def _exact_residual(
             terms.extend((-block[:, j]).tolist())
         out[j] = math.fsum(terms)
     return out
-
-
-def _exact_dot(ys: list[NDArray[np.float64]], b: NDArray[np.float64]) -> float:
-    """Correctly rounded ``(y_1 + y_2 + ...)^T b`` (exact Dekker products, :func:`math.fsum`)."""
-    if b.size == 0:
-        return 0.0
-    terms: list[float] = []
-    for y in ys:
-        p, e = _two_prod(b[:, None], y)
-        terms += p[:, 0].tolist() + e[:, 0].tolist()
-    return math.fsum(terms)
 
 
 def lagrangian_lower_bound(
@@ -327,7 +301,7 @@ def lagrangian_lower_bound(
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
     # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
-    t1 = _exact_dot([y1, y2], b) if n_c else 0.0
+    t1 = exact_dot([y1, y2], b) if n_c else 0.0
     tb = 0.0
     if b_err is not None and n_c:
         tb = float(abs_y @ b_err) * (1.0 + gamma(n_c + 2))

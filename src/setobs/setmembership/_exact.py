@@ -12,6 +12,7 @@ from ..tolerances import (
     HREP_CONVERT_RTOL,
     UNBOUNDED_RADIUS,
 )
+from ._history import HistoryLP
 from ._hrep import (
     HState,
     snap_normals,
@@ -23,7 +24,8 @@ from ._hrep import (
 from ._setup import MODEL_CACHE, Entry
 from ._window import WindowModel
 
-__all__ = ["H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS", "H_MAX_VERTICES", "ExactSteps"]
+__all__ = ["HISTORY_RETRY", "H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS",
+           "H_MAX_VERTICES", "ExactSteps"]
 
 #: LP budget of converting a bounded posterior to the H-representation of exact
 #: mode (a beneath-beyond vertex enumeration); beyond it the set recursion goes on.
@@ -36,6 +38,11 @@ H_CONVERSION_LPS = 150
 #: and then the vertex geometry costs more than the whole-history LPs.
 H_MAX_VERTICES = 128
 H_MAX_NORMALS = 64
+
+
+#: Steps after a failed start of exact mode's whole-history LP (an unbounded
+#: posterior, or free factors that could not be eliminated) before the next try.
+HISTORY_RETRY = 4
 
 
 #: Exact mode converts a posterior whose facets are confirmed only to
@@ -236,3 +243,71 @@ class ExactSteps:
             self._h_back_off(self.k + 1)
             return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x
         return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x
+
+    # ------------------------------------------------------------------ with noise
+    def _history_kw(self) -> dict:
+        return dict(A_o=self.A_o, Gamma_o=self.Gamma_o, C_o=self.C_o, B_o=self.B_o,
+                    E_o=self._E_o, rows=self._hull_rows, data_rtol=self.data_rtol)
+
+    def _history_start(self, k: int) -> HistoryLP | None:
+        """Exact mode's whole-history LP (:mod:`._history`) from the current posterior,
+        once it is bounded; ``None`` before (the set recursion goes on)."""
+        from ..exceptions import SetobsError
+        from ..geometry.reduction import reduce_exact
+
+        box = self._box_o_last
+        if k < self._hist_retry_at or box is None or not (
+                np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
+            return None
+        Z = self._Z
+        if Z is None:
+            return None
+        try:
+            if np.isinf(Z.h).any():  # (X0 = R^n: its factors pivoted out, exactly)
+                Z = reduce_exact(Z)
+            H = HistoryLP.start(Z, box.lo, box.hi, **self._history_kw())
+        except SetobsError:
+            H = None
+        if H is None:
+            self._hist_retry_at = k + HISTORY_RETRY
+        return H
+
+    def _history_step(self, k: int, mode: str, e: Entry):
+        """One exact step with noise on the whole-history LP, or ``None`` (not started:
+        the set recursion decides)."""
+        H = self._Z_src
+        if not isinstance(H, HistoryLP):
+            H = self._history_start(k)
+            if H is None:
+                return None
+        H.push(e)
+        out = H.hull()
+        if out is None:
+            H.pop()
+            return self._history_fallback(k, mode, e, H)
+        box_o, box, box_x, _ = self.split_hull(*out)
+        self.stats["fast"] += 1
+        self._depth = 0
+        return self._commit(k, mode, H, box, box_o, None, e, "ok", box_x)
+
+    def _history_fallback(self, k: int, mode: str, e: Entry, H: HistoryLP):
+        """A step the history LP did not decide (infeasible: the data may contradict
+        the model; a numerical failure): the set recursion decides it from the exact
+        posterior (:meth:`HistoryLP.to_cz`), with its certified emptiness test and
+        retries; the history then goes on with the step as that decided it."""
+        from ..exceptions import ModelInvalidatedError
+
+        self._Z_src = H.to_cz()
+        self._depth = 0
+        try:
+            step = self._reference_step(k, mode, e)
+        except ModelInvalidatedError:
+            self._Z_src = H  # (the observer is left as before the step)
+            raise
+        box = self._box_o_last
+        if step.status in ("ok", "fallback", "skipped") and box is not None and \
+                np.isfinite(box.lo).all() and np.isfinite(box.hi).all():
+            H.push(e.skipped() if step.status == "skipped" else e)
+            H.box = (box.lo.copy(), box.hi.copy())
+            self._Z_src = H
+        return step

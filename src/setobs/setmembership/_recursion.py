@@ -163,6 +163,7 @@ class SetRecursion:
         self.k = k
         self._last_y = e.y
         self._Z_src = Z_src
+        self._box_o_last = box_o
         if mode == "box":
             self._windowing = True
         if self.window is not None:  # (exact mode runs the plain recursion: no history)
@@ -227,7 +228,7 @@ class SetRecursion:
         an LP fell back, and (``state_bounds``) the hull of the state ``M_x Z``."""
         fb_o = False
         box_o = None
-        if self.window is not None or (self.state_bounds and (
+        if self.window is not None or self._history_on or (self.state_bounds and (
                 self._X_coords is not None or self._ubar is not None)):
             box_o, fb_o = hull_with_status(Z)
         box_x, fb_x = None, False

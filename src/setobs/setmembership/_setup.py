@@ -462,8 +462,12 @@ class ModelSetup:
         self._warned_fallback = False
         # Exact mode's H-representation recursion (setmembership._hrep): fixed
         # uncertainty sets; their vertices are computed on first use.
+        # With noise, the exact set's complexity grows with every step: exact mode
+        # keeps the whole-history LP instead (setmembership._history).
+        noisy = self._W_fixed is not None or self._V_fixed is not None or self._noise_varies
+        self._history_on = window is None and self.fast and not self.keep_sets and noisy
         self._hrep = (window is None and self.fast and self._inc_fixed is not None
-                      and not self._noise_varies)
+                      and not self._noise_varies and not self._history_on)
         self._h_images: list[NDArray[np.float64]] | None = None
         self._h_floor_value: float | None = None
         self._h_noise: dict[bytes, list] = {}
