@@ -205,3 +205,55 @@ def test_warm_start_survives_new_data():
         fp = FactorPolytope(A, b, h)
         assert all(_agree(bounds[i], fp.minimize(W[i]).bound) for i in range(6))
     assert pivots > 0  # the state really was carried from call to call
+
+
+def test_window_like_lps_with_many_boxed_noise_factors():
+    """The SMFDO window's LP shape: a few state factors and many small boxed noise
+    factors entering banded rows (random 6-state plant, window 10: 40 x 106). The
+    bound-flipping dual simplex, then the primal simplex from the previous
+    objective's basis, agree with HiGHS on every objective and every new data
+    set, with the warm state carried (there the short-step dual needed 500-2000
+    pivots per LP and ran into its iteration limit)."""
+    rng = np.random.default_rng(33)
+    n_state, steps, l = 6, 10, 4
+    m = steps * l
+    A = np.zeros((m, n_state + steps * (n_state + l)))
+    Phi = rng.normal(size=(n_state, n_state))
+    Phi *= 0.95 / np.abs(np.linalg.eigvals(Phi)).max()
+    C = rng.normal(size=(l, n_state))
+    M = np.eye(n_state)
+    for t in range(steps):  # y_t = C (Phi^t z0 + sum Phi^(t-s) w_s) + v_t
+        M = Phi @ M
+        A[t * l:(t + 1) * l, :n_state] = C @ M
+        for s in range(t + 1):
+            P = np.linalg.matrix_power(Phi, t - s)
+            col = n_state + s * (n_state + l)
+            A[t * l:(t + 1) * l, col:col + n_state] = C @ P
+        col = n_state + t * (n_state + l) + n_state
+        A[t * l:(t + 1) * l, col:col + l] = np.eye(l)
+    n = A.shape[1]
+    W = np.zeros((2 * n_state, n))
+    for i in range(n_state):  # the last state's coordinates: Phi^steps z0 + ...
+        row = np.zeros(n)
+        Mk = np.linalg.matrix_power(Phi, steps)
+        row[:n_state] = Mk[i]
+        for s in range(steps):
+            col = n_state + s * (n_state + l)
+            row[col:col + n_state] = np.linalg.matrix_power(Phi, steps - 1 - s)[i]
+        W[2 * i], W[2 * i + 1] = row, -row
+    S = FixedStructureLP(A, W, np.zeros(n, bool))
+    state = S.new_state()
+    h = np.concatenate([np.full(n_state, 2.0)] + [np.r_[np.full(n_state, 0.01),
+                                                        np.full(l, 0.05)]] * steps)
+    solved = total = 0
+    for _ in range(15):
+        xi = rng.uniform(-1, 1, n) * h
+        b = A @ xi
+        bounds, ok = S.minimize_all(b, h, state)
+        fp = FactorPolytope(A, b, h)
+        for i in range(W.shape[0]):
+            total += 1
+            if ok[i]:
+                solved += 1
+                assert _agree(bounds[i], fp.minimize(W[i]).bound), i
+    assert solved == total

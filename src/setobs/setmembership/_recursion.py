@@ -234,8 +234,7 @@ class SetRecursion:
         box_x, fb_x = None, False
         if self.state_bounds:
             if self._X_coords is not None:
-                j = self._X_coords
-                box_x = Box(box_o.lo[j], box_o.hi[j])
+                box_x = self._coordinate_states(box_o.lo, box_o.hi)
             else:  # (the same factor polytope: its HiGHS model is reused)
                 box_x, fb_x = hull_with_status(self._Mx @ Z)
         Zd = self.P @ Z
