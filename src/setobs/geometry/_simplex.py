@@ -23,6 +23,9 @@ _TINY = np.finfo(np.float64).tiny
 REFACTOR_EVERY = 32
 #: Relative size of the cost perturbation against dual degeneracy (see solve_batch).
 PERTURB = 1e-7
+#: Per data set, the pivot count remembered for the warm start not used decays by
+#: this factor (solve_batch), so that it is tried again after a few sets.
+EST_DECAY = 0.9
 
 # Return codes of the simplex (also used by the batch kernel).
 OPTIMAL = 0
@@ -94,7 +97,7 @@ def primal_residual(A, b, x):
 
 
 @njit(cache=True)
-def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
+def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     """Bounded dual simplex for ``min w^T x, A x = b, |x_j| <= h_j`` (all ``h`` finite).
 
     ``AT`` is ``A`` transposed (contiguous), for column access. ``basis`` (m
@@ -283,11 +286,12 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
         isb[q] = True
         upper[p] = sgn < 0.0
         npiv[0] += 1
+        nit[0] += 1
     return ITERATION_LIMIT
 
 
 @njit(cache=True)
-def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
+def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     """Bounded primal simplex for ``min w^T x, A x = b, |x_j| <= h_j`` from a primal
     feasible basis (the optimal basis of another objective on the same data).
 
@@ -414,6 +418,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit):
                 bestc = abs(c)
                 r = i
                 tr = max(t, 0.0)
+        nit[0] += 1
         if r < 0 or 2.0 * h[q] <= tr:
             upper[q] = not upper[q]  # the entering variable reaches its other bound
             continue
@@ -631,7 +636,8 @@ def solve_batch(structure, data, state, params, out):
     * ``structure = (A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``:
       fixed for a set structure (:class:`~setobs.geometry.fastlp.FixedStructureLP`);
     * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
-    * ``state = (bases, upper, binv, npiv)``: the warm-start state, updated in place;
+    * ``state = (bases, upper, binv, npiv, est)``: the warm-start state, updated in
+      place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used);
     * ``params = (maxit, radius, tol_unb, gap_rtol)``: iteration limit and tolerances;
     * ``out = (bounds, objs, codes, ys)``: results, written in place.
 
@@ -645,8 +651,9 @@ def solve_batch(structure, data, state, params, out):
     """
     A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
     b, h, b_err, bred, hB = data
-    bases, upper, binv, npiv = state
+    bases, upper, binv, npiv, est = state
     maxit, radius, tol_unb, gap_rtol = params
+    nit = np.zeros(1, np.int64)
     bounds, objs, codes, ys = out
     n_lp = Wfull.shape[0]
     mr, nb = Ared.shape
@@ -670,13 +677,19 @@ def solve_batch(structure, data, state, params, out):
             codes[i] = AMBIGUOUS
             primal_ok = False
             continue
-        # After the first LP the primal simplex starts from the previous LP's optimal
-        # basis (same data, another objective). Otherwise, or if that fails, the dual
-        # simplex warm from this LP's last basis: dual-degenerate LPs (many columns
-        # with zero cost, e.g. noise factors that enter only the constraints) stall
-        # it, so it solves with the costs perturbed first (ties broken
-        # deterministically), then finishes from that basis with the true costs (a
-        # few pivots). The result is certified below on the original data either way.
+        # Two warm starts. (1) The dual simplex from this LP's own last basis (the
+        # last data set): dual-degenerate LPs (many columns with zero cost, e.g.
+        # noise factors that enter only the constraints) stall it, so it solves with
+        # the costs perturbed first (ties broken deterministically), then finishes
+        # with the true costs. (2) After the first LP of the set, the primal simplex
+        # from the previous LP's optimal basis (the same data, another objective).
+        # Which is cheaper depends on the family: a window restarting from the
+        # carried-back polytope changes little from step to step (two masses: 5
+        # pivots warm, 15-70 primal), noise-dominated windows change a lot (random
+        # 6-state plant: ~130 warm, 50-110 primal). est[i] holds each one's pivots
+        # when last used, decaying while unused (so the other is tried again);
+        # the cheaper is tried first. The result is certified below on the
+        # original data either way.
         wmax = 0.0
         for j in range(nb):
             wmax = max(wmax, abs(Wred[i, j]))
@@ -685,9 +698,8 @@ def solve_batch(structure, data, state, params, out):
             sg = 1.0 if frac < 0.5 else -1.0
             wp[j] = Wred[i, j] + sg * PERTURB * wmax * (1.0 + frac)
         code = ITERATION_LIMIT
-        if i > 0 and primal_ok:
-            # the same data, another objective: the primal simplex from the last
-            # LP's optimal basis (a handful of pivots)
+        use_primal = i > 0 and primal_ok and est[i, 1] < est[i, 0]
+        if use_primal:
             keep_b[:] = bases[i]
             keep_u[:] = upper[i]
             keep_inv[:, :] = binv[i]
@@ -695,19 +707,26 @@ def solve_batch(structure, data, state, params, out):
             upper[i, :] = upper[i - 1]
             binv[i, :, :] = binv[i - 1]
             npiv[i] = npiv[i - 1]
+            nit[0] = 0
             code = primal_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i],
-                                  binv[i], npiv[i:i + 1], x, z, maxit)
-            if code != OPTIMAL:  # (from the last step's basis of this LP instead)
+                                  binv[i], npiv[i:i + 1], x, z, maxit, nit)
+            est[i, 1] = nit[0] if code == OPTIMAL else 1e9
+            est[i, 0] *= EST_DECAY
+            if code != OPTIMAL:  # (from the last data set's basis of this LP instead)
                 bases[i, :] = keep_b
                 upper[i, :] = keep_u
                 binv[i, :, :] = keep_inv
                 npiv[i] = REFACTOR_EVERY
         if code != OPTIMAL:
+            nit[0] = 0
             code = dual_simplex(Ared, AredT, bred, hB, wp, bases[i], upper[i], binv[i],
-                                npiv[i:i + 1], x, z, maxit)
+                                npiv[i:i + 1], x, z, maxit, nit)
             if code == OPTIMAL or code == ITERATION_LIMIT:
                 code = dual_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i],
-                                    binv[i], npiv[i:i + 1], x, z, maxit)
+                                    binv[i], npiv[i:i + 1], x, z, maxit, nit)
+            if not use_primal:
+                est[i, 0] = nit[0] if code == OPTIMAL else 1e9
+                est[i, 1] *= EST_DECAY
         primal_ok = code == OPTIMAL
         if code != OPTIMAL:
             codes[i] = code

@@ -110,7 +110,8 @@ class LPState:
     """Warm-start state of one user of a :class:`FixedStructureLP` (mutable, not shared).
 
     Holds, per objective, the simplex basis, the nonbasic bound flags, the
-    explicit basis inverse and the pivot counter, plus the output buffers.
+    explicit basis inverse, the pivot counter and the pivot counts of its two
+    warm starts, plus the output buffers.
     Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
     structure it uses, so its results depend only on its own data.
 
@@ -120,7 +121,7 @@ class LPState:
         The structure the state belongs to (fixes the sizes and the initial basis).
     """
 
-    __slots__ = ("bases", "binv", "bounds", "codes", "npiv", "objs", "upper", "ys")
+    __slots__ = ("bases", "binv", "bounds", "codes", "est", "npiv", "objs", "upper", "ys")
 
     def __init__(self, lp: FixedStructureLP) -> None:
         n_lp = lp.n_lp
@@ -128,6 +129,9 @@ class LPState:
         self.upper = np.zeros((n_lp, lp.bidx.size), dtype=np.bool_)
         self.binv = np.ascontiguousarray(np.tile(lp.binv0, (n_lp, 1, 1)))
         self.npiv = np.zeros(n_lp, dtype=np.int64)
+        # pivots of each LP's two warm starts (own last basis, dual simplex; the
+        # previous LP's basis, primal simplex) when last used
+        self.est = np.zeros((n_lp, 2))
         self.bounds = np.empty(n_lp)
         self.objs = np.empty(n_lp)
         self.codes = np.empty(n_lp, dtype=np.int64)
@@ -360,7 +364,7 @@ class FixedStructureLP:
             (self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
              self.yU, self.Q2, self.R, self.dirstat),
             (b, h, berr, bred, hB),
-            (st.bases, st.upper, st.binv, st.npiv),
+            (st.bases, st.upper, st.binv, st.npiv, st.est),
             (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
             (bounds, st.objs, codes, st.ys))
         return bounds, codes == _simplex.OPTIMAL
