@@ -25,7 +25,9 @@ for n > 6; mean and worst ratio), and time per step; in the same run the median 
 Writes ``benchmarks/results/state_estimation.json``.
 
 Run: ``python benchmarks/state_estimation.py [--steps N] [--quick]`` (plants with
-more than 6 states: 40 steps, the box and the default restart only).
+more than 6 states: 40 steps, the box and the default restart only);
+``--r30 STEPS`` times only a random 30-state plant with 21 outputs (window 10, box
+restart) into ``state_estimation_r30.json``.
 """
 
 from __future__ import annotations
@@ -212,17 +214,51 @@ def study(name, A, B, C, rw, rv, N, windows, exact, peer, unit, seed=0,
     return rows, t_lp
 
 
+def r30_timing(steps: int, unit: float) -> list[dict]:
+    """Window 10 (box restart) on a random 30-state plant with 21 outputs: time per step
+    after the window has filled (no history LP: its HiGHS solves take minutes)."""
+    A, B, C, rw, rv = random_system(30, 21, 5)
+    n = A.shape[0]
+    X, Y, U = record(A, B, C, rw, rv, steps, 0)
+    obs = so.SMFDO(so.LinearSystem(A, np.zeros((n, 0)), C, B), window=10, restart="box",
+                   process_noise=rw, measurement_noise=rv, state_bounds=True,
+                   initial_state_set=so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n)))
+    times = []
+    for k in range(steps):
+        t0 = time.perf_counter()
+        st = obs.update(Y[k], U[k - 1] if k else None)
+        times.append(time.perf_counter() - t0)
+    dt = statistics.median(times[10:]) if steps > 10 else statistics.median(times)
+    inside = bool(np.all((X[-1] >= st.state_lo) & (X[-1] <= st.state_hi)))
+    print(f"random_30 w=10   box      {1e3 * dt:8.1f} ms/step ({dt / unit:8.1f} LP)", flush=True)
+    return [{"system": "random_30_21", "n": n, "l": C.shape[0], "estimator": "SMFDO",
+             "window": 10, "restart": "box", "ms_per_step": 1e3 * dt,
+             "per_linprog": dt / unit, "steps": steps, "truth_inside_last": inside,
+             "stats": dict(obs.stats)}]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=120)
     ap.add_argument("--quick", action="store_true", help="two-mass and vehicle only")
     ap.add_argument("--n60", action="store_true",
                     help="also the 60-tank cascade (tens of minutes today)")
+    ap.add_argument("--r30", type=int, default=0, metavar="STEPS",
+                    help="only a random 30-state plant with 21 outputs (the issue's large "
+                         "case), window 10 with the box restart, STEPS steps, timings only "
+                         "(about 30 s per step today); writes state_estimation_r30.json")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"
                                          / "state_estimation.json"))
     args = ap.parse_args()
     unit = linprog_unit()
     print(f"one 45 x 40 linprog (HiGHS): {1e3 * unit:.3f} ms", flush=True)
+    if args.r30:
+        out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30_timing(args.r30, unit),
+               "machine": platform.platform(), "python": platform.python_version()}
+        path = Path(args.out).with_name("state_estimation_r30.json")
+        path.write_text(json.dumps(out, indent=1))
+        print(f"wrote {path}")
+        return
     N = args.steps
     cases = [("two_mass", *two_mass(), (3, 10, 20), True, True),
              ("vehicle", *vehicle(), (3, 10, 20), True, True)]

@@ -63,11 +63,16 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         it is carried as a certified H-representation (facets and box) and
         advanced one step at a time (:mod:`setobs.setmembership._hrep`), so a
         step costs what the *set's* complexity costs, not ``k`` (about 3 ms on
-        the paper example at any ``k``). Sets of growing complexity (more than
-        ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets: typically with
-        measurement noise), time-varying uncertainty sets and ``fast=False``
-        keep the whole history in one constrained zonotope instead, whose
-        cost grows with ``k``.
+        the paper example at any ``k``). With process or measurement noise the
+        exact set gains facets at every step; exact mode then keeps the
+        whole-history LP itself, sparse, in HiGHS, warm-started from step to step
+        and certified by weak duality (:mod:`setobs.setmembership._history`;
+        about one whole-history LP solved from scratch per step on 4-state
+        plants). Without noise, sets of growing complexity (more than
+        ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets), time-varying
+        increment sets, ``keep_sets`` with noise and ``fast=False`` keep the
+        whole history in one constrained zonotope instead. Either way the cost
+        grows with ``k``, except on the H-representation.
     increment_set : ConstrainedZonotope, Box, array_like, callable or None
         Bounded set containing ``dd_k``: a CZ, a :class:`Box`, a vector ``r``
         meaning the box ``|dd_i| <= r_i``, or a callable ``k -> CZ`` for a
