@@ -39,63 +39,17 @@ import time
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.optimize import linprog
 
 HERE = Path(__file__).resolve().parent
 _sys.path.insert(0, str(HERE.parent))
 _sys.path.insert(0, str(HERE))
 
+from tests.oracles import solve_state_history_lp, state_history_lp  # noqa: E402
+
 import setobs as so  # noqa: E402
 from state_estimation import random_system, record, two_mass, vehicle  # noqa: E402
 
 CHECK = (30, 60, 120, 180, 239)
-
-
-def history_lp(A, B, C, Y, U, k, rw, rv, box):
-    """``(A_eq, b_eq, bounds, ix)`` of the whole-history LP of ``x_k`` (sparse)."""
-    n, l = A.shape[0], C.shape[0]
-    nx, nw, nv = (k + 1) * n, k * n, (k + 1) * l
-    o_w, o_v = nx, nx + nw
-    rows, cols, vals, rhs = [], [], [], []
-    r = 0
-    for j in range(k):  # x_(j+1) - A x_j - w_j = B u_j
-        for a in range(n):
-            rows += [r, *([r] * n), r]
-            cols += [(j + 1) * n + a, *range(j * n, j * n + n), o_w + j * n + a]
-            vals += [1.0, *(-A[a]), -1.0]
-            rhs.append(float(B[a] @ U[j]))
-            r += 1
-    for j in range(k + 1):  # C x_j + v_j = y_j
-        for i in range(l):
-            rows += [*([r] * n), r]
-            cols += [*range(j * n, j * n + n), o_v + j * l + i]
-            vals += [*C[i], 1.0]
-            rhs.append(float(Y[j, i]))
-            r += 1
-    A_eq = sp.csr_array((vals, (rows, cols)), shape=(r, nx + nw + nv))
-    bounds = [(None, None)] * nx + [(-rw, rw)] * nw + [(-rv, rv)] * nv
-    for a in range(n):
-        bounds[a] = (box[0][a], box[1][a])
-    return A_eq, np.array(rhs), bounds, k * n
-
-
-def lp_unit(A_eq, b_eq, bounds, ix, n):
-    """Optimal values and the median solve time of the 2 n state LPs."""
-    times, lo, hi = [], np.empty(n), np.empty(n)
-    for a in range(n):
-        for sg in (1.0, -1.0):
-            c = np.zeros(A_eq.shape[1])
-            c[ix + a] = sg
-            t0 = time.perf_counter()
-            res = linprog(c, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs",
-                          options={"primal_feasibility_tolerance": 1e-10,
-                                   "dual_feasibility_tolerance": 1e-10})
-            times.append(time.perf_counter() - t0)
-            if res.status != 0:
-                raise RuntimeError(res.message)
-            (lo if sg > 0 else hi)[a] = sg * res.fun
-    return lo, hi, statistics.median(times)
 
 
 def study(name, plant, N, reference_k):
@@ -121,8 +75,9 @@ def study(name, plant, N, reference_k):
     for k in CHECK:
         if k >= N:
             continue
-        A_eq, b_eq, bounds, ix = history_lp(A, B, C, Y, U, k, rw, rv, (X0.lo, X0.hi))
-        rlo, rhi, unit = lp_unit(A_eq, b_eq, bounds, ix, n)
+        rlo, rhi, lp_times = solve_state_history_lp(
+            *state_history_lp(A, B, C, Y, U, k, rw, rv, (X0.lo, X0.hi)), n)
+        unit = statistics.median(lp_times)
         step = statistics.median(times[max(0, k - 5):k + 6])
         dev = np.maximum(rlo - lo[k], hi[k] - rhi)
         rows.append({"k": k, "ms_per_update": 1e3 * step, "one_history_lp_ms": 1e3 * unit,

@@ -418,6 +418,63 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     return lo, hi
 
 
+def state_history_lp(A, B, C, Y, U, k, rw, rvs, box):
+    """``(A_eq, b_eq, bounds, ix)`` of the whole-history LP of the state ``x_k`` of
+    ``x_(j+1) = A x_j + B u_j + w_j``, ``y_j = C x_j + v_j``, ``|w| <= rw``,
+    ``|v_j| <= rvs[j]`` (or a scalar ``rvs``), ``x_0`` in the box ``(lo, hi)``:
+    every state and noise sample a variable (scipy.sparse); ``x_k`` is
+    ``x[ix : ix + n]``. Measurements are all taken (no NaN)."""
+    import scipy.sparse as sp
+
+    n, l = A.shape[0], C.shape[0]
+    rvs = np.broadcast_to(np.asarray(rvs, dtype=float), (k + 1,))
+    nx, nw, nv = (k + 1) * n, k * n, (k + 1) * l
+    rows, cols, vals, rhs = [], [], [], []
+    r = 0
+    for j in range(k):  # x_(j+1) - A x_j - w_j = B u_j
+        for a in range(n):
+            rows += [r] * (n + 2)
+            cols += [(j + 1) * n + a, *range(j * n, j * n + n), nx + j * n + a]
+            vals += [1.0, *(-A[a]), -1.0]
+            rhs.append(float(B[a] @ U[j]))
+            r += 1
+    for j in range(k + 1):  # C x_j + v_j = y_j
+        for i in range(l):
+            rows += [r] * (n + 1)
+            cols += [*range(j * n, j * n + n), nx + nw + j * l + i]
+            vals += [*C[i], 1.0]
+            rhs.append(float(Y[j, i]))
+            r += 1
+    A_eq = sp.csr_array((vals, (rows, cols)), shape=(r, nx + nw + nv))
+    bounds = [(float(box[0][a]), float(box[1][a])) for a in range(n)] + \
+        [(None, None)] * (nx - n) + [(-rw, rw)] * nw + \
+        [(-rvs[j], rvs[j]) for j in range(k + 1) for _ in range(l)]
+    return A_eq, np.array(rhs), bounds, k * n
+
+
+def solve_state_history_lp(A_eq, b_eq, bounds, ix, n):
+    """``(lo, hi, times)``: the optima of the ``2 n`` LPs of :func:`state_history_lp`
+    (scipy's HiGHS from scratch, tolerances 1e-10) and each solve's time."""
+    import time
+
+    from scipy.optimize import linprog
+
+    times, lo, hi = [], np.empty(n), np.empty(n)
+    for a in range(n):
+        for sg, out in ((1.0, lo), (-1.0, hi)):
+            c = np.zeros(A_eq.shape[1])
+            c[ix + a] = sg
+            t0 = time.perf_counter()
+            res = linprog(c, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs",
+                          options={"primal_feasibility_tolerance": 1e-10,
+                                   "dual_feasibility_tolerance": 1e-10})
+            times.append(time.perf_counter() - t0)
+            if res.status != 0:
+                raise RuntimeError(f"HiGHS: {res.message}")
+            out[a] = sg * res.fun
+    return lo, hi, times
+
+
 def slab_lp_extremes(M, A, b, tol, bounds):
     """Min and max of each row of ``M v`` over ``|A v - b| <= tol`` with the variable
     ``bounds`` (scipy's HiGHS; a failed solve fails the test)."""

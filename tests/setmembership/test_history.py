@@ -19,7 +19,7 @@ import setobs as so
 from setobs.geometry import ConstrainedZonotope
 from setobs.setmembership._history import HistoryLP
 from setobs.setmembership._setup import Entry
-from tests.oracles import history_lp_highs
+from tests.oracles import history_lp_highs, solve_state_history_lp, state_history_lp
 
 
 def _plant():
@@ -147,7 +147,7 @@ def test_a_copy_and_a_pickle_go_on_like_the_original():
 
 def test_time_varying_noise_sets():
     """Callable noise bounds (a larger measurement noise on odd steps): the LP with
-    each step's own sets (the oracle's noise rows per step)."""
+    each step's own sets (the oracle's noise bounds per step)."""
     rw = 0.01
     rv_k = lambda k: 0.04 if k % 2 else 0.02  # noqa: E731
     A, B, C = _plant()
@@ -166,53 +166,15 @@ def test_time_varying_noise_sets():
                    margin=0.0, initial_state_set=so.Box(-2.0 * np.ones(4), 2.0 * np.ones(4)))
     res = obs.run(Y, U)
     assert np.all((X >= res.state_lo) & (X <= res.state_hi))
-    # the oracle with the noise as a per-step variable scale: v_j = s_j nu_j, |nu| <= 0.04
+    # the oracle with each step's own noise bound
     for k in (20, 40):
-        Ys = Y.copy()
-        lo, hi = _oracle_varying(Ys, U, k, rw, [rv_k(j) for j in range(k + 1)])
+        lo, hi, _ = solve_state_history_lp(
+            *state_history_lp(A, B, C, Y, U, k, rw, [rv_k(j) for j in range(k + 1)],
+                              (-2.0 * np.ones(4), 2.0 * np.ones(4))), 4)
         w = hi - lo
         np.testing.assert_allclose(res.state_lo[k], lo, rtol=0, atol=1e-7 * w.max())
         np.testing.assert_allclose(res.state_hi[k], hi, rtol=0, atol=1e-7 * w.max())
     assert obs.stats["fast"] >= 30
-
-
-def _oracle_varying(Y, U, k, rw, rvs):
-    """The history LP with measurement noise bound ``rvs[j]`` at step ``j`` (scipy)."""
-    import scipy.sparse as sp
-
-    A, B, C = _plant()
-    n, l = 4, 2
-    nx, nw = (k + 1) * n, k * n
-    rows, cols, vals, rhs = [], [], [], []
-    r = 0
-    for j in range(k):
-        for a in range(n):
-            rows += [r] * (n + 2)
-            cols += [(j + 1) * n + a, *range(j * n, j * n + n), nx + j * n + a]
-            vals += [1.0, *(-A[a]), -1.0]
-            rhs.append(float(B[a] @ U[j]))
-            r += 1
-    for j in range(k + 1):
-        for i in range(l):
-            rows += [r] * (n + 1)
-            cols += [*range(j * n, j * n + n), nx + nw + j * l + i]
-            vals += [*C[i], 1.0]
-            rhs.append(float(Y[j, i]))
-            r += 1
-    Aeq = sp.csr_array((vals, (rows, cols)), shape=(r, nx + nw + (k + 1) * l))
-    bounds = [(-2.0, 2.0)] * n + [(None, None)] * (nx - n) + [(-rw, rw)] * nw + \
-        [(-rvs[j], rvs[j]) for j in range(k + 1) for _ in range(l)]
-    lo, hi = np.empty(n), np.empty(n)
-    for a in range(n):
-        for sg, out in ((1.0, lo), (-1.0, hi)):
-            c = np.zeros(Aeq.shape[1])
-            c[k * n + a] = sg
-            res = linprog(c, A_eq=Aeq, b_eq=rhs, bounds=bounds, method="highs",
-                          options={"primal_feasibility_tolerance": 1e-10,
-                                   "dual_feasibility_tolerance": 1e-10})
-            assert res.status == 0
-            out[a] = sg * res.fun
-    return lo, hi
 
 
 # ----------------------------------------------------------------- the certificate

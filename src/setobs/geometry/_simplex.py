@@ -97,6 +97,73 @@ def primal_residual(A, b, x):
 
 
 @njit(cache=True)
+def _reduced_costs(A, w, basis, Binv, y, d):
+    """``y = Binv^T w_B`` and ``d = w - A^T y`` (rows of ``Binv`` and ``A``, axpy)."""
+    m, n = A.shape
+    y[:] = 0.0
+    for k in range(m):
+        wk = w[basis[k]]
+        if wk != 0.0:
+            for i in range(m):
+                y[i] += wk * Binv[k, i]
+    d[:] = w
+    for i in range(m):
+        yi = y[i]
+        if yi != 0.0:
+            for j in range(n):
+                d[j] -= yi * A[i, j]
+
+
+@njit(cache=True)
+def _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs):
+    """The basic solution: each nonbasic ``x_j`` at the bound ``upper[j]`` selects, then
+    ``x_B = Binv (b - N x_N)``."""
+    m = basis.size
+    rhs[:] = b
+    for j in range(AT.shape[0]):
+        if isb[j]:
+            continue
+        xj = h[j] if upper[j] else -h[j]
+        x[j] = xj
+        if xj != 0.0:
+            for i in range(m):
+                rhs[i] -= xj * AT[j, i]
+    for i in range(m):
+        s = 0.0
+        for k in range(m):
+            s += Binv[i, k] * rhs[k]
+        x[basis[i]] = s
+
+
+@njit(cache=True)
+def _entering_column(Binv, AT, q, col):
+    """``col = Binv a_q``; returns ``max |col|``."""
+    m = col.size
+    cmax = 0.0
+    for i in range(m):
+        s = 0.0
+        for k in range(m):
+            s += Binv[i, k] * AT[q, k]
+        col[i] = s
+        cmax = max(cmax, abs(s))
+    return cmax
+
+
+@njit(cache=True)
+def _eta_update(Binv, col, r):
+    """Rank-one update of the explicit inverse for pivot row ``r`` of ``col = Binv a_q``."""
+    m = col.size
+    piv = col[r]
+    for k in range(m):
+        Binv[r, k] /= piv
+    for i in range(m):
+        if i != r and col[i] != 0.0:
+            f = col[i]
+            for k in range(m):
+                Binv[i, k] -= f * Binv[r, k]
+
+
+@njit(cache=True)
 def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     """Bounded dual simplex for ``min w^T x, A x = b, |x_j| <= h_j`` (all ``h`` finite).
 
@@ -138,21 +205,8 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             if not _refactor(A, basis, Binv):
                 return NUMERICAL
             npiv[0] = 0
-        # y = Binv^T w_B (rows of Binv, axpy)
-        y[:] = 0.0
-        for k in range(m):
-            wk = w[basis[k]]
-            if wk != 0.0:
-                for i in range(m):
-                    y[i] += wk * Binv[k, i]
-        # d = w - A^T y (rows of A, axpy)
-        d[:] = w
-        for i in range(m):
-            yi = y[i]
-            if yi != 0.0:
-                for j in range(n):
-                    d[j] -= yi * A[i, j]
-        rhs[:] = b
+        _reduced_costs(A, w, basis, Binv, y, d)
+        # every nonbasic variable at the bound its reduced cost selects
         for j in range(n):
             if isb[j]:
                 d[j] = 0.0
@@ -162,16 +216,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
                 upper[j] = False
             elif s < -dtol:
                 upper[j] = True
-            xj = h[j] if upper[j] else -h[j]
-            x[j] = xj
-            if xj != 0.0:
-                for i in range(m):
-                    rhs[i] -= xj * AT[j, i]
-        for i in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Binv[i, k] * rhs[k]
-            x[basis[i]] = s
+        _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs)
         # leaving row: among the violations beyond the tolerance (relative to the
         # variable's own range; columns are equilibrated), the largest by dual
         # steepest edge, violation^2 / ||row i of B^-1||^2 (Forrest-Goldfarb; the
@@ -263,24 +308,11 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             if a > best:
                 best = a
                 q = j
-        cmax = 0.0
-        for i in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Binv[i, k] * AT[q, k]
-            col[i] = s
-            cmax = max(cmax, abs(s))
-        piv = col[r]
-        if abs(piv) <= 1e-11 * cmax:
+        cmax = _entering_column(Binv, AT, q, col)
+        if abs(col[r]) <= 1e-11 * cmax:
             npiv[0] = REFACTOR_EVERY  # refactor on the next call
             return NUMERICAL
-        for k in range(m):
-            Binv[r, k] /= piv
-        for i in range(m):
-            if i != r and col[i] != 0.0:
-                f = col[i]
-                for k in range(m):
-                    Binv[i, k] -= f * Binv[r, k]
+        _eta_update(Binv, col, r)
         basis[r] = q
         isb[p] = False
         isb[q] = True
@@ -328,36 +360,12 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             if not _refactor(A, basis, Binv):
                 return NUMERICAL
             npiv[0] = 0
-        rhs[:] = b
-        for j in range(n):
-            if isb[j]:
-                continue
-            xj = h[j] if upper[j] else -h[j]
-            x[j] = xj
-            if xj != 0.0:
-                for i in range(m):
-                    rhs[i] -= xj * AT[j, i]
-        for i in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Binv[i, k] * rhs[k]
-            x[basis[i]] = s
+        _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs)
         for i in range(m):
             j = basis[i]
             if abs(x[j]) > h[j] + ptol * (1.0 + h[j]):
                 return NUMERICAL  # not primal feasible: not this method's start
-        y[:] = 0.0
-        for k in range(m):
-            wk = w[basis[k]]
-            if wk != 0.0:
-                for i in range(m):
-                    y[i] += wk * Binv[k, i]
-        d[:] = w
-        for i in range(m):
-            yi = y[i]
-            if yi != 0.0:
-                for j in range(n):
-                    d[j] -= yi * A[i, j]
+        _reduced_costs(A, w, basis, Binv, y, d)
         # entering: the most attractive reduced cost per unit column norm
         q = -1
         best = 0.0
@@ -375,20 +383,13 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
         if it == maxit:
             return ITERATION_LIMIT
         dirq = 1.0 if not upper[q] else -1.0  # x_q moves up from -h or down from +h
-        for i in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Binv[i, k] * AT[q, k]
-            col[i] = dirq * s  # x_B changes by -theta * col
-        cmax = 0.0
-        for i in range(m):
-            cmax = max(cmax, abs(col[i]))
+        cmax = _entering_column(Binv, AT, q, col)  # x_B changes by -theta dirq col
         atol = 1e-9 * cmax
         # Harris pass 1: the largest step keeping every basic variable within its
         # bounds relaxed by the tolerance
         tmax = 2.0 * h[q]
         for i in range(m):
-            c = col[i]
+            c = dirq * col[i]
             j = basis[i]
             tol = ptol * (1.0 + h[j])
             if c > atol:
@@ -406,7 +407,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
         bestc = 0.0
         tr = np.inf
         for i in range(m):
-            c = col[i]
+            c = dirq * col[i]
             j = basis[i]
             if c > atol:
                 t = (x[j] + h[j]) / c
@@ -422,19 +423,12 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
         if r < 0 or 2.0 * h[q] <= tr:
             upper[q] = not upper[q]  # the entering variable reaches its other bound
             continue
-        piv = dirq * col[r]  # the entering column's own entry in row r
         if abs(col[r]) <= 1e-11 * cmax:
             npiv[0] = REFACTOR_EVERY
             return NUMERICAL
         p = basis[r]
-        for k in range(m):
-            Binv[r, k] /= piv
-        for i in range(m):
-            if i != r and col[i] != 0.0:
-                f = dirq * col[i]
-                for k in range(m):
-                    Binv[i, k] -= f * Binv[r, k]
-        upper[p] = col[r] < 0.0  # (it rose to +h) or fell to -h
+        _eta_update(Binv, col, r)
+        upper[p] = dirq * col[r] < 0.0  # (it rose to +h) or fell to -h
         basis[r] = q
         isb[p] = False
         isb[q] = True

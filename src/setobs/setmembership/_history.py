@@ -219,7 +219,7 @@ class HistoryLP:
         self._cache = None
 
     def _step_set(self, S: ConstrainedZonotope | None, M: NDArray[np.float64]):
-        """``(M G_S, |M| |G_S| h_S, M c_S, err)`` of a per-step set (cached by identity)."""
+        """``(M G_S, |M G_S| h_S, M c_S, err)`` of a per-step set (cached by identity)."""
         if S is None or S.dim == 0 or M.shape[1] == 0:
             return None
         hit = self._products.get(id(M))
@@ -234,7 +234,7 @@ class HistoryLP:
         g = gamma(M.shape[1] + 2)
         # |M G - fl(M G)| h and |M c - fl(M c)|, the centre's own uncertainty
         err = g * (reach + absM @ np.abs(S.c)) + absM @ S.c_err
-        out = (MG, np.abs(MG) @ S.h, Mc, err * (1.0 + gamma(4)), S)
+        out = (MG, np.abs(MG) @ S.h, Mc, err * (1.0 + gamma(4)))
         self._products[id(M)] = (S, out)
         return out
 
@@ -270,7 +270,7 @@ class HistoryLP:
             pr = self._step_set(S, M)
             if pr is None:
                 continue
-            MG, reach_S, Mc, err_S, S = pr
+            MG, reach_S, Mc, err_S = pr
             c = c + Mc
             rhs = rhs + Mc
             rhs_abs = rhs_abs + np.abs(Mc)
@@ -463,12 +463,12 @@ class HistoryLP:
         hi = np.empty(W.shape[0])
         limit = 50 * (self._n_row + self._n_col) + 10_000
         zs = np.concatenate(self._s)[z]
+        z_prev = self._z_prev.astype(np.int32) if self._moved else None
         for j, hs in enumerate(self._models):
             i, sign = j // 2, (1.0 if j % 2 == 0 else -1.0)
             ws = sign * W[i]
             if self._moved:  # (the objective moves to the newest state)
-                hs.changeColsCost(self._z_prev.size, self._z_prev.astype(np.int32),
-                                  np.zeros(self._z_prev.size))
+                hs.changeColsCost(z_prev.size, z_prev, np.zeros(z_prev.size))
                 hs.changeColsCost(idx.size, idx, ws * zs)
             bound = self._solve(j, ws, limit)
             if bound is None:
@@ -516,14 +516,14 @@ class HistoryLP:
     def to_cz(self) -> ConstrainedZonotope:
         """The posterior as a constrained zonotope (every variable a factor, centred
         in its bounds; equal to the exact set up to the certified ``b_err``)."""
-        lo, hi, b, berr, A, _, _, _ = self._arrays()
+        lo, hi, b, berr, A, _, _, k = self._arrays()
         m = 0.5 * lo + 0.5 * hi
         rho = round_up(np.maximum(hi - m, m - lo))
         Ad = A.toarray()
         As = Ad * rho[None, :]
         rhs = b - Ad @ m
         absA = np.abs(Ad)
-        g = gamma(int(self._arrays()[7]) + 3)
+        g = gamma(k + 3)
         berr2 = berr + g * (np.abs(b) + absA @ np.abs(m) + absA @ rho) + \
             UNIT_ROUNDOFF * (absA @ rho)
         G = np.zeros((self.N, lo.size))
