@@ -47,3 +47,16 @@ def timeit(fn, *args, repeats: int) -> tuple[float, list[float], object]:
         out = fn(*args)
         times.append(time.perf_counter() - t0)
     return statistics.median(times), times, out
+
+
+def state_bands(obs, Y, U) -> tuple[list[float], np.ndarray, np.ndarray]:
+    """Run a state-bounding SMFDO over a record (``U[k - 1]`` into step ``k``): the time
+    of each update and the state bands ``(times, lo, hi)``."""
+    times, lo, hi = [], [], []
+    for k in range(len(Y)):
+        t0 = time.perf_counter()
+        st = obs.update(Y[k], U[k - 1] if k else None)
+        times.append(time.perf_counter() - t0)
+        lo.append(st.state_lo)
+        hi.append(st.state_hi)
+    return times, np.array(lo), np.array(hi)

@@ -47,6 +47,7 @@ _sys.path.insert(0, str(HERE))
 from tests.oracles import solve_state_history_lp, state_history_lp  # noqa: E402
 
 import setobs as so  # noqa: E402
+from _common import state_bands  # noqa: E402
 from state_estimation import random_system, record, two_mass, vehicle  # noqa: E402
 
 CHECK = (30, 60, 120, 180, 239)
@@ -62,14 +63,7 @@ def study(name, plant, N, reference_k):
     # margin=0: the bounds as certified (the default outward margin of 1e-9 of
     # max(1, |bound|) alone is 1e-4 of the bicycle's position band at k = 239)
     obs = so.SMFDO(sys, window=None, margin=0.0, **kw)
-    times, lo, hi = [], [], []
-    for k in range(N):
-        t0 = time.perf_counter()
-        st = obs.update(Y[k], U[k - 1] if k else None)
-        times.append(time.perf_counter() - t0)
-        lo.append(st.state_lo)
-        hi.append(st.state_hi)
-    lo, hi = np.array(lo), np.array(hi)
+    times, lo, hi = state_bands(obs, Y, U)
     inside = bool(np.all((X >= lo) & (X <= hi)))
     rows = []
     for k in CHECK:
