@@ -70,6 +70,10 @@ def check_real_scalar(name: str, value: object, *, positive: bool = False,
 
 def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool,
                   allow_nan: bool = False) -> None:
+    # the common case in one pass: every entry finite and in range (a NaN makes the
+    # maximum NaN and the comparison false)
+    if np.max(np.abs(a), initial=0.0) <= MAX_MAGNITUDE:
+        return
     if not allow_nan and np.isnan(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isnan(a))[0])
         raise DimensionError(f"{name} contains NaN (first at index {idx})")

@@ -251,6 +251,8 @@ class RestartPolytope:
         rows' slacks; ``G_S = [I 0]``, ``A_S = [F -I]``), rounding covered by ``h``
         (a row with an infinite range has a free slack)."""
         c, r = box_center_radius(box_lo, box_hi)
+        if not F.shape[0]:  # the box restart (eq. (24))
+            return c, np.zeros(0), r
         fin = np.isfinite(r)
         c0 = np.where(fin, c, 0.0)
         mid, rad = box_center_radius(lo, hi)  # (an infinite range: centre 0, radius inf)
