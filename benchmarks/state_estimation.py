@@ -50,7 +50,7 @@ import setobs as so
 
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 _sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tests.oracles import history_lp_highs
+from tests.oracles import history_lp_highs, noisy_record
 
 from _common import state_bands
 
@@ -104,15 +104,9 @@ def random_system(n, l, seed):
 
 def record(A, B, C, rw, rv, N, seed):
     rng = np.random.default_rng(seed)
-    n, l = A.shape[0], C.shape[0]
     U = np.sin(0.05 * np.arange(N))[:, None] + 0.2 * rng.normal(size=(N, B.shape[1]))
-    x = rng.uniform(-1, 1, n)
-    X, Y = [], []
-    for k in range(N):
-        X.append(x.copy())
-        Y.append(C @ x + rng.uniform(-rv, rv, l))
-        x = A @ x + B @ U[k] + rng.uniform(-rw, rw, n)
-    return np.array(X), np.array(Y), U
+    X, Y = noisy_record(A, B, C, U, rw, rv, rng)
+    return X, Y, U
 
 
 def cz_filter(A, B, C, rw, rv, X0, Y, U, max_con, max_gen):
@@ -160,7 +154,7 @@ def ratios(lo, hi, ref, ks):
     return float(r.mean()), float(r.max()), float(r.min())
 
 
-def study(name, A, B, C, rw, rv, N, windows, exact, peer, unit, seed=0,
+def study(name, A, B, C, rw, rv, N, windows, exact, peer, seed=0,
           restarts=("polytope", "box")):
     n = A.shape[0]
     X, Y, U = record(A, B, C, rw, rv, N, seed)
@@ -225,7 +219,7 @@ def study(name, A, B, C, rw, rv, N, windows, exact, peer, unit, seed=0,
     return rows, t_lp
 
 
-def r30_timing(steps: int, unit: float) -> list[dict]:
+def r30_timing(steps: int) -> list[dict]:
     """Windows 3, 5 and 10 (box restart) on a random 30-state plant with 21 outputs: time
     per step after the window has filled, and each window's state-band widths against
     window 10's (no history LP: its HiGHS solves take minutes)."""
@@ -273,7 +267,7 @@ def main() -> None:
     unit = linprog_unit()
     print(f"one 45 x 40 linprog (HiGHS): {1e3 * unit:.3f} ms", flush=True)
     if args.r30:
-        out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30_timing(args.r30, unit),
+        out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30_timing(args.r30),
                "machine": platform.platform(), "python": platform.python_version()}
         path = Path(args.out).with_name("state_estimation_r30.json")
         path.write_text(json.dumps(out, indent=1))
@@ -293,7 +287,7 @@ def main() -> None:
     for name, A, B, C, rw, rv, windows, exact, peer in cases:
         big = A.shape[0] > 6  # (large plants: 40 steps, no polytope-only run)
         r, t_lp = study(name, A, B, C, rw, rv, min(N, 40) if big else N, windows, exact,
-                        peer, unit, restarts=("box",) if big else ("polytope", "box"))
+                        peer, restarts=("box",) if big else ("polytope", "box"))
         rows += r
         lp_times[name] = t_lp
     # growth of the window-10 step with n (tanks; the default restart="auto")

@@ -418,6 +418,21 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     return lo, hi
 
 
+def noisy_record(A, B, C, U, rw, rv, rng):
+    """Simulate ``x+ = A x + B u + w``, ``y = C x + v`` from ``x_0`` uniform in
+    ``[-1, 1]^n``, with ``w`` and ``v`` uniform in ``[-rw, rw]`` and ``[-rv, rv]``
+    (drawn in that order: ``x_0``, then ``v_k``, ``w_k`` per step): states and
+    measurements ``(X, Y)``."""
+    n, l = A.shape[0], C.shape[0]
+    x = rng.uniform(-1, 1, n)
+    X, Y = [], []
+    for k in range(len(U)):
+        X.append(x.copy())
+        Y.append(C @ x + rng.uniform(-rv, rv, l))
+        x = A @ x + B @ U[k] + rng.uniform(-rw, rw, n)
+    return np.array(X), np.array(Y)
+
+
 def state_history_lp(A, B, C, Y, U, k, rw, rvs, box):
     """``(A_eq, b_eq, bounds, ix)`` of the whole-history LP of the state ``x_k`` of
     ``x_(j+1) = A x_j + B u_j + w_j``, ``y_j = C x_j + v_j``, ``|w| <= rw``,

@@ -13,6 +13,7 @@ from setobs.geometry.lp import FactorPolytope
 from setobs.setmembership import ModelInvalidatedError, ModelInvalidatedWarning
 from setobs.setmembership import smfdo as smfdo_module
 from setobs.studies import Scenario, rng_for_run
+from tests.oracles import noisy_record
 from tests.setmembership.test_smfdo import random_runs, simulate
 
 RTOL = 1e-8
@@ -195,12 +196,7 @@ def test_noisy_window_lps_stay_on_the_fast_path():
     B, C = rng.normal(size=(n, 1)) * 0.2, rng.normal(size=(l, n))
     rw, rv, N = 0.01, 0.05, 40
     U = np.sin(0.05 * np.arange(N))[:, None]
-    x = rng.uniform(-1, 1, n)
-    X, Y = [], []
-    for k in range(N):
-        X.append(x.copy())
-        Y.append(C @ x + rng.uniform(-rv, rv, l))
-        x = A @ x + B @ U[k] + rng.uniform(-rw, rw, n)
+    X, Y = noisy_record(A, B, C, U, rw, rv, rng)
     sys = so.LinearSystem(A, np.zeros((n, 0)), C, B)
     kw = dict(window=10, restart="box", process_noise=rw, measurement_noise=rv,
               state_bounds=True, initial_state_set=so.Box(-2 * np.ones(n), 2 * np.ones(n)))
@@ -208,7 +204,7 @@ def test_noisy_window_lps_stay_on_the_fast_path():
     rf = obs.run(Y, U)
     rr = so.SMFDO(sys, fast=False, **kw).run(Y, U)
     assert obs.stats["reference"] == 0
-    assert np.all((np.array(X) >= rf.state_lo) & (np.array(X) <= rf.state_hi))
+    assert np.all((X >= rf.state_lo) & (X <= rf.state_hi))
     _close(rf.state_lo, rr.state_lo)
     _close(rf.state_hi, rr.state_hi)
 

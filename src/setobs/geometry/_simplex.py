@@ -169,6 +169,19 @@ def _eta_update(Binv, col, r):
 
 
 @njit(cache=True)
+def _start(basis, w, n):
+    """The basic-column flags of ``basis`` and the reduced-cost tolerance
+    ``1e-12 max |w|`` (both simplices)."""
+    isb = np.zeros(n, np.bool_)
+    for i in range(basis.size):
+        isb[basis[i]] = True
+    wmax = 0.0
+    for j in range(n):
+        wmax = max(wmax, abs(w[j]))
+    return isb, 1e-12 * wmax
+
+
+@njit(cache=True)
 def _pivot_row(Binv, A, r, sgn, alpha):
     """``alpha = sgn * Binv[r, :] A`` (rows of ``A``, axpy)."""
     m, n = A.shape
@@ -204,13 +217,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     maximises violation^2 / ||row of B^-1||^2).
     """
     m, n = A.shape
-    isb = np.zeros(n, np.bool_)
-    for i in range(m):
-        isb[basis[i]] = True
-    wmax = 0.0
-    for j in range(n):
-        wmax = max(wmax, abs(w[j]))
-    dtol = 1e-12 * wmax
+    isb, dtol = _start(basis, w, n)
     ptol = 1e-9
     d = np.empty(n)
     alpha = np.empty(n)
@@ -377,13 +384,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     against ~150).
     """
     m, n = A.shape
-    isb = np.zeros(n, np.bool_)
-    for i in range(m):
-        isb[basis[i]] = True
-    wmax = 0.0
-    for j in range(n):
-        wmax = max(wmax, abs(w[j]))
-    dtol = 1e-12 * wmax
+    isb, dtol = _start(basis, w, n)
     ptol = 1e-9
     ref = np.ones(n)  # devex weights
     d = np.empty(n)
