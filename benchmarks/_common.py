@@ -8,6 +8,7 @@ import time
 
 import cvxpy as cp
 import numpy as np
+from scipy.optimize import linprog
 
 from setobs import ConstrainedZonotope
 
@@ -60,3 +61,20 @@ def state_bands(obs, Y, U) -> tuple[list[float], np.ndarray, np.ndarray]:
         lo.append(st.state_lo)
         hi.append(st.state_hi)
     return times, np.array(lo), np.array(hi)
+
+
+def linprog_unit(repeats: int = 30) -> float:
+    """Median time (s) of one 45 x 40 ``scipy.optimize.linprog`` (HiGHS): the unit of the
+    speed targets, timed in the same run as what it measures."""
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(45, 40))
+    x0 = rng.uniform(-0.5, 0.5, 40)
+    b = A @ x0 + rng.uniform(0.0, 0.5, 45)
+    c = rng.normal(size=40)
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r = linprog(c, A_ub=A, b_ub=b, bounds=[(-1, 1)] * 40, method="highs")
+        ts.append(time.perf_counter() - t0)
+        assert r.status == 0
+    return statistics.median(ts)

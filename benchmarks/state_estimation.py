@@ -44,7 +44,6 @@ from pathlib import Path
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.optimize import linprog
 
 import setobs as so
 
@@ -52,7 +51,7 @@ _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 _sys.path.insert(0, str(Path(__file__).resolve().parent))
 from tests.oracles import history_lp_highs, noisy_record
 
-from _common import state_bands
+from _common import linprog_unit, state_bands
 
 
 def c2d(Ac, Bc, Ts):
@@ -130,21 +129,6 @@ def cz_filter(A, B, C, rw, rv, X0, Y, U, max_con, max_gen):
         lo.append(box.lo)
         hi.append(box.hi)
     return np.array(lo), np.array(hi), stalled
-
-
-def linprog_unit(repeats=30):
-    rng = np.random.default_rng(0)
-    A = rng.normal(size=(45, 40))
-    x0 = rng.uniform(-0.5, 0.5, 40)
-    b = A @ x0 + rng.uniform(0.0, 0.5, 45)
-    c = rng.normal(size=40)
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        r = linprog(c, A_ub=A, b_ub=b, bounds=[(-1, 1)] * 40, method="highs")
-        ts.append(time.perf_counter() - t0)
-        assert r.status == 0
-    return statistics.median(ts)
 
 
 def ratios(lo, hi, ref, ks):

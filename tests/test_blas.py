@@ -98,3 +98,19 @@ def test_the_limit_can_be_switched_off(monkeypatch, two_threads):
             assert all(n == 1 for n in blas_threads())
         assert all(n == 1 for n in blas_threads())
     assert all(n == 2 for n in blas_threads())
+
+
+def test_libraries_are_read_again_after_an_import(monkeypatch):
+    """A BLAS brought by a later import (python-control's slycot ships its own) is
+    controlled too: the list is read again once ``sys.modules`` has grown."""
+    import sys
+    import types
+
+    first = _blas.blas_libraries()
+    assert _blas.blas_libraries() is first  # cached while nothing is imported
+    monkeypatch.setitem(sys.modules, "setobs_test_fake_extension", types.ModuleType("x"))
+    again = _blas.blas_libraries()
+    assert again is not first
+    assert {lib.filepath for lib in again} >= {lib.filepath for lib in first}
+    assert all(lib.threading_layer != "disabled" for lib in again
+               if hasattr(lib, "threading_layer"))

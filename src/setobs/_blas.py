@@ -26,11 +26,20 @@ from __future__ import annotations
 
 import functools
 import os
+import sys
 import threading
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-__all__ = ["blas_limit_enabled", "single_threaded_blas", "with_single_threaded_blas"]
+__all__ = ["SMALL_BLAS_DIM", "blas_limit_enabled", "single_threaded_blas",
+           "with_single_threaded_blas"]
+
+#: Matrices with every dimension below this run single-threaded in OpenBLAS whatever
+#: its thread count (its thresholds: ``m n k <= 4 * 65536`` for ``gemm``, ``m n <
+#: 9216`` for ``gemv``, ``m n < 10000`` for ``getrf``), so a kernel that handles only
+#: such matrices may skip the limit (an SMFDO step on a small window does: the four
+#: thread-count calls of the limit were a tenth of its time).
+SMALL_BLAS_DIM = 64
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -38,6 +47,7 @@ _lock = threading.Lock()
 _depth = 0
 _saved: list[tuple[Any, int]] = []
 _libs: list[Any] | None = None
+_libs_modules = -1  # len(sys.modules) when _libs was read
 
 
 def blas_limit_enabled() -> bool:
@@ -47,14 +57,22 @@ def blas_limit_enabled() -> bool:
 
 
 def blas_libraries() -> list[Any]:
-    """The BLAS libraries loaded in this process (numpy's and scipy's OpenBLAS, MKL, ...)."""
-    global _libs
-    if _libs is None:
+    """The BLAS libraries loaded in this process (numpy's and scipy's OpenBLAS, MKL, ...).
+
+    Read again after any further Python module was imported: an extension may bring
+    its own BLAS (python-control's slycot ships one). Libraries built without threads
+    (scs ships one) are left out: they have no thread pool to limit.
+    """
+    global _libs, _libs_modules
+    if _libs is None or len(sys.modules) != _libs_modules:
         import scipy.linalg  # noqa: F401  (loads scipy's own BLAS, if it has one)
         from threadpoolctl import ThreadpoolController
 
         ctl = ThreadpoolController()
-        _libs = [lib for lib in ctl.lib_controllers if lib.user_api == "blas"]
+        # (a BLAS built without threads, as scs's OpenBLAS, has no pool to limit)
+        _libs = [lib for lib in ctl.lib_controllers if lib.user_api == "blas"
+                 and getattr(lib, "threading_layer", None) != "disabled"]
+        _libs_modules = len(sys.modules)
     return _libs
 
 

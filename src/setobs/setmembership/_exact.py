@@ -212,10 +212,9 @@ class ExactSteps:
         U = (e.u if e.u is not None else np.zeros(self.sys.p))[None, :] if self.sys.p \
             else np.zeros((1, 0))
         Y_err = None if e.yerr is None else e.yerr[None, :]
-        c, b, h, c_err, b_err = model.assemble(c_S, b_S, h_S, y[None, :], U,
-                                               b_S_err=b_S_err, data_rtol=self.data_rtol,
-                                               Y_err=Y_err)
-        y_scale = float(np.abs(y[m]).max(initial=0.0))
+        c, b, h, c_err, b_err, y_scale = model.assemble(
+            c_S, b_S, h_S, y[None, :], U, b_S_err=b_S_err, data_rtol=self.data_rtol,
+            Y_err=Y_err)
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None

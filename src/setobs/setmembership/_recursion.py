@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 
+from .._lazy import lazy_module
 from .._rounding import UNIT_ROUNDOFF
 from ..exceptions import (
     EmptySetError,
@@ -14,7 +15,7 @@ from ..exceptions import (
     SolverWarning,
 )
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.box import box_center, trusted_box
+from ..geometry.box import trusted_box
 from ..geometry.zonotope import absorb_center_error, hull_with_status, trusted_cz
 from ..tolerances import CENTER_ERROR_ABSORB_RTOL
 from ._setup import Entry
@@ -22,6 +23,9 @@ from ._steps import SMFDOStep
 from ._window import model_rtol
 
 __all__ = ["ON_INCONSISTENT", "SetRecursion"]
+
+# The compiled margins (numba) load on the first step, not on import.
+_kernels = lazy_module("setobs.setmembership._kernels")
 
 #: ``on_inconsistent`` choices.
 ON_INCONSISTENT = ("raise", "skip", "reset")
@@ -166,20 +170,22 @@ class SetRecursion:
         self._box_o_last = box_o
         if mode == "box":
             self._windowing = True
+        # the outward margin, the centre and the half-widths in one compiled call
+        has_o = box_o is not None
+        ho_lo, ho_hi, lo, hi, est, rad, finite = _kernels.reported(
+            box_o.lo if has_o else box.lo, box_o.hi if has_o else box.hi, box.lo, box.hi,
+            self.margin)
         if self.window is not None:  # (exact mode runs the plain recursion: no history)
             self._hist.append(e)  # e.dd is None at k = 0 (never used)
             # The restart box of eq. (24) gets the same relative margin as the
             # reported bounds: the set recursion itself rounds (O(eps)), and a
             # box without margin can make a thin set (states pinned to rounding
             # level) empty at a later step.
-            self._hulls.append(trusted_box(*self._outward(box_o.lo, box_o.hi)))
+            self._hulls.append(trusted_box(ho_lo, ho_hi))
             self._hull_u.append(np.zeros(self.sys.p) if e.u is None else e.u)
             if self._windowing and len(self._hist) > self.window:
                 del self._hist[:len(self._hist) - self.window]
-        lo, hi = self._outward(box.lo, box.hi)
-        est = box_center(lo, hi)
-        rad = float(np.max(0.5 * (hi - lo), initial=0.0))
-        if status == "ok" and not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        if status == "ok" and not finite:
             status = "unbounded"
         x_lo = x_hi = None
         if box_x is not None:
@@ -245,12 +251,9 @@ class SetRecursion:
         return Zd, box_d, box_o, fb_o or fb_d or fb_x, box_x
 
     def _outward(self, lo, hi):
-        a, b = np.abs(lo), np.abs(hi)
-        if np.isinf(a).any() or np.isinf(b).any():
-            a[np.isinf(a)] = 0.0
-            b[np.isinf(b)] = 0.0
-        scale = np.maximum(1.0, np.maximum(a, b))
-        return lo - self.margin * scale, hi + self.margin * scale
+        """``lo``, ``hi`` widened by the relative margin (``margin * max(1, |end|)``)."""
+        return _kernels.outward_margin(np.asarray(lo, dtype=np.float64),
+                                       np.asarray(hi, dtype=np.float64), self.margin)
 
     def _handle_empty(self, k: int, Zp: ConstrainedZonotope, e: Entry, msg: str):
         """``on_inconsistent="reset"``: the posterior of an inflated box of ``Zp``."""

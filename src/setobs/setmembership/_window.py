@@ -35,10 +35,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._rounding import UNIT_ROUNDOFF, gamma
+from .._blas import SMALL_BLAS_DIM
+from .._lazy import lazy_module
+from .._rounding import gamma
 from ..geometry import ConstrainedZonotope
-from ..geometry.fastlp import FixedStructureLP, LPState, hull_from_bounds, hull_objectives
+from ..geometry.fastlp import FixedStructureLP, LPState, hull_objectives
 from ..geometry.zonotope import trusted_cz
+
+# The compiled assembly (numba) loads on the first window, not on import.
+_kernels = lazy_module("setobs.setmembership._kernels")
+_EMPTY = np.zeros(0)
 
 
 def model_rtol(s: int, N: int, p: int, nD: int) -> float:
@@ -200,7 +206,7 @@ class WindowModel:
         self._b_u_a = parts[5] if nz else np.zeros((0, s * p))
         self._b_abs_err = parts[6] if nz else np.zeros(0)
         self.y_pos = np.asarray(y_pos, dtype=np.int64) - self.nS_rows
-        self.y_sel = np.asarray(y_sel, dtype=bool)
+        self._y_idx = np.flatnonzero(np.asarray(y_sel, dtype=bool)).astype(np.int64)
         self.masks = tuple(masks)
         self.n_y = n_y
         self.G = np.hstack([G, np.zeros((N, n_g - n_x))])
@@ -218,6 +224,9 @@ class WindowModel:
         self._absP = None if P is None else np.abs(P)
         self.unbounded_radius = unbounded_radius
         self.lp = FixedStructureLP(self.A, hull_objectives(W), self.free, unbounded_radius)
+        #: every matrix of the step has all dimensions below ``SMALL_BLAS_DIM`` (BLAS
+        #: then runs single-threaded by itself: ``setobs._blas``)
+        self.blas_small = max(self.A.shape[0], self.A.shape[1], W.shape[0]) < SMALL_BLAS_DIM
 
     @property
     def usable(self) -> bool:
@@ -252,55 +261,22 @@ class WindowModel:
         Returns
         -------
         c, b, h, c_err, b_err : ndarray
+        y_scale : float
+            The largest ``|y|`` of the measurements read (what ``b``'s rounding
+            is relative to: :meth:`hull`).
         """
-        u = U.reshape(-1) if self.p else np.zeros(0)
-        yflat = Y.reshape(-1)[self.y_sel]
-        b_tail = self.b_const + self.b_c @ c_S
-        if self.p:
-            b_tail = b_tail + self.b_u @ u
-        rest = b_tail[self.y_pos]  # what y is added to (a copy: fancy indexing)
-        b_tail[self.y_pos] += yflat
-        b = np.concatenate([b_S, b_tail]) if self.nS_rows else b_tail
-        c = self.c_c @ c_S + self.c_const
-        if self.p:
-            c = c + self.c_u @ u
-        h = np.concatenate([h_S, self.h_D])
-        # Error bounds: rounding of the precomputed coefficients and of their
-        # products with the data (gamma on the absolute-value products), the three
-        # additions (3u on the magnitudes of the terms), the data's
-        # representation error, and the errors carried by the start set.
-        acS = np.abs(c_S)
-        ya = np.abs(yflat)
-        eb = self._b_const_a + self._b_c_a @ acS
-        ec = self._c_const_a + self._c_c_a @ acS
-        if self.p:
-            au = np.abs(u)
-            eb = eb + self._b_u_a @ au
-            ec = ec + self._c_u_a @ au
-        g = self._gK + 3.0 * UNIT_ROUNDOFF
-        eb = g * eb
-        ec = g * ec
-        # On every measurement row: the data's representation error, the rounding
-        # of adding y (none where the rest is zero, e.g. from R^n), and the model
-        # allowance gK |y|: the rounding of the generator products C_o A_o^j G_S
-        # (relative gK) acting on the factors, whose image C_o G_j xi has the
-        # size of y when the prediction does not cancel.
-        eb[self.y_pos] += (data_rtol + self._gK) * ya + np.where(
-            rest != 0.0, UNIT_ROUNDOFF * (np.abs(rest) + ya), 0.0)
-        if Y_err is not None:
-            eb[self.y_pos] += np.asarray(Y_err).reshape(-1)[self.y_sel]
-        eb = eb + self._b_abs_err
-        ec = ec + self._c_abs_err
-        if self.p and data_rtol:
-            eb = eb + data_rtol * (self._b_u_a @ au)
-            ec = ec + data_rtol * (self._c_u_a @ au)
-        if c_S_err is not None and c_S_err.any():
-            eb = eb + self._b_c_a @ c_S_err
-            ec = ec + self._c_c_a @ c_S_err
-        if self.nS_rows:
-            eb = np.concatenate([np.zeros(self.nS_rows) if b_S_err is None else b_S_err, eb])
-        g = 1.0 + self._gK  # rounding of the bounds themselves
-        return c, b, h, ec * g, eb * g
+        f64 = np.float64
+        empty = _EMPTY
+        return _kernels.assemble(
+            np.ascontiguousarray(c_S, dtype=f64), np.ascontiguousarray(b_S, dtype=f64),
+            np.ascontiguousarray(h_S, dtype=f64), np.ascontiguousarray(Y, dtype=f64).reshape(-1),
+            self._y_idx, np.ascontiguousarray(U, dtype=f64).reshape(-1) if self.p else empty,
+            empty if b_S_err is None else np.ascontiguousarray(b_S_err, dtype=f64),
+            empty if c_S_err is None else np.ascontiguousarray(c_S_err, dtype=f64),
+            empty if Y_err is None else np.ascontiguousarray(Y_err, dtype=f64).reshape(-1),
+            self.b_const, self.b_c, self.b_u, self._b_const_a, self._b_c_a, self._b_u_a,
+            self._b_abs_err, self.y_pos, self.c_const, self.c_c, self.c_u, self._c_const_a,
+            self._c_c_a, self._c_u_a, self._c_abs_err, self.h_D, self._gK, float(data_rtol))
 
     def hull(self, c, b, h, y_scale: float, state: LPState, b_err, c_err):
         """Certified hull bounds of ``Z`` (and of ``P Z``), or ``None`` if any LP failed.
@@ -321,7 +297,8 @@ class WindowModel:
             k = self.P.shape[1]
             pe = (self._absP @ (c_err + gamma(k + 1) * np.abs(c))) * (1.0 + gamma(k + 2))
             cc, cc_err = np.concatenate([c, Pc]), np.concatenate([c_err, pe])
-        return hull_from_bounds(bounds, cc, cc_err)
+        lo, hi, crossed_not = _kernels.hull_bounds(bounds, cc, cc_err)
+        return (lo, hi) if crossed_not else None
 
     def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""

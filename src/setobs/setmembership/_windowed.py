@@ -6,12 +6,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .._lazy import lazy_module
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.zonotope import trusted_cz
 from ..tolerances import UNBOUNDED_RADIUS
 from ._restart import RestartPolytope
 from ._setup import MODEL_CACHE, Entry
 from ._window import WindowModel
+
+# The compiled restart data (numba) loads on the first window, not on import.
+_kernels = lazy_module("setobs.setmembership._kernels")
+_EMPTY = np.zeros(0)
 
 __all__ = ["AUTO_GAIN", "AUTO_PROBE", "MAX_MASK_STRUCTURES", "WindowedSteps"]
 
@@ -34,11 +39,10 @@ class WindowedSteps:
         """How step ``k`` is computed: ``"box"`` (eq. (24), restart from IH(Z_(k-delta))),
         ``"init"`` (the whole history from Z_0^-), or ``"recursive"`` (one more step)."""
         win = self.window
-        if win is not None and len(self._hulls) >= win:
-            lo, _ = self._restart_bounds(self._hulls[-win])
-            if (self._windowing or not self._from_initial or k > self._grow_limit
-                    or np.isfinite(lo).all()):
-                return "box"
+        if win is not None and len(self._hulls) >= win and (
+                self._windowing or not self._from_initial or k > self._grow_limit
+                or np.isfinite(self._restart_bounds(self._hulls[-win])[0]).all()):
+            return "box"
         return "init" if self._from_initial else "recursive"
 
     # ------------------------------------------------------------------ fast path
@@ -105,8 +109,7 @@ class WindowedSteps:
         inc, B_step, V = self._step_set, self._B_step, self._V_fixed
         if mode == "box":
             win = self.window
-            lo, hi, F, rlo, rhi = self._restart_rows(poly)
-            c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
+            c_S, b_S, h_S, F = self._restart_start(poly)
             free = np.isinf(h_S)
             c_S_err = b_S_err = None
             key = ("box", F.shape[0], free.tobytes(), mkey)
@@ -148,10 +151,9 @@ class WindowedSteps:
         if self._Du is not None:
             Y_err = np.array([np.zeros(self.sys.l) if e.yerr is None else e.yerr
                               for e in hist])
-        c, b, h, c_err, b_err = model.assemble(c_S, b_S, h_S, Y, U, c_S_err=c_S_err,
-                                               b_S_err=b_S_err, data_rtol=self.data_rtol,
-                                               Y_err=Y_err)
-        y_scale = float(np.abs(Y[measured]).max(initial=0.0))
+        c, b, h, c_err, b_err, y_scale = model.assemble(
+            c_S, b_S, h_S, Y, U, c_S_err=c_S_err, b_S_err=b_S_err, data_rtol=self.data_rtol,
+            Y_err=Y_err)
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
@@ -180,12 +182,21 @@ class WindowedSteps:
         rlo, rhi = R.rows(Box(lo, hi), boxes, inputs)
         return lo, hi, R.F_all, rlo, rhi
 
+    def _restart_start(self, poly: bool):
+        """The restart set's data ``c_S``, ``b_S``, ``h_S`` (generators ``[I 0]``,
+        constraints ``[F -I]``: :meth:`RestartPolytope.start_data`) and its rows ``F``;
+        the box restart (eq. (24), no rows) in one compiled call."""
+        R = self._restart_poly
+        if R is None or not R.lags or not poly:
+            box_t = self._hulls[-self.window]
+            c_S, h_S = _kernels.box_start(box_t.lo, box_t.hi)
+            return c_S, _EMPTY, h_S, np.zeros((0, c_S.size))
+        lo, hi, F, rlo, rhi = self._restart_rows(poly)
+        return (*RestartPolytope.start_data(lo, hi, F, rlo, rhi), F)
+
     def _restart_cz(self) -> ConstrainedZonotope:
         """The restart set as a constrained zonotope (the reference path)."""
-        lo, hi, F, rlo, rhi = self._restart_rows(self._polytope_now())
-        if not F.shape[0]:
-            return ConstrainedZonotope.from_box(lo, hi)
-        c_S, b_S, h_S = RestartPolytope.start_data(lo, hi, F, rlo, rhi)
+        c_S, b_S, h_S, F = self._restart_start(self._polytope_now())
         G_S, A_S = RestartPolytope.structure(F)
         return trusted_cz(G_S, c_S, A_S, b_S, h_S)
 

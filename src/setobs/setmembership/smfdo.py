@@ -9,7 +9,7 @@ from collections import deque
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._blas import with_single_threaded_blas
+from .._blas import single_threaded_blas, with_single_threaded_blas
 from .._lazy import progress_bar
 from .._validation import as_matrix, check_real_scalar
 from ..exceptions import (
@@ -381,6 +381,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self._box_o_last: Box | None = None  # certified hull of the last posterior
         self._warned_inconsistent = False
         self._in_run = False
+        self._blas_small = False  # the last step's window is small (see update)
 
     @property
     def _Z(self) -> ConstrainedZonotope | None:
@@ -459,7 +460,6 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         singular ``A_o``; else ``min(restart_depth - 1, 120 // N_o)``)."""
         return self._restart_lags
 
-    @with_single_threaded_blas
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
                u: ArrayLike | None = None) -> SMFDOStep:
         """Process the measurement ``y_k`` (and the input ``u_(k-1)`` applied before it).
@@ -483,6 +483,18 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             If no state and disturbance history explains the data
             (``on_inconsistent="raise"``).
         """
+        if self._blas_small:
+            # the last step was a window small enough for BLAS to run single-threaded
+            # by itself (setobs._blas.SMALL_BLAS_DIM): the limit's four thread-count
+            # calls (a tenth of such a step) are skipped; only speed depends on it
+            return self._update(y, u_prev, u)
+        with single_threaded_blas():
+            return self._update(y, u_prev, u)
+
+    def _update(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
+                ) -> SMFDOStep:
+        """:meth:`update`'s step (the caller sets the BLAS threads)."""
+        self._blas_small = False
         e, self._u_pending = self._entry(y, u_prev, u)
         k = self.k + 1
         mode = "init" if k == 0 else self._start_mode(k)
@@ -501,6 +513,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         if fast is not None:
             self.stats["fast"] += 1
             Z_src, box, box_o, box_x, _ = fast
+            self._blas_small = Z_src[0].blas_small
             Zd = None
             if self.keep_sets:
                 model, c, b, h, c_err, b_err = Z_src
