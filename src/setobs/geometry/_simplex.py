@@ -703,6 +703,48 @@ def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb, b_err):
 
 
 @njit(cache=True)
+def prepare(b, h, b_err, bidx, S_B, R, Q0, absQ0, absAB, Q2, b_scale, rtol):
+    """The reduced LP's data for one set: ``hB = h[bidx] / S_B`` and ``bred = Q2^T (R b)``,
+    and whether ``b`` is consistent with the redundant rows: ``|Q0^T (R b)| <= rtol *
+    scale + |Q0|^T (R b_err)``, ``scale`` the largest of ``|R b|``, ``b_scale max R``
+    and ``|A_B| hB`` (``b_err`` empty: exact). Equilibration by powers of two is exact.
+    """
+    m = b.size
+    hB = np.empty(bidx.size)
+    for j in range(bidx.size):
+        hB[j] = h[bidx[j]] / S_B[j]
+    bs = R * b
+    ok = True
+    if Q0.shape[1]:
+        scale = 1e-300
+        rmax = 0.0
+        for i in range(m):
+            scale = max(scale, abs(bs[i]))
+            rmax = max(rmax, R[i])
+        scale = max(scale, b_scale * rmax)
+        for i in range(m):
+            s = 0.0
+            for j in range(hB.size):
+                s += absAB[i, j] * hB[j]
+            scale = max(scale, s)
+        for k in range(Q0.shape[1]):
+            v, sl = 0.0, rtol * scale
+            for i in range(m):
+                v += Q0[i, k] * bs[i]
+                if b_err.size:
+                    sl += absQ0[i, k] * (R[i] * b_err[i])
+            if abs(v) > sl:
+                ok = False
+    bred = np.zeros(Q2.shape[1])
+    for i in range(m):
+        bi = bs[i]
+        if bi != 0.0:
+            for j in range(Q2.shape[1]):
+                bred[j] += Q2[i, j] * bi
+    return hB, bred, ok
+
+
+@njit(cache=True)
 def solve_batch(structure, data, state, params, out):
     """All LPs ``min Wfull[i]^T xi`` of one set: reduced simplex, then certification.
 

@@ -62,6 +62,8 @@ _simplex = lazy_module("setobs.geometry._simplex")
 
 __all__ = ["FixedStructureLP", "LPState", "hull_from_bounds", "hull_objectives"]
 
+_EMPTY = np.zeros(0)
+
 
 def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
     top = float(norms.max(initial=0.0))
@@ -346,20 +348,15 @@ class FixedStructureLP:
         bounds, codes = st.bounds, st.codes
         if not self.usable:
             return bounds, np.zeros(self.n_lp, dtype=bool)
-        hB = np.ascontiguousarray(h[self.bidx] / self.S_B)
-        berr = np.zeros(self.m) if b_err is None else np.ascontiguousarray(b_err,
-                                                                           dtype=np.float64)
-        bs = self.R * b  # exact (powers of two)
-        if self.Q0.shape[1]:
-            # data consistent with the redundant rows (up to rounding and b_err)?
-            scale = max(float(np.abs(bs).max(initial=0.0)),
-                        b_scale * float(self.R.max(initial=0.0)),
-                        float((self._absAB @ hB).max(initial=0.0)), 1e-300)
-            slack = FASTLP_CONSISTENCY_RTOL * scale + (self._absQ0.T @ (self.R * berr)
-                                                 if b_err is not None else 0.0)
-            if (np.abs(self.Q0.T @ bs) > slack).any():
-                return bounds, np.zeros(self.n_lp, dtype=bool)
-        bred = self.Q2.T @ bs
+        berr = _EMPTY if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
+        # (data consistent with the redundant rows, up to rounding and b_err?)
+        hB, bred, consistent = _simplex.prepare(
+            b, h, berr, self.bidx, self.S_B, self.R, self.Q0, self._absQ0, self._absAB,
+            self.Q2, float(b_scale), FASTLP_CONSISTENCY_RTOL)
+        if not consistent:
+            return bounds, np.zeros(self.n_lp, dtype=bool)
+        if b_err is None:
+            berr = np.zeros(self.m)
         _simplex.solve_batch(
             (self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
              self.yU, self.Q2, self.R, self.dirstat),
