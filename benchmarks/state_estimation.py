@@ -179,7 +179,8 @@ def study(name, A, B, C, rw, rv, N, windows, exact, peer, seed=0,
                      "per_linprog": dt / unit, "linprog_ms": 1e3 * unit,
                      "width_ratio_mean": mean,
                      "width_ratio_worst": worst, "width_ratio_min": best,
-                     "truth_inside": inside, "stats": dict(obs.stats)})
+                     "truth_inside": inside, "stats": dict(obs.stats),
+                     **iteration_fields(obs, N, dt)})
         print(f"{name:9s} w={w!s:4s} {restart:8s} {1e3 * dt:8.2f} ms/step "
               f"({dt / unit:6.2f} LP)  ratio {mean:.3f} / {worst:.3f} (min {best:.4f})"
               f"  inside {inside}", flush=True)
@@ -230,8 +231,43 @@ def r30_timing(steps: int) -> list[dict]:
                      "truth_inside": inside,
                      "width_vs_window10_mean": float(ratio.mean()),
                      "width_vs_window10_worst": float(ratio.max()),
-                     "stats": dict(obs.stats)})
+                     "stats": dict(obs.stats),
+                     **iteration_fields(obs, steps, float(np.mean(times)))})
     return rows
+
+
+def iteration_fields(obs, steps: int, dt: float) -> dict:
+    """The simplex's work per step (primal and dual iterations: pivots and bound flips)
+    and the step's time per iteration (an upper bound on one iteration's cost)."""
+    p, d = obs.simplex_iterations
+    it = (p + d) / steps
+    return {"simplex_iterations_per_step": it, "primal_share": p / max(p + d, 1),
+            "step_us_per_iteration": 1e6 * dt / it if it else None}
+
+
+def target(what: str, row: dict | None, limit: float, key: str = "per_linprog",
+           at_least: bool = False) -> dict:
+    """One of issue 33's targets against its row: the measured value, whether it is met,
+    and (speed) the iterations per step the limit allows at the measured cost of one."""
+    if row is None:
+        return {"target": what, "limit": limit, "measured": None, "met": None}
+    val = row[key]
+    out = {"target": what, "limit": limit, "measured": val,
+           "met": bool(val >= limit if at_least else val <= limit)}
+    if key == "per_linprog" and row.get("step_us_per_iteration"):
+        # at the measured time per iteration, the limit's time buys this many
+        out["iterations_per_step"] = row["simplex_iterations_per_step"]
+        out["iterations_the_limit_allows"] = (limit * row["linprog_ms"] * 1e3
+                                              / row["step_us_per_iteration"])
+    return out
+
+
+def find(rows, system, window, restart, estimator="SMFDO"):
+    for r in rows:
+        if (r["system"], r["window"], r["restart"], r["estimator"]) == (
+                system, window, restart, estimator):
+            return r
+    return None
 
 
 def main() -> None:
@@ -251,7 +287,11 @@ def main() -> None:
     unit = linprog_unit()
     print(f"one 45 x 40 linprog (HiGHS): {1e3 * unit:.3f} ms", flush=True)
     if args.r30:
-        out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30_timing(args.r30),
+        r30 = r30_timing(args.r30)
+        out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30,
+               "targets": [target("random 30-state plant, 21 outputs, window 10 (issue 33: "
+                                  "at most 10 linprog)", find(r30, "random_30_21", 10, "box"),
+                                  10.0)],
                "machine": platform.platform(), "python": platform.python_version()}
         path = Path(args.out).with_name("state_estimation_r30.json")
         path.write_text(json.dumps(out, indent=1))
@@ -282,7 +322,24 @@ def main() -> None:
     if len(pts) >= 2:
         ln = np.log(np.array(pts, dtype=float))
         growth = float(np.polyfit(ln[:, 0], ln[:, 1], 1)[0])
-    out = {"linprog_45x40_ms": 1e3 * unit, "steps": N, "rows": rows,
+    targets = [target("random 6-state plant, 4 outputs, window 10, noise, state bounds, "
+                      "default restart (issue 33: at most 0.7 linprog)",
+                      find(rows, "random_6", 10, "auto"), 0.7)]
+    for name in ("two_mass", "vehicle", "random_6", "tanks_6", "tanks_15", "tanks_30"):
+        r10 = find(rows, name, 10, "auto")
+        if r10 is not None and np.isfinite(r10["width_ratio_mean"]):
+            targets.append(target(f"{name}, window 10, mean width / exact at most 1.05",
+                                  r10, 1.05, "width_ratio_mean"))
+            targets.append(target(f"{name}, window 10, worst width / exact at most 1.25",
+                                  r10, 1.25, "width_ratio_worst"))
+            targets.append(target(f"{name}, window 10, never narrower than the exact set "
+                                  "(smallest ratio at least 1 - 1e-9)", r10, 1.0 - 1e-9,
+                                  "width_ratio_min", at_least=True))
+        r3 = find(rows, name, 3, "polytope")
+        if r3 is not None and np.isfinite(r3["width_ratio_mean"]):
+            targets.append(target(f"{name}, window 3 (polytope restart), mean width / exact "
+                                  "at most 1.5", r3, 1.5, "width_ratio_mean"))
+    out = {"linprog_45x40_ms": 1e3 * unit, "steps": N, "rows": rows, "targets": targets,
            "history_lp_s_per_step_checked": lp_times,
            "tanks_window10_growth_exponent": growth,
            "machine": platform.platform(), "python": platform.python_version()}

@@ -202,11 +202,18 @@ def test_noisy_window_lps_stay_on_the_fast_path():
               state_bounds=True, initial_state_set=so.Box(-2 * np.ones(n), 2 * np.ones(n)))
     obs = so.SMFDO(sys, **kw)
     rf = obs.run(Y, U)
-    rr = so.SMFDO(sys, fast=False, **kw).run(Y, U)
+    ref = so.SMFDO(sys, fast=False, **kw)
+    rr = ref.run(Y, U)
     assert obs.stats["reference"] == 0
     assert np.all((X >= rf.state_lo) & (X <= rf.state_hi))
     _close(rf.state_lo, rr.state_lo)
     _close(rf.state_hi, rr.state_hi)
+    # the simplex's work is counted: none on the reference path; on the fast path both
+    # simplices ran (the primal for the hull's further bounds of each data set, the
+    # dual at least on the first)
+    primal, dual = obs.simplex_iterations
+    assert primal > 0 and dual > 0
+    assert ref.simplex_iterations == (0, 0)
 
 
 def _with_outlier():

@@ -753,8 +753,9 @@ def solve_batch(structure, data, state, params, out):
     * ``structure = (A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``:
       fixed for a set structure (:class:`~setobs.geometry.fastlp.FixedStructureLP`);
     * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
-    * ``state = (bases, upper, binv, npiv, est)``: the warm-start state, updated in
-      place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used);
+    * ``state = (bases, upper, binv, npiv, est, iters)``: the warm-start state, updated
+      in place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used;
+      ``iters``: the primal and dual simplex iterations so far, pivots and bound flips);
     * ``params = (maxit, radius, tol_unb, gap_rtol)``: iteration limit and tolerances;
     * ``out = (bounds, objs, codes, ys)``: results, written in place.
 
@@ -768,7 +769,7 @@ def solve_batch(structure, data, state, params, out):
     """
     A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
     b, h, b_err, bred, hB = data
-    bases, upper, binv, npiv, est = state
+    bases, upper, binv, npiv, est, iters = state
     maxit, radius, tol_unb, gap_rtol = params
     nit = np.zeros(1, np.int64)
     bounds, objs, codes, ys = out
@@ -841,6 +842,7 @@ def solve_batch(structure, data, state, params, out):
                                   binv[i], npiv[i:i + 1], x, z, maxit, nit)
             est[i, 1] = nit[0] if code == OPTIMAL else 1e9
             est[i, 0] *= EST_DECAY
+            iters[0] += nit[0]
             if code != OPTIMAL:  # (from the last data set's basis of this LP instead)
                 bases[i, :] = keep_b
                 upper[i, :] = keep_u
@@ -856,6 +858,7 @@ def solve_batch(structure, data, state, params, out):
             if not use_primal:
                 est[i, 0] = DUAL_PIVOT_COST * nit[0] if code == OPTIMAL else 1e9
                 est[i, 1] *= EST_DECAY
+            iters[1] += nit[0]
         if code != OPTIMAL:
             codes[i] = code
             continue

@@ -113,7 +113,8 @@ class LPState:
 
     Holds, per objective, the simplex basis, the nonbasic bound flags, the
     explicit basis inverse, the pivot counter and the pivot counts of its two
-    warm starts, plus the output buffers.
+    warm starts, the simplex iterations so far (``iters``: primal, dual), plus the
+    output buffers.
     Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
     structure it uses, so its results depend only on its own data.
 
@@ -123,7 +124,8 @@ class LPState:
         The structure the state belongs to (fixes the sizes and the initial basis).
     """
 
-    __slots__ = ("bases", "binv", "bounds", "codes", "est", "npiv", "objs", "upper", "ys")
+    __slots__ = ("bases", "binv", "bounds", "codes", "est", "iters", "npiv", "objs", "upper",
+                 "ys")
 
     def __init__(self, lp: FixedStructureLP) -> None:
         n_lp = lp.n_lp
@@ -134,6 +136,8 @@ class LPState:
         # pivots of each LP's two warm starts (own last basis, dual simplex; the
         # previous LP's basis, primal simplex) when last used
         self.est = np.zeros((n_lp, 2))
+        # primal and dual simplex iterations (pivots and bound flips) so far
+        self.iters = np.zeros(2, dtype=np.int64)
         self.bounds = np.empty(n_lp)
         self.objs = np.empty(n_lp)
         self.codes = np.empty(n_lp, dtype=np.int64)
@@ -361,7 +365,7 @@ class FixedStructureLP:
             (self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
              self.yU, self.Q2, self.R, self.dirstat),
             (b, h, berr, bred, hB),
-            (st.bases, st.upper, st.binv, st.npiv, st.est),
+            (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
             (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
             (bounds, st.objs, codes, st.ys))
         return bounds, codes == _simplex.OPTIMAL

@@ -206,7 +206,7 @@ class ExactSteps:
         state = self._states.get(key)
         if state is None:
             if len(self._states) > 64:
-                self._states.clear()
+                self._retire_states()
             state = self._states[key] = model.new_state()
         c_S, b_S, h_S, b_S_err = st.start()
         U = (e.u if e.u is not None else np.zeros(self.sys.p))[None, :] if self.sys.p \

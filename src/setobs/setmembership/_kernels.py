@@ -193,3 +193,87 @@ def box_start(lo, hi):
         c[i] = ci
         r[i] = np.nextafter(ri, np.inf) if ri > 0 else 0.0
     return c, r
+
+
+@njit(cache=True)
+def _center_radius(lo, hi):
+    """:func:`box_start` of one coordinate: ``(c, r)`` (``(0, inf)`` if unbounded)."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return 0.0, np.inf
+    c = 0.5 * lo + 0.5 * hi
+    r = max(hi - c, c - lo)
+    return c, (np.nextafter(r, np.inf) if r > 0 else 0.0)
+
+
+@njit(cache=True)
+def restart_rows(lo_b, hi_b, avail, lo_t, hi_t, F, row_lag, G, G_a, P, K, K_a, K_e, S, S_a,
+                 unbounded, Hu, Hu_a, U, data_rtol, g, g_t):
+    """Ranges of the restart polytope's rows (the arithmetic of
+    :meth:`setobs.setmembership._restart.RestartPolytope.rows`, which documents it):
+    row ``r`` from the earlier hull ``lo_b[row_lag[r]]``, ``hi_b[...]`` (``avail``:
+    known), else, or when that is unbounded, over the hull ``[lo_t, hi_t]`` itself
+    (``g_t``: the rounding factor ``gamma(N + 3)`` of that product)."""
+    L, N = lo_b.shape
+    R = F.shape[0]
+    c0 = np.zeros((L, N))
+    r0 = np.zeros((L, N))
+    fin = np.zeros((L, N), np.bool_)
+    for j in range(L):
+        for i in range(N):
+            c, r = _center_radius(lo_b[j, i], hi_b[j, i])
+            if np.isfinite(r):
+                fin[j, i] = True
+                c0[j, i], r0[j, i] = c, r
+    aU = np.abs(U)
+    lo, hi = np.empty(R), np.empty(R)
+    bad = np.zeros(R, np.bool_)
+    for k in range(R):
+        j = row_lag[k]
+        b = unbounded[k] or not avail[j]
+        mid, rad, mag = K[k], S[k], K_a[k] + S_a[k]
+        for i in range(N):
+            if P[k, i] != 0.0 and not fin[j, i]:
+                b = True
+            mid += G[k, i] * c0[j, i]
+            rad += G_a[k, i] * r0[j, i]
+            mag += (P[k, i] + G_a[k, i]) * (abs(c0[j, i]) + r0[j, i])
+        err = K_e[k]
+        if U.size:
+            tu = 0.0
+            for i in range(U.size):
+                mid += Hu[k, i] * U[i]
+                tu += Hu_a[k, i] * aU[i]
+            mag += 2.0 * tu
+            err += data_rtol * tu
+        err += g * mag
+        # the range's own assembly (three roundings of terms up to its magnitude)
+        err += 4.0 * _U * (abs(mid) + rad + err)
+        lo[k], hi[k] = mid - (rad + err), mid + (rad + err)
+        if not (np.isfinite(lo[k]) and np.isfinite(hi[k])):
+            b = True
+        bad[k] = b
+    if bad.any():
+        # the rows' ranges over the hull at t itself: F c -+ (|F| r + rounding)
+        ct, rt = np.zeros(N), np.zeros(N)
+        ft = np.zeros(N, np.bool_)
+        for i in range(N):
+            c, r = _center_radius(lo_t[i], hi_t[i])
+            if np.isfinite(r):
+                ft[i] = True
+                ct[i], rt[i] = c, r
+        for k in range(R):
+            if not bad[k]:
+                continue
+            m0, r1, s = 0.0, 0.0, 0.0
+            unb = False
+            for i in range(N):
+                a = abs(F[k, i])
+                m0 += F[k, i] * ct[i]
+                r1 += a * rt[i]
+                s += a * abs(ct[i])
+                if a > 0 and not ft[i]:
+                    unb = True
+            r1 = r1 + g_t * (s + r1)
+            lo[k] = -np.inf if unb else m0 - r1
+            hi[k] = np.inf if unb else m0 + r1
+    return lo, hi

@@ -47,11 +47,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._rounding import UNIT_ROUNDOFF, gamma
+from .._lazy import lazy_module
+from .._rounding import gamma
 from ..geometry import ConstrainedZonotope
 from ..geometry.box import box_center_radius
 
 __all__ = ["DEFAULT_RESTART_DEPTH", "RestartPolytope"]
+
+# The compiled rows' ranges (numba) load on the first polytope restart, not on import.
+_kernels = lazy_module("setobs.setmembership._kernels")
+_EMPTY = np.zeros(0)
 
 #: Number of hulls (``m``: the one at ``t`` and ``m - 1`` earlier ones) a window
 #: restart combines by default. Every lag ``1 .. m - 1`` is used: on a lightly damped
@@ -207,43 +212,16 @@ class RestartPolytope:
         avail = np.arange(1, L + 1) <= len(boxes)
         lo_b = np.array([boxes[j].lo if avail[j] else box_t.lo for j in range(L)])
         hi_b = np.array([boxes[j].hi if avail[j] else box_t.hi for j in range(L)])
-        c, r = box_center_radius(lo_b, hi_b)  # (elementwise)
-        fin = np.isfinite(r)
-        c0, r0 = np.where(fin, c, 0.0), np.where(fin, r, 0.0)
-        xmax = np.abs(c0) + r0
-        lag = self.row_lag  # each row's own earlier hull
-        # rows reaching an unbounded hull coordinate or increment factor
-        bad = (self.P * ~fin[lag]).any(axis=1) | self.unbounded | ~avail[lag]
-        mid = np.einsum("rn,rn->r", self.G, c0[lag]) + self.K
-        rad = np.einsum("rn,rn->r", self.G_a, r0[lag]) + self.S
-        mag = np.einsum("rn,rn->r", self.P + self.G_a, xmax[lag]) + self.K_a + self.S_a
-        err = self.K_e.copy()
+        U = _EMPTY
         if self.p:
             n_u = min(len(inputs), L)
             U = np.zeros(L * self.p)
             U[:n_u * self.p] = np.asarray(inputs[:n_u], dtype=float).reshape(-1)
-            mid = mid + self.Hu @ U
-            tu = self.Hu_a @ np.abs(U)
-            mag = mag + 2.0 * tu
-            err = err + self.data_rtol * tu
-        err = err + self._g * mag
-        # the range's own assembly (three roundings of terms up to its magnitude)
-        err = err + 4.0 * UNIT_ROUNDOFF * (np.abs(mid) + rad + err)
-        lo, hi = mid - (rad + err), mid + (rad + err)
-        bad |= ~(np.isfinite(lo) & np.isfinite(hi))
-        if bad.any():
-            # the rows' ranges over IH(Z_t) itself: F c -+ (|F| r + rounding)
-            ct, rt = box_center_radius(box_t.lo, box_t.hi)
-            ft = np.isfinite(rt)
-            Fb = self.F_all[bad]
-            ct0, rt0 = np.where(ft, ct, 0.0), np.where(ft, rt, 0.0)
-            m0 = Fb @ ct0
-            r1 = np.abs(Fb) @ rt0
-            r1 = r1 + gamma(N + 3) * (np.abs(Fb) @ np.abs(ct0) + r1)
-            unb = (np.abs(Fb)[:, ~ft] > 0).any(axis=1)
-            lo[bad] = np.where(unb, -np.inf, m0 - r1)
-            hi[bad] = np.where(unb, np.inf, m0 + r1)
-        return lo, hi
+        return _kernels.restart_rows(
+            lo_b, hi_b, avail, np.ascontiguousarray(box_t.lo), np.ascontiguousarray(box_t.hi),
+            self.F_all, self.row_lag, self.G, self.G_a, self.P, self.K, self.K_a, self.K_e,
+            self.S, self.S_a, self.unbounded, self.Hu, self.Hu_a, U, self.data_rtol, self._g,
+            gamma(N + 3))
 
     @staticmethod
     def start_data(box_lo, box_hi, F, lo, hi):

@@ -367,6 +367,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self._windowing = False  # the window has restarted from a hull at least once
         self._u_pending: NDArray[np.float64] | None = None
         self._states: dict[tuple, object] = {}  # LP warm-start states, one per structure
+        self._retired_iterations = np.zeros(2, dtype=np.int64)  # (of dropped states)
         self._mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
         self._depth = 0  # recursion steps since the start set of the current posterior
         self.first_inconsistent: int | None = None
@@ -459,6 +460,22 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         from the box, eq. (24): ``restart="box"``, exact mode, time-varying sets or a
         singular ``A_o``; else ``min(restart_depth - 1, 120 // N_o)``)."""
         return self._restart_lags
+
+    @property
+    def simplex_iterations(self) -> tuple[int, int]:
+        """Iterations of the compiled simplex so far, ``(primal, dual)`` (pivots and
+        bound flips over every LP of the fast paths): the work behind the steps' time,
+        for benchmarks and for choosing a window."""
+        tot = self._retired_iterations.copy()
+        for st in self._states.values():
+            tot += st.iters
+        return int(tot[0]), int(tot[1])
+
+    def _retire_states(self) -> None:
+        """Drop the LP warm-start states (keeping their iteration counts)."""
+        for st in self._states.values():
+            self._retired_iterations += st.iters
+        self._states.clear()
 
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
                u: ArrayLike | None = None) -> SMFDOStep:
