@@ -95,6 +95,23 @@ def test_the_polytope_restart_meets_the_width_targets(two_mass_runs):
     assert r3.mean() <= 1.5 and b3.mean() > 10.0
 
 
+def test_the_first_restart_waits_for_the_polytopes_depth(two_mass_runs):
+    """Until ``delta + restart_lags`` steps (10 + 29) the polytope has too few earlier
+    hulls to carry back, and the steps are the whole history from the initial set:
+    the history LP's bands (1e-7 of the width), not a shallow polytope's. The box
+    restart (eq. (24)) restarts as soon as the hull is bounded, and is wider there."""
+    _, runs, lp, ks = two_mass_runs
+    r, b = runs[10, "polytope"][0], runs[10, "box"][0]
+    early = [k for k in ks if k < 10 + 29]
+    assert early == [25, 30, 35]
+    for k in early:
+        lo, hi = lp[k]
+        tol = 1e-7 * (hi - lo).max()
+        assert np.all(np.abs(r.state_lo[k] - lo) <= tol) and np.all(
+            np.abs(r.state_hi[k] - hi) <= tol)
+        assert np.max((b.state_hi[k] - b.state_lo[k]) / (hi - lo)) > 1.5
+
+
 def test_the_polytope_restart_is_inside_the_box_restart_at_every_step(two_mass_runs):
     """The restart set is the box cut by valid rows, and every earlier hull is inside
     the box restart's (by induction): so is every step's band (up to the rounding
@@ -208,7 +225,10 @@ def test_auto_keeps_the_box_where_the_shape_does_not_matter():
                    measurement_noise=RV, state_bounds=True,
                    initial_state_set=so.Box(-2 * np.ones(4), 2 * np.ones(4)))
     obs.run(Y2)
-    assert obs.stats["polytope_restarts"] == 60 - 10
+    # (the first restart waits until the polytope can carry back its full depth: the
+    # steps before run the whole history from the initial set, the exact set)
+    assert obs.restart_lags == 29
+    assert obs.stats["polytope_restarts"] == 60 - 10 - 29
 
 
 def test_a_singular_dynamics_restarts_from_the_box():

@@ -15,6 +15,7 @@ from setobs.setmembership import (
     chebyshev_center,
     interval_center,
 )
+from setobs.tolerances import FASTLP_GAP_RTOL
 
 
 def simulate(sys, N, rng, x0, d0, step=1.0, U=None, signs=False):
@@ -316,8 +317,8 @@ def test_increment_set_validation():
 def test_coordinate_shortcut_equals_direct_hull_of_PZ():
     """When P selects coordinates, the bounds come from IH(Z_k): the same LPs as IH(P Z_k).
 
-    Both are certified bounds of the same LPs, reached by different warm-start
-    sequences, so they agree to the certification gap (not bit for bit)."""
+    Both are certified bounds of the same LPs, reached by different solvers and
+    warm-start sequences, so they agree to the certification gap (not bit for bit)."""
     rng = np.random.default_rng(13)
     sys = so.examples.chang2006()
     Y, _ = simulate(sys, 30, rng, x0=[0.1, 0.2, 0.3], d0=[0.0, 1.0])
@@ -329,8 +330,12 @@ def test_coordinate_shortcut_equals_direct_hull_of_PZ():
         # the documented outward margin: margin * max(1, |lo|, |hi|) per coordinate
         scale = np.maximum(1.0, np.maximum(np.abs(direct.lo), np.abs(direct.hi)))
         lo, hi = direct.lo - obs.margin * scale, direct.hi + obs.margin * scale
-        np.testing.assert_allclose(st.lo, lo, rtol=1e-10, atol=1e-10)
-        np.testing.assert_allclose(st.hi, hi, rtol=1e-10, atol=1e-10)
+        # (each path accepts a certified bound within FASTLP_GAP_RTOL (1 + |objective|)
+        # of its optimum: on the whole-history sets of the first steps the two
+        # differed by 2.4e-10)
+        tol = 2.0 * FASTLP_GAP_RTOL
+        np.testing.assert_allclose(st.lo, lo, rtol=tol, atol=tol)
+        np.testing.assert_allclose(st.hi, hi, rtol=tol, atol=tol)
 
 
 # ------------------------------------------------------------------ eq. (24), independently
