@@ -96,14 +96,15 @@ def test_the_polytope_restart_meets_the_width_targets(two_mass_runs):
 
 
 def test_the_first_restart_waits_for_the_polytopes_depth(two_mass_runs):
-    """Until ``delta + restart_lags`` steps (10 + 29) the polytope has too few earlier
-    hulls to carry back, and the steps are the whole history from the initial set:
-    the history LP's bands (1e-7 of the width), not a shallow polytope's. The box
-    restart (eq. (24)) restarts as soon as the hull is bounded, and is wider there."""
+    """While the polytope has too few earlier hulls to carry back and the whole history
+    is no larger an LP than its window's (10 + 116 // 5 steps: 116 rows, 4 noise and
+    1 measurement factors per step), the steps are the whole history from the initial
+    set: the history LP's bands (1e-7 of the width), not a shallow polytope's. The
+    box restart (eq. (24)) restarts as soon as the hull is bounded, and is wider."""
     _, runs, lp, ks = two_mass_runs
     r, b = runs[10, "polytope"][0], runs[10, "box"][0]
-    early = [k for k in ks if k < 10 + 29]
-    assert early == [25, 30, 35]
+    early = [k for k in ks if k < 10 + 23]
+    assert early == [25, 30]
     for k in early:
         lo, hi = lp[k]
         tol = 1e-7 * (hi - lo).max()
@@ -225,10 +226,10 @@ def test_auto_keeps_the_box_where_the_shape_does_not_matter():
                    measurement_noise=RV, state_bounds=True,
                    initial_state_set=so.Box(-2 * np.ones(4), 2 * np.ones(4)))
     obs.run(Y2)
-    # (the first restart waits until the polytope can carry back its full depth: the
-    # steps before run the whole history from the initial set, the exact set)
+    # (the first restart waits for the polytope's depth while the whole history is no
+    # larger an LP: 116 rows (29 lags x 4 axes) // 5 factors per step = 23 steps)
     assert obs.restart_lags == 29
-    assert obs.stats["polytope_restarts"] == 60 - 10 - 29
+    assert obs.stats["polytope_restarts"] == 60 - 10 - 23
 
 
 def test_a_singular_dynamics_restarts_from_the_box():

@@ -47,12 +47,20 @@ class WindowedSteps:
         return "init" if self._from_initial else "recursive"
 
     def _init_lags(self) -> int:
-        """Steps the first restart waits for beyond the window: with the polytope
-        restart, until it can carry back its full depth (``restart_lags`` earlier
-        hulls; before that the whole history from ``Z_0^-`` is the exact set at the
-        cost of a window of ``k`` steps, and a shallow polytope was up to 27 % wider
-        than it); none with the box restart (eq. (24) as the paper runs it)."""
-        return self._restart_lags if self._polytope_now() else 0
+        """Steps the first restart waits for beyond the window. With the polytope
+        restart, the restart at ``t`` carries back only the hulls known at ``t``: a
+        restart in the first steps is shallow (up to 27 % wider than the exact set on
+        the 4-state benchmark plant). Until it can carry back its full depth
+        (``restart_lags``) each step is the whole history from ``Z_0^-``, the exact
+        set, as long as that LP is no larger than the polytope window's: ``N + k f``
+        against ``N + R + delta f`` factors (``f`` per step, ``R`` the polytope's
+        rows), so at most ``R // f`` steps (cold LPs: a longer wait made a noisy
+        6-state plant's first 120 steps 5 times as costly). None with the box
+        restart (eq. (24) as the paper runs it)."""
+        if not self._polytope_now() or self._restart_poly is None:
+            return 0
+        f = self._step_set.n_gen + (0 if self._V_fixed is None else self._V_fixed.n_gen)
+        return min(self._restart_lags, self._restart_poly.F_all.shape[0] // max(f, 1))
 
     # ------------------------------------------------------------------ fast path
     def _window_hist(self, entry: Entry) -> list[Entry]:

@@ -199,10 +199,10 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         certified; on a probe step the narrower one is reported. The probes run
         on the fast path; the reference path (``fast=False``) keeps the polytope.
         With the polytope (``"polytope"``, ``"auto"``), the first restart waits
-        until it can carry back its full depth (``delta + restart_lags`` steps);
-        until then each step is the whole history from the initial set, the
-        exact set (a shallow polytope was up to 27 % wider than it on the
-        4-state plant).
+        for the polytope's depth (up to ``restart_lags`` steps beyond the window,
+        while the whole history is no larger an LP than the window's); until then
+        each step is the whole history from the initial set, the exact set (a
+        shallow polytope was up to 27 % wider than it on the 4-state plant).
     restart_depth : int
         ``m >= 1``: the hull at ``k - delta`` and up to ``m - 1`` earlier ones
         (default 30; at most ``120 // N_o`` earlier ones, so that a large state
