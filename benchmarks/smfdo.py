@@ -19,12 +19,15 @@ import json
 import os
 import platform
 import statistics
+import sys as _sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 import setobs as so
+
+_sys.path.insert(0, str(Path(__file__).resolve().parent))  # (also when imported by tests)
 from _common import linprog_unit
 
 

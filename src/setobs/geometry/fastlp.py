@@ -361,11 +361,25 @@ class FixedStructureLP:
             return bounds, np.zeros(self.n_lp, dtype=bool)
         if b_err is None:
             berr = np.zeros(self.m)
-        _simplex.solve_batch(
-            (self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
-             self.yU, self.Q2, self.R, self.dirstat),
-            (b, h, berr, bred, hB),
-            (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
-            (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL, FASTLP_GAP_RTOL),
-            (bounds, st.objs, codes, st.ys))
+        args = ((self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
+                 self.yU, self.Q2, self.R, self.dirstat),
+                (b, h, berr, bred, hB),
+                (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
+                (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL,
+                 FASTLP_GAP_RTOL),
+                (bounds, st.objs, codes, st.ys))
+        _simplex.solve_batch(*args)
+        stuck = (codes == _simplex.ITERATION_LIMIT) | (codes == _simplex.NUMERICAL)
+        if stuck.any():
+            # A warm start can cycle on a degenerate vertex (the HSM150 record, window
+            # 10, k = 3680: 300 dual iterations on a 10-row LP whose optimum sits on
+            # the restart box's bound; cold, it solves). Those LPs once more from the
+            # structure's initial basis with the dual simplex; the solved ones restart
+            # from their own optimal bases (no pivots) and are certified again.
+            st.bases[stuck] = self.basis0
+            st.upper[stuck] = False
+            st.binv[stuck] = self.binv0
+            st.npiv[stuck] = 0
+            st.est[stuck] = 0.0
+            _simplex.solve_batch(*args)
         return bounds, codes == _simplex.OPTIMAL
