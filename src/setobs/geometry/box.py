@@ -32,8 +32,10 @@ def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
     The representation of a box as a set with generators ``I`` and factor
     bounds ``rad`` (:meth:`ConstrainedZonotope.from_box`, Scott et al.'s
     Theorem 1, the reduction's recentring): the centre is the rounded
-    midpoint, and the radius, rounded up, covers both ends from it. An
-    unbounded coordinate has centre 0 and radius ``inf``.
+    midpoint, and the radius covers both ends from it (the larger distance,
+    rounded up where its subtraction was inexact: ``[0, 3]`` and ``[-1, 1]``
+    keep their corners exactly). An unbounded coordinate has centre 0 and
+    radius ``inf``.
 
     Parameters
     ----------
@@ -45,9 +47,21 @@ def box_center_radius(lo: NDArray[np.float64], hi: NDArray[np.float64]
     lo_f = np.where(free, 0.0, lo) if anyfree else lo
     hi_f = np.where(free, 0.0, hi) if anyfree else hi
     c = 0.5 * lo_f + 0.5 * hi_f
-    rad = np.maximum(hi_f - c, c - lo_f)
-    rad = np.where(rad > 0, np.nextafter(rad, np.inf), 0.0)
+    d_hi, d_lo = hi_f - c, c - lo_f
+    rad = np.maximum(d_hi, d_lo)
+    # rounded up only where a difference was inexact (Knuth's TwoSum error): where both
+    # are exact, [c - rad, c + rad] covers [lo, hi] as is (a box's corners stay its own)
+    exact = (_sum_error(hi_f, -c, d_hi) == 0) & (_sum_error(c, -lo_f, d_lo) == 0)
+    rad = np.where((rad > 0) & ~exact, np.nextafter(rad, np.inf), rad)
     return c, (np.where(free, np.inf, rad) if anyfree else rad)
+
+
+def _sum_error(a: NDArray[np.float64], b: NDArray[np.float64],
+               s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a + b - s`` exactly for ``s = fl(a + b)`` (Knuth's TwoSum; finite values)."""
+    bv = s - a
+    av = s - bv
+    return (a - av) + (b - bv)
 
 
 class Box:

@@ -266,6 +266,9 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     SolverError
         If the construction cannot be verified.
     """
+    V = _parallelotope_vertices(Z)
+    if V is not None:
+        return V
     Zs, f = unit_scaled(Z)
     if Zs is not Z:  # the same construction at unit magnitude, scaled back exactly
         return vertices(Zs) * f
@@ -277,6 +280,51 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
         return np.unique(np.array([[box.lo[0]], [box.hi[0]]]), axis=0)
     V, _, _ = _VerifiedHull(Z).run()
     return V
+
+
+#: Largest number of independent generators whose 2^m sign combinations
+#: :func:`vertices` enumerates in closed form.
+MAX_CLOSED_FORM_GENERATORS = 10
+
+
+def _parallelotope_vertices(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
+    """The vertices of a set whose generators are linearly independent and that has no
+    constraints (points, boxes, segments, parallelotopes, also lower-dimensional ones),
+    in closed form, or ``None``.
+
+    Such a set is ``{c + G xi : |xi| <= h}`` with ``G`` of full column rank (the
+    columns with ``h_j > 0``), so its vertices are exactly the ``2^m`` points ``c +
+    sum_j s_j h_j g_j``, ``s`` in ``{-1, 1}^m`` (distinct by independence). Each is
+    summed in exact rational arithmetic and rounded once to the nearest float: a
+    vertex that is a float is returned exactly (a box's corners, the point ``{4}``).
+    Not used when the centre carries a rounding error (``c_err``), the set is
+    unbounded, or the columns are not clearly independent (smallest singular value
+    below ``1e-8`` of the largest; the verified construction decides those).
+    """
+    if Z.n_con or not np.isfinite(Z.h).all() or np.any(Z.c_err != 0.0):
+        return None
+    live = (Z.h > 0) & np.any(Z.G != 0.0, axis=0)
+    G, h = Z.G[:, live], Z.h[live]
+    m = G.shape[1]
+    if m > min(Z.dim, MAX_CLOSED_FORM_GENERATORS):
+        return None
+    if m:
+        sv = np.linalg.svd(G, compute_uv=False)
+        if not sv[-1] > 1e-8 * sv[0]:
+            return None
+    from fractions import Fraction
+    from itertools import product
+
+    c = [Fraction(float(v)) for v in Z.c]
+    # the half-edges h_j g_j, exact
+    E = [[Fraction(float(G[i, j])) * Fraction(float(h[j])) for i in range(Z.dim)]
+         for j in range(m)]
+    out = np.empty((2 ** m, Z.dim))
+    for r, signs in enumerate(product((-1, 1), repeat=m)):
+        for i in range(Z.dim):
+            out[r, i] = float(c[i] + sum((s * E[j][i] for j, s in enumerate(signs)),
+                                         Fraction(0)))
+    return out
 
 
 def to_hrep(Z: ConstrainedZonotope) -> HRep:

@@ -180,29 +180,39 @@ def hull_bounds(bounds, c, c_err):
 def box_start(lo, hi):
     """Centre and radii of the box restart (eq. (24)) from the hull ``[lo, hi]``: a
     coordinate unbounded on either side is free both ways (centre 0, radius inf; an
-    outer answer), the others get the rounded midpoint and the radius rounded up to
-    cover both ends (:func:`setobs.geometry.box.box_center_radius`)."""
+    outer answer), the others get the rounded midpoint and a radius that covers both
+    ends from it (:func:`setobs.geometry.box.box_center_radius`)."""
     n = lo.size
     c, r = np.empty(n), np.empty(n)
     for i in range(n):
         if not (np.isfinite(lo[i]) and np.isfinite(hi[i])):
             c[i], r[i] = 0.0, np.inf
             continue
-        ci = 0.5 * lo[i] + 0.5 * hi[i]
-        ri = max(hi[i] - ci, ci - lo[i])
-        c[i] = ci
-        r[i] = np.nextafter(ri, np.inf) if ri > 0 else 0.0
+        c[i], r[i] = _center_radius(lo[i], hi[i])
     return c, r
 
 
 @njit(cache=True)
+def _sum_exact(a, b, s):
+    """Whether ``s = fl(a + b)`` is exact (Knuth's TwoSum error is zero)."""
+    bv = s - a
+    av = s - bv
+    return (a - av) + (b - bv) == 0.0
+
+
+@njit(cache=True)
 def _center_radius(lo, hi):
-    """:func:`box_start` of one coordinate: ``(c, r)`` (``(0, inf)`` if unbounded)."""
+    """:func:`box_start` of one coordinate: ``(c, r)`` (``(0, inf)`` if unbounded; the
+    radius rounded up only where a difference was inexact, as
+    :func:`setobs.geometry.box.box_center_radius` does)."""
     if not (np.isfinite(lo) and np.isfinite(hi)):
         return 0.0, np.inf
     c = 0.5 * lo + 0.5 * hi
-    r = max(hi - c, c - lo)
-    return c, (np.nextafter(r, np.inf) if r > 0 else 0.0)
+    d_hi, d_lo = hi - c, c - lo
+    r = max(d_hi, d_lo)
+    if r > 0 and not (_sum_exact(hi, -c, d_hi) and _sum_exact(c, -lo, d_lo)):
+        r = np.nextafter(r, np.inf)
+    return c, r
 
 
 @njit(cache=True)

@@ -1,0 +1,95 @@
+"""Exact vertices where the set's facets meet exactly: points, boxes, segments and
+parallelotopes (issue 34). Oracles: the box's own corners and closed forms written in
+the test; scipy's linprog (each vertex is the unique maximiser of a functional) and
+Qhull (every returned point is a vertex of their hull)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull
+
+import setobs as so
+
+
+def _rows(V):
+    return sorted(map(tuple, np.asarray(V).tolist()))
+
+
+def test_box_corners_are_exact():
+    lo, hi = [-1.0, 0.0, 2.0], [1.0, 3.0, 2.5]
+    V = so.ConstrainedZonotope.from_box(lo, hi).vertices()
+    assert _rows(V) == _rows(list(itertools.product(*zip(lo, hi, strict=True))))
+
+
+@pytest.mark.parametrize("Z", [
+    so.ConstrainedZonotope(np.zeros((1, 1)), [4.0]),
+    so.ConstrainedZonotope.from_box([4.0], [4.0]),
+    so.ConstrainedZonotope(np.zeros((2, 0)), [4.0, -0.1]),
+])
+def test_a_point_is_one_exact_vertex(Z):
+    V = Z.vertices()
+    assert V.shape == (1, Z.dim) and np.array_equal(V[0], Z.c)
+
+
+def test_a_segment_in_space_has_its_two_exact_ends():
+    Z = so.ConstrainedZonotope([[0.5], [0.0], [0.25]], [1.0, 2.0, 3.0])
+    Z = so.ConstrainedZonotope(Z.G, Z.c, h=[2.0])
+    assert _rows(Z.vertices()) == [(0.0, 2.0, 2.5), (2.0, 2.0, 3.5)]
+
+
+def test_a_flat_parallelogram_in_3d():
+    G = np.array([[1.0, 0.5], [0.0, 1.0], [0.25, 0.0]])
+    Z = so.ConstrainedZonotope(G, [0.0, 1.0, 0.0])
+    expect = [tuple(np.array([0.0, 1.0, 0.0]) + G @ np.array(s)) for s in
+              itertools.product((-1.0, 1.0), repeat=2)]
+    assert _rows(Z.vertices()) == sorted(expect)  # (dyadic data: exact in floats)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_random_parallelotopes_against_linprog_and_qhull(seed):
+    rng = np.random.default_rng(seed)
+    n = 3
+    G, c, h = rng.normal(size=(n, n)), rng.normal(size=n), rng.uniform(0.1, 2.0, n)
+    Z = so.ConstrainedZonotope(G, c, h=h)
+    V = Z.vertices()
+    assert V.shape == (2 ** n, n)
+    assert sorted(ConvexHull(V).vertices.tolist()) == list(range(2 ** n))
+    Ginv_T = np.linalg.inv(G).T
+    for v in V:
+        # the vertex's signs, and the functional it alone maximises
+        s = np.sign(np.linalg.solve(G, v - c))
+        d = Ginv_T @ s
+        r = linprog(-(G.T @ d), bounds=list(zip(-h, h, strict=True)), method="highs")
+        assert r.status == 0
+        best = d @ c - r.fun
+        assert abs(d @ v - best) <= 1e-12 * (1 + abs(best))
+
+
+def test_sets_outside_the_closed_form_still_use_the_verified_construction():
+    # constraints, too many generators, a rounding error on the centre
+    Zc = so.ConstrainedZonotope(np.eye(2), [0.0, 0.0], A=[[1.0, 1.0]], b=[0.0])
+    assert _rows(np.round(Zc.vertices(), 12)) == [(-1.0, 1.0), (1.0, -1.0)]
+    Zm = so.ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], [0.0, 0.0])
+    assert len(Zm.vertices()) == 6  # a hexagon
+
+
+def test_box_radius_is_rounded_up_only_where_inexact():
+    """Oracle: exact rational arithmetic. The radius covers both ends from the rounded
+    centre; where the differences are exact it is the half-width itself."""
+    from fractions import Fraction
+
+    from setobs.geometry.box import box_center_radius
+
+    c, r = box_center_radius(np.array([-1.0, 0.0, 2.0]), np.array([1.0, 3.0, 2.5]))
+    assert c.tolist() == [0.0, 1.5, 2.25] and r.tolist() == [1.0, 1.5, 0.25]
+    rng = np.random.default_rng(4)
+    lo = rng.normal(size=500) * 10.0 ** rng.integers(-12, 12, 500)
+    hi = lo + np.abs(rng.normal(size=500)) * 10.0 ** rng.integers(-14, 3, 500)
+    c, r = box_center_radius(lo, hi)
+    for i in range(500):
+        assert Fraction(c[i]) - Fraction(r[i]) <= Fraction(lo[i])
+        assert Fraction(c[i]) + Fraction(r[i]) >= Fraction(hi[i])
