@@ -78,7 +78,7 @@ def outward_interval(c: NDArray[np.float64], c_err: NDArray[np.float64] | None,
 
     The one rounding of an interval hull from certified factor-space bounds
     (the reference path's :meth:`ConstrainedZonotope.interval_hull` and the
-    compiled fast path's :func:`setobs.geometry.fastlp.hull_from_bounds`):
+    compiled fast path's ``setobs.setmembership._kernels.hull_bounds``):
     ``lo = down(down(c - c_err) + low)``, ``hi = up(up(c + c_err) + upp)``,
     with ``c`` used as is where ``c_err = 0`` and ``-inf``/``inf`` where a
     bound is infinite.

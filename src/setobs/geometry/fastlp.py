@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas
 from .._lazy import lazy_module
-from .._rounding import outward_interval, pow2_inverse
+from .._rounding import pow2_inverse
 from ..tolerances import (
     EQUILIBRATION_FLOOR,
     FASTLP_BOUNDED_CLEAR,
@@ -60,7 +60,7 @@ from ..tolerances import (
 # The compiled simplex (numba) compiles/loads on the first batch, not on import.
 _simplex = lazy_module("setobs.geometry._simplex")
 
-__all__ = ["FixedStructureLP", "LPState", "hull_from_bounds", "hull_objectives"]
+__all__ = ["FixedStructureLP", "LPState", "hull_objectives"]
 
 _EMPTY = np.zeros(0)
 
@@ -82,30 +82,6 @@ def hull_objectives(W: NDArray[np.float64]) -> NDArray[np.float64]:
     W2[0::2] = W
     W2[1::2] = -W
     return W2
-
-
-def hull_from_bounds(bounds: NDArray[np.float64], c: NDArray[np.float64],
-                     c_err: NDArray[np.float64] | None = None
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-    """Interval hull ``c + [bounds[0::2], -bounds[1::2]]`` of the objectives of
-    :func:`hull_objectives`, rounded outward as
-    :meth:`ConstrainedZonotope.interval_hull` does (and widened by ``c_err``,
-    a bound on the error of ``c``); ``None`` if the certified bounds cross
-    (emptiness must then be decided by the reference path).
-
-    Parameters
-    ----------
-    bounds : ndarray, shape (2 d,)
-        Certified lower bounds of the objectives of :func:`hull_objectives`.
-    c : ndarray, shape (d,)
-        Centre of the set in the mapped coordinates.
-    c_err : ndarray, shape (d,), optional
-        Bound on the rounding error of ``c``.
-    """
-    low, upp = bounds[0::2], -bounds[1::2]
-    if (low > upp).any():
-        return None
-    return outward_interval(c, c_err, low, upp)
 
 
 class LPState:
