@@ -32,6 +32,16 @@ def _matvec_add(out, M, v, a):
 
 
 @njit(cache=True)
+def _affine(k, Mc, c_S, Mu, u):
+    """``k + Mc c_S + Mu u`` (a new vector; the input term only with inputs)."""
+    out = k.copy()
+    _matvec_add(out, Mc, c_S, 1.0)
+    if u.size:
+        _matvec_add(out, Mu, u, 1.0)
+    return out
+
+
+@njit(cache=True)
 def assemble(c_S, b_S, h_S, Yf, y_idx, u, b_S_err, c_S_err, Y_err,
              b_const, b_c, b_u, b_const_a, b_c_a, b_u_a, b_abs_err, y_pos,
              c_const, c_c, c_u, c_const_a, c_c_a, c_u_a, c_abs_err, h_D,
@@ -49,22 +59,11 @@ def assemble(c_S, b_S, h_S, Yf, y_idx, u, b_S_err, c_S_err, Y_err,
     has_u = u.size > 0
     au = np.abs(u)
     acS = np.abs(c_S)
-    # b's tail and c: affine in the data
-    bt = b_const.copy()
-    _matvec_add(bt, b_c, c_S, 1.0)
-    c = c_const.copy()
-    _matvec_add(c, c_c, c_S, 1.0)
-    if has_u:
-        _matvec_add(bt, b_u, u, 1.0)
-        _matvec_add(c, c_u, u, 1.0)
-    # their error bounds
-    eb = b_const_a.copy()
-    _matvec_add(eb, b_c_a, acS, 1.0)
-    ec = c_const_a.copy()
-    _matvec_add(ec, c_c_a, acS, 1.0)
-    if has_u:
-        _matvec_add(eb, b_u_a, au, 1.0)
-        _matvec_add(ec, c_u_a, au, 1.0)
+    # b's tail and c: affine in the data; their error bounds: the same on magnitudes
+    bt = _affine(b_const, b_c, c_S, b_u, u)
+    c = _affine(c_const, c_c, c_S, c_u, u)
+    eb = _affine(b_const_a, b_c_a, acS, b_u_a, au)
+    ec = _affine(c_const_a, c_c_a, acS, c_u_a, au)
     g = gK + 3.0 * _U
     for i in range(nt):
         eb[i] *= g
