@@ -503,3 +503,36 @@ def slab_lp_extremes(M, A, b, tol, bounds):
             assert r.status == 0, r.message
             (lo if sgn > 0 else hi)[i] = sgn * r.fun
     return lo, hi
+
+
+def outward_sum_cases(seed: int, n: int = 200):
+    """Random ``c`` (magnitudes 1e-8 to 1e8), centre errors ``e`` (half of them zero),
+    offsets ``low <= 0 <= upp``; three ``low`` are ``-inf`` and two ``upp`` ``+inf``."""
+    rng = np.random.default_rng(seed)
+    c = rng.normal(size=n) * 10.0 ** rng.integers(-8, 8, n)
+    e = np.where(rng.random(n) < 0.5, 0.0, np.abs(c) * 1e-15)
+    low = -np.abs(rng.normal(size=n)) * 10.0 ** rng.integers(-8, 8, n)
+    upp = np.abs(rng.normal(size=n))
+    low[:3], upp[3:5] = -np.inf, np.inf
+    return c, e, low, upp
+
+
+def assert_outward_sums(lo, hi, c, e, low, upp) -> None:
+    """``[lo, hi]`` contains ``[c - e + low, c + e + upp]`` in exact rational arithmetic
+    (and is infinite exactly where the offset is)."""
+    for i in range(len(c)):
+        if np.isfinite(low[i]):
+            assert Fraction(lo[i]) <= Fraction(c[i]) - Fraction(e[i]) + Fraction(low[i])
+        else:
+            assert lo[i] == -np.inf
+        if np.isfinite(upp[i]):
+            assert Fraction(hi[i]) >= Fraction(c[i]) + Fraction(e[i]) + Fraction(upp[i])
+        else:
+            assert hi[i] == np.inf
+
+
+def assert_box_covers(c, r, lo, hi) -> None:
+    """``[c - r, c + r]`` contains ``[lo, hi]`` in exact rational arithmetic."""
+    for i in range(len(c)):
+        assert Fraction(c[i]) - Fraction(r[i]) <= Fraction(lo[i])
+        assert Fraction(c[i]) + Fraction(r[i]) >= Fraction(hi[i])

@@ -15,6 +15,7 @@ from setobs.exceptions import SolverWarning
 from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
 from setobs.geometry.zonotope import factor_polytope
 from tests.conftest import cripple_highs, exact_extremes, random_cz
+from tests.oracles import assert_outward_sums, outward_sum_cases
 
 seeds = st.integers(0, 2**32 - 1)
 
@@ -225,26 +226,11 @@ def test_certificates_with_unbounded_factors_against_exact_rational_lps(seed):
 
 def test_outward_interval_contains_the_exact_sums():
     """``[c + low, c + upp]`` widened by ``c_err``: checked in exact rational arithmetic."""
-    from fractions import Fraction
-
     from setobs._rounding import outward_interval
 
-    rng = np.random.default_rng(8)
-    c = rng.normal(size=200) * 10.0 ** rng.integers(-8, 8, 200)
-    e = np.where(rng.random(200) < 0.5, 0.0, np.abs(c) * 1e-15)
-    low = -np.abs(rng.normal(size=200)) * 10.0 ** rng.integers(-8, 8, 200)
-    upp = np.abs(rng.normal(size=200))
-    low[:3], upp[3:5] = -np.inf, np.inf
+    c, e, low, upp = outward_sum_cases(8)
     lo, hi = outward_interval(c, e, low, upp)
-    for i in range(200):
-        if np.isfinite(low[i]):
-            assert Fraction(lo[i]) <= Fraction(c[i]) - Fraction(e[i]) + Fraction(low[i])
-        else:
-            assert lo[i] == -np.inf
-        if np.isfinite(upp[i]):
-            assert Fraction(hi[i]) >= Fraction(c[i]) + Fraction(e[i]) + Fraction(upp[i])
-        else:
-            assert hi[i] == np.inf
+    assert_outward_sums(lo, hi, c, e, low, upp)
     # coordinates without an offset keep the (rounded) centre
     lo2, hi2 = outward_interval(c, e, low, upp, offset=np.zeros(200, bool))
     assert np.all(lo2[e == 0] == c[e == 0]) and np.all(hi2[e == 0] == c[e == 0])

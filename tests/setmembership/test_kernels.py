@@ -15,6 +15,7 @@ import pytest
 from setobs import ConstrainedZonotope
 from setobs.setmembership import _kernels
 from setobs.setmembership._window import WindowModel
+from tests.oracles import assert_box_covers, assert_outward_sums, outward_sum_cases
 
 
 def _fr(M):
@@ -72,26 +73,12 @@ def test_assembled_data_contain_the_exact_closed_form(seed):
 
 
 def test_hull_bounds_contain_the_exact_sums_and_report_crossing():
-    rng = np.random.default_rng(8)
-    n = 200
-    c = rng.normal(size=n) * 10.0 ** rng.integers(-8, 8, n)
-    e = np.where(rng.random(n) < 0.5, 0.0, np.abs(c) * 1e-15)
-    low = -np.abs(rng.normal(size=n)) * 10.0 ** rng.integers(-8, 8, n)
-    upp = np.abs(rng.normal(size=n))
-    low[:3], upp[3:5] = -np.inf, np.inf
-    bounds = np.empty(2 * n)
+    c, e, low, upp = outward_sum_cases(8)
+    bounds = np.empty(2 * c.size)
     bounds[0::2], bounds[1::2] = low, -upp
     lo, hi, ok = _kernels.hull_bounds(bounds, c, e)
     assert ok
-    for i in range(n):
-        if np.isfinite(low[i]):
-            assert Fraction(lo[i]) <= Fraction(c[i]) - Fraction(e[i]) + Fraction(low[i])
-        else:
-            assert lo[i] == -np.inf
-        if np.isfinite(upp[i]):
-            assert Fraction(hi[i]) >= Fraction(c[i]) + Fraction(e[i]) + Fraction(upp[i])
-        else:
-            assert hi[i] == np.inf
+    assert_outward_sums(lo, hi, c, e, low, upp)
     bounds[10], bounds[11] = 1.0, -0.5  # low 1 > upp 0.5
     assert not _kernels.hull_bounds(bounds, c, e)[2]
 
@@ -107,8 +94,7 @@ def test_box_start_covers_the_box_exactly():
         if i in (5, 6, 7):  # unbounded on a side: free both ways
             assert c[i] == 0.0 and r[i] == np.inf
             continue
-        assert Fraction(c[i]) - Fraction(r[i]) <= Fraction(lo[i])
-        assert Fraction(c[i]) + Fraction(r[i]) >= Fraction(hi[i])
+        assert_box_covers(c[i:i + 1], r[i:i + 1], lo[i:i + 1], hi[i:i + 1])
         if i < 5:
             assert r[i] == 0.0
         else:  # and not loose: within a few ulps of the half-width
