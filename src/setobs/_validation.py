@@ -24,6 +24,8 @@ def readonly(a: NDArray[Any]) -> NDArray[Any]:
 
 def _to_float(name: str, value: ArrayLike, what: str) -> NDArray[np.float64]:
     """A float64 copy of ``value``; complex, non-numeric and ragged input is refused."""
+    if type(value) is np.ndarray and value.dtype == np.float64:
+        return value.copy()  # the common case, without the checks below (~2 us)
     if isinstance(value, str | bytes) or value is None:
         raise DimensionError(f"{name} must be a real numeric {what}, got {value!r}")
     try:
@@ -72,7 +74,7 @@ def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool,
                   allow_nan: bool = False) -> None:
     # the common case in one pass: every entry finite and in range (a NaN makes the
     # maximum NaN and the comparison false)
-    if np.max(np.abs(a), initial=0.0) <= MAX_MAGNITUDE:
+    if not a.size or np.abs(a).max() <= MAX_MAGNITUDE:
         return
     if not allow_nan and np.isnan(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isnan(a))[0])

@@ -64,21 +64,32 @@ def _cat(e1, n1: int, e2, n2: int) -> NDArray[np.float64] | None:
                            np.zeros(n2) if e2 is None else e2])
 
 
-def _sum_err(a, v, err) -> NDArray[np.float64] | None:
-    """Bound for ``fl(a + v)`` given the bound ``err`` carried by ``a``."""
-    new = gamma(2) * (np.abs(a) + np.abs(v))
-    return _add(err, new) if new.any() else err
+_GAMMA2 = gamma(2)
+
+
+def _sum_err(s, err) -> NDArray[np.float64] | None:
+    """Bound for the rounding of ``s = fl(a + v)`` plus the bound ``err`` carried by
+    ``a`` and ``v``: ``|fl(a + v) - (a + v)| <= u |a + v| <= gamma_1 |s|``, and
+    ``gamma_2 |s|`` also covers the rounding of that product (zero where ``s = 0``:
+    a floating-point sum is zero only if exact)."""
+    new = np.abs(s)
+    if not new.any():
+        return err
+    new *= _GAMMA2
+    return new if err is None else _add(err, new)
 
 
 def _map_err(M, c, err) -> NDArray[np.float64] | None:
     """Bound for ``fl(M c)`` given the bound ``err`` carried by ``c``."""
+    if err is None and not c.any():
+        return None
     k = M.shape[1]
     base = gamma(k + 1) * np.abs(c)
     if err is not None:
-        base = base + err
-    if not base.any():
-        return None
-    return (np.abs(M) @ base) * (1.0 + gamma(k + 2))
+        base += err
+    out = np.abs(M) @ base
+    out *= 1.0 + gamma(k + 2)
+    return out
 
 
 def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
@@ -207,6 +218,26 @@ class ConstrainedZonotope:
         object.__setattr__(self, "_cerr", None)
         object.__setattr__(self, "_berr", None)
         object.__setattr__(self, "_cache", {})
+
+    @classmethod
+    def _owned(cls, G, c, A, b, h, unbounded_radius: float, cerr, berr) -> ConstrainedZonotope:
+        """Build from float64 arrays that are either fresh (made by the caller, no other
+        reference) or already read-only arrays of a set: no copies (internal fast path of
+        the exact operations). ``cerr``, ``berr``: as in :meth:`_trusted`."""
+        self = object.__new__(cls)
+        setattr_ = object.__setattr__
+        if cerr is not None and not cerr.any():
+            cerr = None
+        if berr is not None and not berr.any():
+            berr = None
+        for name, val in (("_G", G), ("_c", c), ("_A", A), ("_b", b), ("_h", h),
+                          ("_cerr", cerr), ("_berr", berr)):
+            if val is not None and val.flags.writeable:
+                val.flags.writeable = False
+            setattr_(self, name, val)
+        setattr_(self, "unbounded_radius", unbounded_radius)
+        setattr_(self, "_cache", {})
+        return self
 
     @classmethod
     def _trusted(cls, G, c, A, b, h, unbounded_radius: float = UNBOUNDED_RADIUS, cerr=None,
@@ -468,24 +499,26 @@ class ConstrainedZonotope:
         """
         if not isinstance(other, ConstrainedZonotope):
             v = as_vector("vector", other, size=self.dim)
-            cerr = _sum_err(self._c, v, self._cerr)
+            c = self._c + v
+            cerr = _sum_err(c, self._cerr)
             if err is not None:
                 e = as_vector("err", err, size=self.dim)
                 if (e < 0).any():
                     raise DimensionError("err must be nonnegative")
                 cerr = _add(cerr, e)
-            return self._same_factors(self._G, self._c + v, cerr)
+            return self._same_factors(self._G, c, cerr)
         if err is not None:
             raise TypeError("err applies to a vector summand only")
         self._check_same_dim(other, "Minkowski sum")
-        return ConstrainedZonotope._trusted(
-            np.hstack([self._G, other._G]),
-            self._c + other._c,
+        c = self._c + other._c
+        return ConstrainedZonotope._owned(
+            np.concatenate((self._G, other._G), axis=1),
+            c,
             _blockdiag2(self._A, other._A),
-            np.concatenate([self._b, other._b]),
-            np.concatenate([self._h, other._h]),
+            np.concatenate((self._b, other._b)),
+            np.concatenate((self._h, other._h)),
             min(self.unbounded_radius, other.unbounded_radius),
-            _sum_err(self._c, other._c, _add(self._cerr, other._cerr)),
+            _sum_err(c, _add(self._cerr, other._cerr)),
             _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
 
@@ -529,8 +562,8 @@ class ConstrainedZonotope:
     def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64],
                       cerr: NDArray[np.float64] | None) -> ConstrainedZonotope:
         """A set with the same factor polytope; shares its LP model (and emptiness cache)."""
-        out = ConstrainedZonotope._trusted(G, c, self._A, self._b, self._h, self.unbounded_radius,
-                                           cerr, self._berr)
+        out = ConstrainedZonotope._owned(G, c, self._A, self._b, self._h, self.unbounded_radius,
+                                         cerr, self._berr)
         if "lp" in self._cache:
             out._cache["lp"] = self._cache["lp"]
         return out
@@ -551,7 +584,7 @@ class ConstrainedZonotope:
         """
         if not isinstance(other, ConstrainedZonotope):
             raise TypeError(f"cartesian expects a ConstrainedZonotope, got {type(other).__name__}")
-        return ConstrainedZonotope._trusted(
+        return ConstrainedZonotope._owned(
             _blockdiag2(self._G, other._G),
             np.concatenate([self._c, other._c]),
             _blockdiag2(self._A, other._A),
@@ -588,7 +621,7 @@ class ConstrainedZonotope:
             ye = as_vector("y_err", y_err, size=C_a.shape[0])
             if (ye < 0).any():
                 raise DimensionError("y_err must be nonnegative")
-        return ConstrainedZonotope._trusted(
+        return ConstrainedZonotope._owned(
             self._G, self._c,
             np.vstack([self._A, C_a @ self._G]),
             np.concatenate([self._b, y_a - C_a @ self._c]),
@@ -627,7 +660,7 @@ class ConstrainedZonotope:
         b = np.concatenate([self._b, other._b, other._c - R_a @ self._c])
         new_err = _diff_err(other._c, R_a, self._c, self._cerr, other._cerr)
         berr = _cat(_cat(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err, other.dim)
-        return ConstrainedZonotope._trusted(
+        return ConstrainedZonotope._owned(
             np.hstack([self._G, np.zeros((self.dim, other.n_gen))]), self._c, A, b,
             np.concatenate([self._h, other._h]), min(self.unbounded_radius, other.unbounded_radius),
             self._cerr, berr,
@@ -1025,7 +1058,8 @@ class ConstrainedZonotope:
 
         return reduce_exact(self)
 
-    def eliminate_constraints(self, max_constraints: int) -> ConstrainedZonotope:
+    def eliminate_constraints(self, max_constraints: int, method: str = "auto"
+                              ) -> ConstrainedZonotope:
         """Outer constraint elimination (Scott et al. 2016, Sec. 4.2); see
         :func:`setobs.geometry.reduction.eliminate_constraints`.
 
@@ -1033,10 +1067,13 @@ class ConstrainedZonotope:
         ----------
         max_constraints : int
             Largest number of constraints of the result.
+        method : {"auto", "fast", "lp"}
+            Overshoots by interval propagation (``"fast"``) or certified LPs (``"lp"``);
+            ``"auto"`` takes the fast mode for large sets.
         """
         from .reduction import eliminate_constraints
 
-        return eliminate_constraints(self, max_constraints)
+        return eliminate_constraints(self, max_constraints, method)
 
     def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
         """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`.
