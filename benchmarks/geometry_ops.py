@@ -20,8 +20,18 @@ The disagreement columns compare the values (supports, distances, bounds):
 setobs' LP values are certified outer bounds, so differences are outward and of
 the order of Clarabel's accuracy.
 
-Run: ``python benchmarks/geometry_ops.py [--repeats N]``; writes
-``benchmarks/results/geometry_ops.json``.
+With ZonoOpt installed (``pip install setobs[peers]``), the ``peers`` section
+compares setobs with it on the same sets (``_peers.py``): Minkowski sum, linear
+map, generalized intersection, emptiness of an empty intersection, point
+containment and interval hull on random sets (n = 2..6; 10, 20, 40 generators; 0,
+5, 10 constraints), interleaved medians and their ratios by dimension; whether
+ZonoOpt's hull falls inside setobs' certified box; and constraint elimination on a
+3-D polytope with 60 facets (63 generators, 60 constraints): time per eliminated
+constraint, in 45 x 40 linprog units, and the support excess over the polytope's.
+
+Run: ``python benchmarks/geometry_ops.py [--repeats N] [--peers-only]``; writes
+``benchmarks/results/geometry_ops.json`` (``--peers-only`` keeps the file's cvxpy
+rows and measures the peers again).
 """
 
 from __future__ import annotations
@@ -37,7 +47,7 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
-from _common import make_cz, timeit
+from _common import linprog_unit, make_cz, timeit
 from setobs import ConstrainedZonotope
 from setobs.geometry import convex_hull, distance, intersect_polytope, is_subset_of_polytope
 
@@ -96,12 +106,61 @@ def hull_cvxpy(Z, W):
     return lo, hi
 
 
+def peer_section(repeats: int) -> dict:
+    """The ZonoOpt comparison (``_peers.py``), or why it was skipped."""
+    try:
+        import zonoopt  # noqa: F401  (the optional peer)
+    except ImportError:
+        return {"skipped": "zonoopt is not installed (pip install setobs[peers])"}
+    import _peers
+
+    rows = _peers.operation_rows(np.random.default_rng(34), max(40, 40 * repeats))
+    lp_s = linprog_unit()
+    elim = _peers.elimination_rows(lp_s, max(40, 40 * repeats))
+    ratios = _peers.ratios_by_dimension(rows)
+    for op, by_n in ratios.items():
+        print(f"  {op:26s} setobs/ZonoOpt by n: "
+              + "  ".join(f"{n}: {r:5.2f}" for n, r in by_n.items()))
+    for r in elim["rows"]:
+        print(f"  eliminate {r['eliminated']:2d}: {1e3 * r['fast_s_per_constraint']:.2f} ms per "
+              f"constraint ({r['fast_linprogs_per_constraint']:.2f} linprog), ZonoOpt "
+              f"{1e3 * r['zonoopt_s_per_constraint']:.2f} ms; support excess mean "
+              f"{r['fast_support_excess_mean']:.3f} "
+              f"(ZonoOpt {r['zonoopt_support_excess_mean']:.3f})")
+    inside = sum(r["zonoopt_hull_inside_certified_box"] for r in rows)
+    return {
+        "zonoopt": metadata.version("zonoopt"),
+        "ratios_by_dimension": ratios,
+        "operations": rows,
+        "zonoopt_hulls_inside_certified_box": f"{inside} of {len(rows)}",
+        "elimination": elim,
+        "targets": {
+            "every_operation_ratio_at_most_1": {
+                op: {"worst": max(by_n.values()), "met": max(by_n.values()) <= 1.0}
+                for op, by_n in ratios.items()},
+            "elimination_at_most_10_linprogs_per_constraint": {
+                "worst": max(r["fast_linprogs_per_constraint"] for r in elim["rows"]),
+                "met": max(r["fast_linprogs_per_constraint"] for r in elim["rows"]) <= 10.0},
+        },
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "geometry_ops.json"))
+    ap.add_argument("--peers-only", action="store_true",
+                    help="measure only the ZonoOpt comparison (keep the file's other rows)")
     args = ap.parse_args()
     rng = np.random.default_rng(2026)
+    peers = peer_section(args.repeats)
+    if args.peers_only:
+        result = json.loads(Path(args.out).read_text())
+        result["peers"] = peers
+        result["setobs"] = setobs.__version__
+        Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
+        print(f"wrote {args.out}")
+        return
     rows = []
     r_cvx = max(2, args.repeats // 2)
     for n, n_g, n_c in SIZES:
@@ -158,6 +217,7 @@ def main() -> None:
         "cpus": os.cpu_count(),
         "repeats": args.repeats,
         "results": rows,
+        "peers": peers,
     }
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")

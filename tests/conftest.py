@@ -109,6 +109,19 @@ def cripple_highs(monkeypatch) -> None:
     monkeypatch.setattr(FactorPolytope, "new_highs", staticmethod(crippled))
 
 
+def disable_compiled_lps(monkeypatch) -> None:
+    """Take the compiled simplex out of the factor polytope's queries (the batch of
+    :meth:`FactorPolytope.minimize_many` and the last retry, ``try_compiled``), so that
+    a test reaches the HiGHS path."""
+    from setobs.geometry.lp import FactorPolytope
+
+    def nothing_solved(self, W):
+        return np.full(W.shape[0], -np.inf), np.zeros(W.shape[0], dtype=bool)
+
+    monkeypatch.setattr(FactorPolytope, "minimize_many", nothing_solved)
+    monkeypatch.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
+
+
 def cdd_vertices(Z: ConstrainedZonotope) -> np.ndarray:
     """Points ``G xi + c`` over the cdd vertices of the factor polytope (floating point)."""
     n_g = Z.n_gen

@@ -51,13 +51,39 @@ def spy_minimize(monkeypatch, seen):
 
 
 def test_lp_queries_run_single_threaded_and_restore(monkeypatch, two_threads):
+    """A set with more factors than ``SMALL_BLAS_DIM``: its support LP (HiGHS path) and
+    its hull (the compiled batch) run with one BLAS thread; the setting comes back."""
+    from setobs.geometry.fastlp import FixedStructureLP
+
+    seen: list[list[int]] = []
+    spy_minimize(monkeypatch, seen)
+    orig = FixedStructureLP.minimize_all_unchecked
+
+    def spy_batch(self, *args, **kwargs):
+        seen.append(blas_threads())
+        return orig(self, *args, **kwargs)
+
+    monkeypatch.setattr(FixedStructureLP, "minimize_all_unchecked", spy_batch)
+    rng = np.random.default_rng(0)
+    n_g = _blas.SMALL_BLAS_DIM + 6
+    A = rng.normal(size=(1, n_g))
+    Z = so.ConstrainedZonotope(rng.normal(size=(2, n_g)), [0.0, 0.0], A,
+                               A @ rng.uniform(-0.5, 0.5, n_g))
+    Z.interval_hull()
+    Z.support([1.0, 1.0])
+    assert len(seen) >= 2 and all(all(n == 1 for n in s) for s in seen)
+    assert all(n == 2 for n in blas_threads())
+
+
+def test_small_queries_skip_the_limit(monkeypatch, two_threads):
+    """Below ``SMALL_BLAS_DIM`` (OpenBLAS runs such matrices on one thread anyway) the
+    thread count is left alone: the limit's calls would cost more than the query."""
     seen: list[list[int]] = []
     spy_minimize(monkeypatch, seen)
     Z = so.ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], [0.0, 0.0],
                                A=[[1.0, 1.0, 1.0]], b=[0.5])
-    Z.interval_hull()
-    assert seen and all(all(n == 1 for n in s) for s in seen)
-    assert all(n == 2 for n in blas_threads())
+    Z.support([1.0, 0.0])
+    assert seen and all(all(n == 2 for n in s) for s in seen)
 
 
 def test_nested_and_threaded_use_restores_the_setting(monkeypatch, two_threads):

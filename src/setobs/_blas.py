@@ -32,7 +32,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 __all__ = ["SMALL_BLAS_DIM", "blas_limit_enabled", "single_threaded_blas",
-           "with_single_threaded_blas"]
+           "with_single_threaded_blas", "with_single_threaded_blas_unless_small"]
 
 #: Matrices with every dimension below this run single-threaded in OpenBLAS whatever
 #: its thread count (its thresholds: ``m n k <= 4 * 65536`` for ``gemm``, ``m n <
@@ -127,6 +127,25 @@ class _SingleThreadedBLAS:
                 for lib, n in _saved:
                     set_num_threads(lib, n)
                 _saved.clear()
+
+
+def with_single_threaded_blas_unless_small(size: Callable[[Any], int]) -> Callable[[F], F]:
+    """Decorator of a method: like :func:`with_single_threaded_blas`, but the limit is
+    skipped when ``size(self)``, the largest matrix dimension the method handles, is
+    below :data:`SMALL_BLAS_DIM` (OpenBLAS runs such matrices on one thread anyway;
+    the limit's thread-count calls cost ~30 us, more than a small query)."""
+
+    def decorate(func: F) -> F:
+        @functools.wraps(func)
+        def wrapper(self: Any, *args: Any, **kwargs: Any) -> Any:
+            if size(self) < SMALL_BLAS_DIM:
+                return func(self, *args, **kwargs)
+            with _SingleThreadedBLAS():
+                return func(self, *args, **kwargs)
+
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
 
 
 def guard_depth() -> int:

@@ -14,7 +14,7 @@ from setobs import ConstrainedZonotope
 from setobs.exceptions import SolverWarning
 from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
 from setobs.geometry.zonotope import factor_polytope
-from tests.conftest import cripple_highs, exact_extremes, random_cz
+from tests.conftest import cripple_highs, disable_compiled_lps, exact_extremes, random_cz
 from tests.oracles import assert_outward_sums, outward_sum_cases
 
 seeds = st.integers(0, 2**32 - 1)
@@ -109,7 +109,7 @@ def test_total_solver_failure_gives_a_wider_certified_box_and_a_warning(seed):
     Z = random_cz(rng, n=2, n_g=5, n_c=2)
     with pytest.MonkeyPatch.context() as mp:
         cripple_highs(mp)
-        mp.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
+        disable_compiled_lps(mp)
         with pytest.warns(SolverWarning, match="failed under every solver setting"):
             box = Z.interval_hull()
         assert factor_polytope(Z).fallbacks > 0
@@ -143,7 +143,7 @@ def test_an_lp_no_setting_decides_is_decided_by_the_perturbed_restart(seed, monk
 
     monkeypatch.setattr(FactorPolytope, "perturbed_objective", perturbed)
     monkeypatch.setattr(FactorPolytope, "solve_objective", stalling)
-    monkeypatch.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
+    disable_compiled_lps(monkeypatch)
     import warnings
 
     with warnings.catch_warnings():

@@ -267,11 +267,10 @@ def test_consistent_data_never_abort_a_run(fast):
 
 def test_a_fallback_step_is_flagged_and_warned_once(monkeypatch):
     from setobs.exceptions import SolverWarning
-    from setobs.geometry.lp import FactorPolytope
-    from tests.conftest import cripple_highs
+    from tests.conftest import cripple_highs, disable_compiled_lps
 
     cripple_highs(monkeypatch)
-    monkeypatch.setattr(FactorPolytope, "try_compiled", lambda self, w, we, wp: None)
+    disable_compiled_lps(monkeypatch)
     sys_ = so.examples.chang2006()
     Y, D = simulate(sys_, 12, np.random.default_rng(0), np.zeros(3), [0, 0], 1.0)
     with pytest.warns(SolverWarning, match="warned once") as rec:

@@ -897,3 +897,49 @@ def solve_batch(structure, data, state, params, out):
             codes[i] = NOT_CERTIFIED
         else:
             codes[i] = OPTIMAL
+
+
+@njit(cache=True)
+def phase1(As, bs, h, maxit):
+    """The phase-1 LP of :meth:`setobs.geometry.lp.FactorPolytope.emptiness` (every
+    ``h_j`` finite) by the dual simplex: ``min sum(s+ + s-)`` subject to
+    ``As xi + s+ - s- = bs``, ``|xi| <= h``, ``s+-`` in ``[0, 2 S]``, written with the
+    shifted slacks ``s+- = S + t+-``, ``|t+-| <= S`` (the shifts cancel in the rows),
+    so that every variable has a symmetric bound. ``S = 1 + sum |bs|`` exceeds any
+    optimal slack (``xi = 0`` violates by ``sum |bs|`` in all). The slack columns
+    ``t+`` are the initial basis (``B = I``). The costs are first perturbed (the
+    ``xi`` columns cost nothing: dual degenerate), then the true costs finish from
+    that basis, as in :func:`solve_batch`. Returns ``(code, xi, y)``: the simplex's
+    point and row multiplier, which the caller certifies.
+    """
+    m, n = As.shape
+    N = n + 2 * m
+    A = np.zeros((m, N))
+    A[:, :n] = As
+    S = 1.0
+    for i in range(m):
+        A[i, n + i] = 1.0
+        A[i, n + m + i] = -1.0
+        S += abs(bs[i])
+    AT = np.ascontiguousarray(A.T)
+    H = np.empty(N)
+    H[:n] = h
+    H[n:] = S
+    w = np.zeros(N)
+    w[n:] = 1.0
+    wp = np.empty(N)
+    for j in range(N):
+        frac = (j * 0.6180339887498949) % 1.0
+        sg = 1.0 if frac < 0.5 else -1.0
+        wp[j] = w[j] + sg * PERTURB * (1.0 + frac)
+    basis = np.arange(n, n + m).astype(np.int64)
+    upper = np.zeros(N, np.bool_)
+    Binv = np.eye(m)
+    npiv = np.zeros(1, np.int64)
+    nit = np.zeros(1, np.int64)
+    x = np.zeros(N)
+    y = np.zeros(m)
+    code = dual_simplex(A, AT, bs, H, wp, basis, upper, Binv, npiv, x, y, maxit, nit)
+    if code == OPTIMAL:
+        code = dual_simplex(A, AT, bs, H, w, basis, upper, Binv, npiv, x, y, maxit, nit)
+    return code, x[:n].copy(), y

@@ -43,7 +43,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from .._blas import with_single_threaded_blas
+from .._blas import with_single_threaded_blas, with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
 from .._rounding import pow2_inverse
 from ..tolerances import (
@@ -250,6 +250,58 @@ class FixedStructureLP:
         self.binv0 = binv
         self.maxit = 20 * (mr + 5)
 
+    @classmethod
+    def bounded(cls, A: NDArray[np.float64], W: NDArray[np.float64]) -> FixedStructureLP:
+        """The structure of ``min W[i]^T xi`` over ``{A xi = b, |xi| <= h}`` with every
+        ``h_j`` finite, built without rank decisions: one artificial column per row
+        (``[A | I]``, artificial bounds ``0``, so the LP is unchanged) gives a
+        nonsingular initial basis whatever the rank of ``A``. Pass ``h`` extended by
+        ``m`` zeros (:meth:`minimize_all`); the multipliers are those of the rows of
+        ``A``, certified on ``[A | I]`` (the artificial terms vanish with their zero
+        bounds), so the bounds hold for the original LP. A redundant row keeps its
+        artificial in the basis at zero; an inconsistent one makes the LP infeasible
+        (reported not solved).
+
+        Parameters
+        ----------
+        A : ndarray, shape (m, n)
+            Constraint matrix.
+        W : ndarray, shape (n_lp, n)
+            Objectives.
+        """
+        self = object.__new__(cls)
+        m, n = A.shape
+        Aa = np.empty((m, n + m))
+        Aa[:, :n] = A
+        Aa[:, n:] = np.eye(m)
+        Wa = np.zeros((W.shape[0], n + m))
+        Wa[:, :n] = W
+        self.A, self.W = Aa, Wa
+        self.m, self.n, self.n_lp = m, n + m, Wa.shape[0]
+        self.free = np.zeros(n + m, dtype=bool)
+        self.unbounded_radius = UNBOUNDED_RADIUS
+        self.fidx = np.zeros(0, dtype=np.int64)
+        self.bidx = np.arange(n + m, dtype=np.int64)
+        self.usable, self.reason = True, ""
+        S = pow2_inverse(_floored(np.sqrt((Aa * Aa).sum(axis=0))))
+        As = Aa * S
+        R = pow2_inverse(_floored(np.sqrt((As * As).sum(axis=1))))
+        As *= R[:, None]
+        self.S_B, self.R = S, R
+        self.pinvU = self.pinvU_orig = np.zeros((m, 0))
+        self.yU = np.zeros((self.n_lp, m))
+        self.dirstat = np.zeros(self.n_lp, dtype=np.int64)
+        self.Wred = np.ascontiguousarray(Wa * S)
+        self.Q2 = np.eye(m)
+        self.Q0 = self._absQ0 = np.zeros((m, 0))
+        self._absAB = np.abs(As)
+        self.Ared, self.AredT = As, np.ascontiguousarray(As.T)
+        self.mr = m
+        self.basis0 = np.arange(n, n + m, dtype=np.int64)
+        self.binv0 = np.diag(1.0 / (R * S[n:]))
+        self.maxit = 20 * (m + 5)
+        return self
+
     def _unusable(self, why: str) -> None:
         self.usable = False
         self.reason = why
@@ -258,7 +310,7 @@ class FixedStructureLP:
         """A fresh warm-start state (initial basis from QR with pivoting)."""
         return LPState(self)
 
-    @with_single_threaded_blas
+    @with_single_threaded_blas_unless_small(lambda lp: max(lp.m, lp.n))
     def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
                      state: LPState | None = None, *, b_err: NDArray[np.float64] | None = None,
                      return_duals: bool = False):

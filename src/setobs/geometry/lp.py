@@ -69,7 +69,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .._blas import with_single_threaded_blas
+from .._blas import with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
 from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, two_prod
 from ..exceptions import EmptySetError
@@ -327,6 +327,15 @@ def _option(hs: highspy.Highs, name: str) -> int:
 
 def _status_name(h: highspy.Highs) -> str:
     return h.modelStatusToString(h.getModelStatus())
+
+
+def _polytope_size(fp: FactorPolytope) -> int:
+    """Largest dimension of a factor polytope's matrices (the phase-1 LP's ``2 n_c``
+    extra columns are identities: its products stay below OpenBLAS's thresholds)."""
+    return max(fp.n_g, fp.n_c)
+
+
+_blas_unless_small = with_single_threaded_blas_unless_small(_polytope_size)
 
 
 class FactorPolytope:
@@ -596,7 +605,7 @@ class FactorPolytope:
         hs.run()
         return hs.getModelStatus()
 
-    @with_single_threaded_blas
+    @_blas_unless_small
     def minimize(
         self,
         w: NDArray[np.float64],
@@ -752,6 +761,38 @@ class FactorPolytope:
         best = max(best, self.certify(w, np.zeros(self.n_c), w_err, w_pair))
         self.fallbacks += 1
         return LPResult(best, np.nan, None, "fallback")
+
+    def minimize_many(self, W: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Certified lower bounds of ``min W[i]^T xi`` for all ``i`` by the compiled
+        simplex (:meth:`FixedStructureLP.bounded <setobs.geometry.fastlp.FixedStructureLP.bounded>`:
+        one dual simplex warm from the previous objective's basis, each multiplier
+        certified like the HiGHS path's). For polytopes with a constraint and every
+        bound finite; elsewhere nothing is solved.
+
+        Parameters
+        ----------
+        W : ndarray, shape (n_lp, n_g)
+            Objectives (exact: no rounding error to carry).
+
+        Returns
+        -------
+        bounds : ndarray, shape (n_lp,)
+            Certified lower bounds where ``ok``.
+        ok : ndarray of bool, shape (n_lp,)
+            Solved with the certified bound within the fast path's gap of the simplex
+            objective; the others go to :meth:`minimize` (which also decides
+            emptiness).
+        """
+        n_lp = W.shape[0]
+        if self.n_c == 0 or self._unb.any() or not n_lp:
+            return np.full(n_lp, -np.inf), np.zeros(n_lp, dtype=bool)
+        from .fastlp import FixedStructureLP
+
+        with self._lock:
+            lp = FixedStructureLP.bounded(self.A, W)
+            return lp.minimize_all(self.b, np.concatenate([self.h, np.zeros(self.n_c)]),
+                                   b_err=self.b_err)
 
     def _nearly_feasible(self, w, w_err, w_pair, hs, y, x, bound) -> LPResult | None:
         """An "optimal" answer at a point slightly off the rows, accepted as exact when
@@ -1017,7 +1058,7 @@ class FactorPolytope:
         y[nbr] = yn
         return y
 
-    @with_single_threaded_blas
+    @_blas_unless_small
     def minimize_relaxed(
         self,
         w: NDArray[np.float64],
@@ -1082,7 +1123,7 @@ class FactorPolytope:
         m, e = np.frexp(np.where(s > 0.0, s, 1.0))
         return np.ldexp(1.0, np.where(m == 0.5, e - 1, e))
 
-    @with_single_threaded_blas
+    @_blas_unless_small
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness test with a phase-1 LP.
 
@@ -1111,19 +1152,29 @@ class FactorPolytope:
             self._emptiness[tol] = rep
             return rep
 
-    def _phase1(self, tol: float) -> EmptinessReport:
-        if self.n_c == 0:
-            return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
-        scale = self._row_scale()
-        As = self.A / scale[:, None]
-        bs = self.b / scale
+    def _phase1_compiled(self, As: NDArray[np.float64], bs: NDArray[np.float64]
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """``(y, xi)`` of the phase-1 LP by the compiled dual simplex
+        (:func:`setobs.geometry._simplex.phase1`; every bound finite), or ``None``."""
+        if self._unb.any():
+            return None
+        from .fastlp import _simplex
+
+        code, x, y = _simplex.phase1(np.ascontiguousarray(As), bs, self.h,
+                                     50 * (self.n_c + self.n_g))
+        if code != _simplex.OPTIMAL or not (np.isfinite(y).all() and np.isfinite(x).all()):
+            return None
+        return y, x
+
+    def _phase1_highs(self, As: NDArray[np.float64], bs: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """``(y, xi)`` of the phase-1 LP by HiGHS (with retries), or ``None``."""
         n_c, n_g = self.n_c, self.n_g
         lo, up = self._col_bounds()
         big = np.hstack([As, np.eye(n_c), -np.eye(n_c)])
         lo_c = np.concatenate([lo, np.zeros(2 * n_c)])
         up_c = np.concatenate([up, np.full(2 * n_c, _INF)])
         cost = np.concatenate([np.zeros(n_g), np.ones(2 * n_c)])
-        sol = None
         for options in ({"simplex_strategy": 1}, *self._RETRIES):
             hs = self.new_highs()
             for key, val in options.items():
@@ -1133,19 +1184,52 @@ class FactorPolytope:
             hs.run()
             if hs.getModelStatus() == highspy.HighsModelStatus.kOptimal:
                 sol = hs.getSolution()
-                break
-        if sol is None:
+                return (np.asarray(sol.row_dual, dtype=np.float64),
+                        np.asarray(sol.col_value, dtype=np.float64)[:n_g])
+        return None
+
+    def _phase1(self, tol: float) -> EmptinessReport:
+        if self.n_c == 0:
+            return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
+        scale = self._row_scale()
+        As = self.A / scale[:, None]
+        bs = self.b / scale
+        solved = self._phase1_compiled(As, bs)
+        if solved is not None:
+            rep = self._phase1_report(As, bs, scale, *solved, tol, compiled=True)
+            # undecided (no certificate above tol, no point within it): HiGHS decides
+            if rep.empty or rep.violation_found <= tol:
+                return rep
+        solved = self._phase1_highs(As, bs)
+        if solved is None:
             self.fallbacks += 1
             return EmptinessReport(False, 0.0, np.nan, tol)
-        y = np.asarray(sol.row_dual, dtype=np.float64)
-        x = np.asarray(sol.col_value, dtype=np.float64)[:n_g]
+        return self._phase1_report(As, bs, scale, *solved, tol)
+
+    def _phase1_report(self, As, bs, scale, y, x, tol: float, compiled: bool = False
+                       ) -> EmptinessReport:
+        """The certified verdict of a phase-1 solution ``(y, x)`` (scaled rows);
+        ``compiled``: every bound finite and the compiled kernels loaded, so the
+        certificate is :func:`setobs.geometry._simplex.certify` (the same bound and
+        error analysis as :func:`lagrangian_lower_bound`)."""
+        n_c, n_g = self.n_c, self.n_g
+        b_err = None if self.b_err is None else self.b_err / scale
         # Certified bound with the scaled data (exact: power-of-two scales); the
         # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
-        lower, y = lagrangian_lower_bound(
-            np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
-            unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
-            b_err=None if self.b_err is None else self.b_err / scale,
-        )
+        if compiled:
+            from .fastlp import _simplex
+
+            y = np.array(y, dtype=np.float64)
+            lower, _ = _simplex.certify(
+                np.zeros(n_g), np.ascontiguousarray(As), bs, self.h, y,
+                np.zeros(0, dtype=np.int64), np.zeros((n_c, 0)), self.unbounded_radius, 0.0,
+                np.zeros(n_c) if b_err is None else b_err)
+        else:
+            lower, y = lagrangian_lower_bound(
+                np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
+                unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
+                b_err=b_err,
+            )
         norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * gamma(n_c + 1))
         if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
             lower_inf = round_down(lower / norm1)

@@ -722,6 +722,10 @@ class ConstrainedZonotope:
         cached = self._cache.get("hull")
         if cached is not None:
             return cached
+        if not self.n_con:
+            out = (self._zonotope_hull(), False)
+            self._cache["hull"] = out
+            return out
         n = self.dim
         low = np.zeros(n)
         upp = np.zeros(n)
@@ -730,10 +734,15 @@ class ConstrainedZonotope:
         zero_rows = ~self._G.any(axis=1)
         if self.n_con and zero_rows.any() and fp.emptiness().empty:
             raise EmptySetError("the set is empty (certified by the phase-1 LP)")
-        for i in np.flatnonzero(~zero_rows):
+        rows = np.flatnonzero(~zero_rows)
+        W = np.empty((2 * rows.size, self.n_gen))
+        W[0::2] = self._G[rows]
+        W[1::2] = -self._G[rows]
+        fast, ok = fp.minimize_many(W)
+        for t, i in enumerate(rows):
             g = self._G[i]
-            lw = fp.minimize(g).bound
-            up = -fp.minimize(-g).bound
+            lw = fast[2 * t] if ok[2 * t] else fp.minimize(g).bound
+            up = -fast[2 * t + 1] if ok[2 * t + 1] else -fp.minimize(-g).bound
             if lw > up:
                 # Crossing certified bounds prove the exact set empty; within the
                 # emptiness tolerance it may not be: decide, then relax outward.
@@ -746,6 +755,27 @@ class ConstrainedZonotope:
         out = (Box(lo, hi), fp.fallbacks > before)
         self._cache["hull"] = out
         return out
+
+    def _zonotope_hull(self) -> Box:
+        """The hull without constraints, in closed form: ``c +- |G| h`` (Scott et al.
+        2016, eq. (4)), the radius rounded up (``gamma_(n_g + 1)``, then one ulp) and
+        infinite in rows that an unbounded factor reaches."""
+        G, h = self._G, self._h
+        unb = np.isinf(h)
+        absG = np.abs(G)
+        Gb, hb = (absG[:, ~unb], h[~unb]) if unb.any() else (absG, h)
+        rad = Gb @ hb
+        # exact where a row has one term and its bound is a power of two (boxes,
+        # points, axis-aligned generators); else rounded up
+        one = (Gb != 0.0).sum(axis=1) <= 1
+        pow2 = (np.frexp(hb)[0] == 0.5) | (hb == 0.0)
+        exact = one & ((Gb == 0.0) | pow2[None, :]).all(axis=1)
+        rad = np.where(exact, rad, np.nextafter(rad * (1.0 + gamma(self.n_gen + 1)), np.inf))
+        if unb.any():
+            rad[absG[:, unb].any(axis=1)] = np.inf
+        offset = rad > 0.0
+        lo, hi = outward_interval(self._c, self._cerr, -rad, rad, offset=offset)
+        return Box(lo, hi)
 
     def support(self, direction: ArrayLike) -> float:
         """Certified support function ``max_{z in Z} d^T z`` (``+inf`` if unbounded).
