@@ -134,6 +134,39 @@ def test_isequal_cases():
     c1b = ConstrainedZonotope(c1.G, c1.c, A=c1.A, b=[1 + np.finfo(float).eps])
     assert c1.is_equal(c1b).holds is True
     assert c1.is_equal(cora(*CZ2)).holds is False
+    # compensate for the small offset by a tolerance (CORA: isequal(cZ1, cZ1 + 1e-8, 1e-6))
+    assert c1.is_equal(c1 + 1e-8 * np.ones(2), tol=1e-6).holds is True
+    assert c1.is_equal(c1 + 1e-4 * np.ones(2), tol=1e-6).holds is False
+
+
+# ---------------------------------------------------------------- test_conZonotope_representsa
+def test_representsa_cases():
+    assert ConstrainedZonotope.empty(2).represents("empty")
+    assert not cora(*CZ1).represents("empty")
+    # origin
+    assert not ConstrainedZonotope.empty(2).represents("origin")
+    assert ConstrainedZonotope.point(np.zeros(3)).represents("origin")
+    assert ConstrainedZonotope(np.zeros((2, 2)), np.zeros(2)).represents("origin")
+    assert not ConstrainedZonotope(np.zeros((2, 1)), np.ones(2)).represents("origin")
+    assert not ConstrainedZonotope([[1.0], [0.0], [-1.0]], np.zeros(3)).represents("origin")
+    below = ConstrainedZonotope([[0.02, -0.1], [0.2, 0.05]], [0.5, 0.5])
+    assert below.represents("origin", tol=1.0)
+    # zonotope
+    assert ConstrainedZonotope([[1, -1, 0], [2, 1, 3]], [1, 2]).represents("zonotope")
+    # CORA expects False here: its check is syntactic (a conZonotope with constraints is
+    # "not a zonotope"). setobs decides the geometry: with xi_3 = 1 - xi_1 the set is
+    # {(2 xi_1 + 1, 2 xi_2 - xi_1 + 1) : xi_1 in [0, 1], xi_2 in [-1, 1]}, the affine
+    # image of a box, i.e. the parallelogram with vertices (1, -1), (1, 3), (3, -2),
+    # (3, 2) (by hand): a zonotope.
+    c1 = cora(*CZ1)
+    assert same_points(c1.vertices(), [[1, -1], [1, 3], [3, -2], [3, 2]])
+    assert c1.represents("zonotope")
+    assert not cora(*CZ2).represents("zonotope")  # (a triangle: not centrally symmetric)
+    # interval
+    assert ConstrainedZonotope([[1, 0], [0, 2]], [1, 2]).represents("box")
+    # point
+    assert ConstrainedZonotope.point([1.0, 2.0]).represents("point")
+    assert not ConstrainedZonotope([[1, 0], [0, 2]], [1, 2]).represents("point")
 
 
 # ---------------------------------------------------------------- test_conZonotope_empty, uminus

@@ -21,10 +21,11 @@ from .operations import (
     intersect_strip,
     interval_matrix_map,
     pontryagin_difference,
+    quad_map,
 )
 from .polytope import HRep, cz_from_hpolytope, polygon_2d, to_hrep, vertices
 from .reduction import eliminate_constraints, reduce_exact, reduce_order, remove_redundancy, rescale
-from .relations import ContainmentResult, is_equal, is_subset, is_subset_of_polytope
+from .relations import ContainmentResult, is_equal, is_subset, is_subset_of_polytope, represents
 from .zonotope import ConstrainedZonotope
 
 __all__ = [
@@ -55,9 +56,11 @@ __all__ = [
     "nearest_point",
     "polygon_2d",
     "pontryagin_difference",
+    "quad_map",
     "reduce_exact",
     "reduce_order",
     "remove_redundancy",
+    "represents",
     "rescale",
     "sample",
     "to_hrep",

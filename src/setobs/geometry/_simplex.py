@@ -11,6 +11,8 @@ as on the HiGHS path, so soundness never depends on the simplex.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -943,3 +945,60 @@ def phase1(As, bs, h, maxit):
     if code == OPTIMAL:
         code = dual_simplex(A, AT, bs, H, w, basis, upper, Binv, npiv, x, y, maxit, nit)
     return code, x[:n].copy(), y
+
+
+@njit(cache=True)
+def emptiness(A, b, h, b_err, radius, maxit):
+    """The whole phase-1 emptiness test of
+    :meth:`setobs.geometry.lp.FactorPolytope.emptiness` for every ``h_j`` finite, in one
+    call: the rows scaled by powers of two (the smallest at least
+    ``max(max_j |A_ij|, |b_i|)``, exact), :func:`phase1`, the certificate
+    (:func:`certify` of the zero objective, ``b_err`` scaled alike) divided by
+    ``||y||_1`` and rounded down, and the phase-1 point clipped to its bounds with
+    its largest scaled row violation. Returns ``(code, lower_inf, found, xi)``;
+    ``code != OPTIMAL`` means nothing was decided.
+    """
+    m, n = A.shape
+    As = np.empty((m, n))
+    bs = np.empty(m)
+    be = np.empty(m)
+    for i in range(m):
+        s = abs(b[i])
+        for j in range(n):
+            s = max(s, abs(A[i, j]))
+        if s > 0.0:
+            mant, ex = math.frexp(s)
+            sc = math.ldexp(1.0, ex - 1 if mant == 0.5 else ex)
+        else:
+            sc = 1.0
+        for j in range(n):
+            As[i, j] = A[i, j] / sc
+        bs[i] = b[i] / sc
+        be[i] = b_err[i] / sc
+    code, x, y = phase1(As, bs, h, maxit)
+    if code != OPTIMAL:
+        return code, 0.0, np.nan, x
+    for j in range(n):
+        if not (np.isfinite(x[j])):
+            return NUMERICAL, 0.0, np.nan, x
+    for i in range(m):
+        if not np.isfinite(y[i]):
+            return NUMERICAL, 0.0, np.nan, x
+    lower, _ = certify(np.zeros(n), As, bs, h, y, np.zeros(0, np.int64), np.zeros((m, 0)),
+                       radius, 0.0, be)
+    norm1 = 0.0
+    for i in range(m):
+        norm1 += abs(y[i])
+    norm1 *= 1.0 + 2.0 * _gamma(m + 1)
+    lower_inf = 0.0
+    if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
+        lower_inf = np.nextafter(lower / norm1, -np.inf)
+    found = 0.0
+    for j in range(n):
+        x[j] = min(max(x[j], -h[j]), h[j])
+    for i in range(m):
+        r = -bs[i]
+        for j in range(n):
+            r += As[i, j] * x[j]
+        found = max(found, abs(r))
+    return OPTIMAL, lower_inf, found, x

@@ -432,8 +432,24 @@ class FactorPolytope:
         return hs
 
     @staticmethod
-    def _pass(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> bool:
-        """Pass the LP to HiGHS; ``False`` if HiGHS rejects the model."""
+    def pass_model(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> bool:
+        """Pass ``min cost^T x, lo_r <= A x <= up_r, lo_c <= x <= up_c`` (dense ``A``) to the
+        HiGHS model ``hs``, with the library's iteration limits; ``False`` if HiGHS
+        rejects the model.
+
+        Parameters
+        ----------
+        hs : highspy.Highs
+            A model from :meth:`new_highs`.
+        A : ndarray, shape (m, n)
+            Constraint matrix.
+        lo_c, up_c : ndarray, shape (n,)
+            Column bounds.
+        lo_r, up_r : ndarray, shape (m,)
+            Row bounds.
+        cost : ndarray, shape (n,)
+            Objective.
+        """
         lp = highspy.HighsLp()
         n_r, n_col = A.shape
         lp.num_col_ = n_col
@@ -499,7 +515,7 @@ class FactorPolytope:
         for key, val in (options or {}).items():
             hs.setOptionValue(key, val)
         lo, up = self._col_bounds()
-        return hs if self._pass(hs, self.A, lo, up, row_lo, row_hi, cost) else None
+        return hs if self.pass_model(hs, self.A, lo, up, row_lo, row_hi, cost) else None
 
     def highs_model(self) -> highspy.Highs | None:
         if self._model is None:
@@ -898,7 +914,7 @@ class FactorPolytope:
         scale = self.objective_scale(w2)
         hs = self.new_highs()
         hs.setOptionValue("simplex_strategy", 1)
-        if not self._pass(hs, A2, np.concatenate([-hb, -ones]), np.concatenate([hb, ones]),
+        if not self.pass_model(hs, A2, np.concatenate([-hb, -ones]), np.concatenate([hb, ones]),
                           b2, b2, w2 / scale):
             return None
         hs.run()
@@ -1152,20 +1168,6 @@ class FactorPolytope:
             self._emptiness[tol] = rep
             return rep
 
-    def _phase1_compiled(self, As: NDArray[np.float64], bs: NDArray[np.float64]
-                         ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-        """``(y, xi)`` of the phase-1 LP by the compiled dual simplex
-        (:func:`setobs.geometry._simplex.phase1`; every bound finite), or ``None``."""
-        if self._unb.any():
-            return None
-        from .fastlp import _simplex
-
-        code, x, y = _simplex.phase1(np.ascontiguousarray(As), bs, self.h,
-                                     50 * (self.n_c + self.n_g))
-        if code != _simplex.OPTIMAL or not (np.isfinite(y).all() and np.isfinite(x).all()):
-            return None
-        return y, x
-
     def _phase1_highs(self, As: NDArray[np.float64], bs: NDArray[np.float64]
                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
         """``(y, xi)`` of the phase-1 LP by HiGHS (with retries), or ``None``."""
@@ -1179,7 +1181,7 @@ class FactorPolytope:
             hs = self.new_highs()
             for key, val in options.items():
                 hs.setOptionValue(key, val)
-            if not self._pass(hs, big, lo_c, up_c, bs, bs, cost):
+            if not self.pass_model(hs, big, lo_c, up_c, bs, bs, cost):
                 continue
             hs.run()
             if hs.getModelStatus() == highspy.HighsModelStatus.kOptimal:
@@ -1191,45 +1193,38 @@ class FactorPolytope:
     def _phase1(self, tol: float) -> EmptinessReport:
         if self.n_c == 0:
             return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
+        if not self._unb.any():
+            # every bound finite: the compiled phase 1, scaled and certified in one call
+            from .fastlp import _simplex
+
+            code, lower_inf, found, xc = _simplex.emptiness(
+                self.A, self.b, self.h, np.zeros(self.n_c) if self.b_err is None else self.b_err,
+                self.unbounded_radius, 50 * (self.n_c + self.n_g))
+            if code == _simplex.OPTIMAL:
+                empty = bool(lower_inf > tol)
+                # undecided (no certificate above tol, no point within it): HiGHS decides
+                if empty or found <= tol:
+                    return EmptinessReport(empty, float(lower_inf), float(found), tol,
+                                           None if empty else xc)
         scale = self._row_scale()
         As = self.A / scale[:, None]
         bs = self.b / scale
-        solved = self._phase1_compiled(As, bs)
-        if solved is not None:
-            rep = self._phase1_report(As, bs, scale, *solved, tol, compiled=True)
-            # undecided (no certificate above tol, no point within it): HiGHS decides
-            if rep.empty or rep.violation_found <= tol:
-                return rep
         solved = self._phase1_highs(As, bs)
         if solved is None:
             self.fallbacks += 1
             return EmptinessReport(False, 0.0, np.nan, tol)
         return self._phase1_report(As, bs, scale, *solved, tol)
 
-    def _phase1_report(self, As, bs, scale, y, x, tol: float, compiled: bool = False
-                       ) -> EmptinessReport:
-        """The certified verdict of a phase-1 solution ``(y, x)`` (scaled rows);
-        ``compiled``: every bound finite and the compiled kernels loaded, so the
-        certificate is :func:`setobs.geometry._simplex.certify` (the same bound and
-        error analysis as :func:`lagrangian_lower_bound`)."""
+    def _phase1_report(self, As, bs, scale, y, x, tol: float) -> EmptinessReport:
+        """The certified verdict of a phase-1 solution ``(y, x)`` (scaled rows)."""
         n_c, n_g = self.n_c, self.n_g
-        b_err = None if self.b_err is None else self.b_err / scale
         # Certified bound with the scaled data (exact: power-of-two scales); the
         # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
-        if compiled:
-            from .fastlp import _simplex
-
-            y = np.array(y, dtype=np.float64)
-            lower, _ = _simplex.certify(
-                np.zeros(n_g), np.ascontiguousarray(As), bs, self.h, y,
-                np.zeros(0, dtype=np.int64), np.zeros((n_c, 0)), self.unbounded_radius, 0.0,
-                np.zeros(n_c) if b_err is None else b_err)
-        else:
-            lower, y = lagrangian_lower_bound(
-                np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
-                unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
-                b_err=b_err,
-            )
+        lower, y = lagrangian_lower_bound(
+            np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
+            unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
+            b_err=None if self.b_err is None else self.b_err / scale,
+        )
         norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * gamma(n_c + 1))
         if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
             lower_inf = round_down(lower / norm1)

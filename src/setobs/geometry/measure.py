@@ -26,9 +26,9 @@ from .._lazy import optional_import
 from .._rounding import gamma, round_down
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from .lp import FactorPolytope, highspy
 from .zonotope import (
     ConstrainedZonotope,
-    factor_polytope,
     hull_with_status,
     support_unwarned,
     unit_scaled,
@@ -270,22 +270,50 @@ class _FacetChords:
         return lo, hi
 
 
-class _LPChords:
-    """Chords from two LPs on ``{t : x + t u in Z}``."""
+class LPChords:
+    """Chords from two LPs on ``{t : x + t u in Z}``, all on one HiGHS model per chain.
+
+    Columns ``(t, xi)`` (``t`` free, ``|xi| <= h``), rows ``u t - G xi = c - x`` and
+    ``A xi = b``: between chords only the ``t`` column (``u``), the first rows' bounds
+    (``c - x``) and the sign of ``t``'s cost change, so each LP starts from the last
+    basis (warm) instead of a new model (0.6 ms per LP before).
+    """
 
     def __init__(self, Z: ConstrainedZonotope) -> None:
         self.Z = Z
+        n, n_g, n_c = Z.dim, Z.n_gen, Z.n_con
+        M = np.zeros((n + n_c, 1 + n_g))
+        M[:n, 0] = 1.0  # (the structure of u; its values are set per chord)
+        M[:n, 1:] = -Z.G
+        M[n:, 1:] = Z.A
+        inf = np.inf
+        up = np.concatenate([[inf], Z.h])  # (h = inf: free, as HiGHS's infinity)
+        self.hs = FactorPolytope.new_highs()
+        self.hs.setOptionValue("simplex_strategy", 1)
+        rows = np.concatenate([Z.c, Z.b])
+        ok = FactorPolytope.pass_model(self.hs, M, -up, up, rows, rows,
+                                       np.concatenate([[1.0], np.zeros(n_g)]))
+        if not ok:
+            raise SolverError("hit-and-run: HiGHS rejected the chord model")
+        self.n = n
+        self.idx = np.arange(n, dtype=np.int32)
+
+    def _solve(self, sign: float) -> float:
+        hs = self.hs
+        hs.changeColCost(0, sign)
+        hs.run()
+        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            raise SolverError("a chord LP of hit-and-run failed",
+                              status=str(hs.getModelStatus()))
+        return float(hs.getSolution().col_value[0])
 
     def chord(self, x: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, float]:
-        T = ConstrainedZonotope.full_space(1).intersect(self.Z - x, u[:, None])
-        fp = factor_polytope(T)
-        w = np.zeros(T.n_gen)
-        w[0] = 1.0
-        lo = fp.minimize(w)
-        hi = fp.minimize(-w)
-        if lo.status != "optimal" or hi.status != "optimal":
-            raise SolverError("a chord LP of hit-and-run failed", status=lo.status)
-        return float(lo.objective), float(-hi.objective)
+        hs = self.hs
+        for i in range(self.n):
+            hs.changeCoeff(i, 0, float(u[i]))
+        r = self.Z.c - x
+        hs.changeRowsBounds(self.n, self.idx, r, r)
+        return self._solve(1.0), self._solve(-1.0)
 
 
 def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None = None, *,
@@ -355,7 +383,7 @@ def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None
         raise DimensionError(f"thin must be a positive integer, got {thin!r}")
     thin = int(thin)
     use_facets = method == "facets" or (method == "auto" and Z.dim <= 3)
-    oracle = _FacetChords(Z) if use_facets else _LPChords(Z)
+    oracle = _FacetChords(Z) if use_facets else LPChords(Z)
     scale = max(1.0, float(np.abs(np.concatenate([box.lo, box.hi])).max()))
     out = np.empty((int(n), Z.dim))
     total = burn_in + int(n) * thin

@@ -25,12 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import as_matrix, as_vector
+from .._validation import as_matrix, as_vector, check_real_scalar
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import CONTAINMENT_RTOL, FEASIBILITY_TOL
 from .zonotope import ConstrainedZonotope, magnitude, scaled_by, support_unwarned, unit_scaled
 
-__all__ = ["ContainmentResult", "is_equal", "is_subset", "is_subset_of_polytope"]
+__all__ = ["ContainmentResult", "is_equal", "is_subset", "is_subset_of_polytope", "represents"]
 
 
 @dataclass(frozen=True)
@@ -306,22 +306,50 @@ def _matching_certificate(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> boo
     return bool(ok_eq and ok_ub)
 
 
-def is_equal(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResult:
+def is_equal(Z: ConstrainedZonotope, W: ConstrainedZonotope, tol: float = 0.0
+             ) -> ContainmentResult:
     """Whether ``Z`` and ``W`` are the same set: :func:`is_subset` both ways.
 
-    ``False`` comes with a witness in one set and not the other.
+    ``False`` comes with a witness in one set and not the other. With ``tol > 0``
+    the sets are compared up to that Hausdorff distance in the infinity norm (CORA's
+    ``isequal(S1, S2, tol)``): ``Z subset W + B`` and ``W subset Z + B`` with ``B``
+    the box ``[-tol, tol]^n`` (a witness is then farther than ``tol`` from the other
+    set).
 
     Parameters
     ----------
     Z, W : ConstrainedZonotope
         The sets.
+    tol : float
+        Largest distance (infinity norm, the sets' units) at which they still count as
+        equal (default 0: up to :data:`~setobs.tolerances.CONTAINMENT_RTOL` only).
 
     Examples
     --------
     >>> Z = ConstrainedZonotope.from_box([0.0], [1.0])
     >>> bool(is_equal(Z, Z + np.array([0.0]))), bool(is_equal(Z, Z + np.array([1e-3])))
     (True, False)
+    >>> bool(is_equal(Z, Z + np.array([1e-3]), tol=2e-3))
+    True
     """
+    tol = check_real_scalar("tol", tol, nonnegative=True)
+    if tol > 0.0:
+        if not isinstance(W, ConstrainedZonotope):
+            raise TypeError(f"is_equal expects a ConstrainedZonotope, got {type(W).__name__}")
+        if W.dim != Z.dim:
+            raise DimensionError(f"equality: dimensions differ ({Z.dim} vs {W.dim})")
+        B = ConstrainedZonotope.from_box(np.full(Z.dim, -tol), np.full(Z.dim, tol))
+        Z, W, Zb, Wb = Z, W, Z + B, W + B
+        a = is_subset(Z, Wb)
+        if a.holds is False:
+            return ContainmentResult(False, a.witness, a.method, a.margin, a.tol)
+        b = is_subset(W, Zb)
+        if b.holds is False:
+            return ContainmentResult(False, b.witness, b.method, b.margin, b.tol)
+        holds = True if (a.holds and b.holds) else None
+        return ContainmentResult(holds, None, f"{a.method}/{b.method}",
+                                 float(np.nanmax([a.margin, b.margin, -np.inf])),
+                                 max(a.tol, b.tol))
     a = is_subset(Z, W)
     if a.holds is False:
         return ContainmentResult(False, a.witness, a.method, a.margin, a.tol)
@@ -332,3 +360,139 @@ def is_equal(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResul
     return ContainmentResult(holds, None, f"{a.method}/{b.method}",
                              float(np.nanmax([a.margin, b.margin, -np.inf])),
                              max(a.tol, b.tol))
+
+
+#: Kinds :func:`represents` decides.
+REPRESENTABLE_KINDS = ("empty", "point", "origin", "box", "zonotope")
+
+
+def represents(Z: ConstrainedZonotope, kind: str, tol: float | None = None) -> bool:
+    """Whether ``Z`` is (up to ``tol``) a set of a simpler kind (CORA's ``representsa``).
+
+    * ``"empty"``: certified empty (:meth:`~ConstrainedZonotope.is_empty`, with ``tol``
+      as the feasibility tolerance when given);
+    * ``"point"``: non-empty and its certified interval hull at most ``tol`` wide in
+      every coordinate; ``"origin"``: that point within ``tol`` of ``0``;
+    * ``"box"``: non-empty, bounded, and every corner of its interval hull within
+      ``tol`` of the set (infinity norm): a convex set that contains its hull's
+      corners is its hull (``2^n`` containment LPs, ``n <= 12``);
+    * ``"zonotope"``: a set without constraints is one; otherwise the constraints are
+      first removed exactly where they can be (:func:`~setobs.geometry.reduce_exact`),
+      and else the polytope is tested geometrically: a polytope is a zonotope iff
+      every 2-face is centrally symmetric (Shephard 1974; in the plane, iff it is
+      centrally symmetric), checked on its verified vertices and, in 3-D, on the
+      faces of their convex hull (Qhull), up to ``tol``. Lower-dimensional sets are
+      tested in their affine hull. Refused above 3 (affine) dimensions when the
+      constraints cannot be removed exactly.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+    kind : {"empty", "point", "origin", "box", "zonotope"}
+        The kind.
+    tol : float, optional
+        Absolute tolerance in the set's units (default ``CONTAINMENT_RTOL`` times
+        ``1 +`` the set's magnitude; for ``"empty"`` the default feasibility tolerance).
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``kind``.
+    NotImplementedError
+        For ``"box"`` above 12 dimensions and ``"zonotope"`` above 3 affine
+        dimensions with constraints that exact reduction cannot remove.
+
+    Examples
+    --------
+    >>> square = ConstrainedZonotope.from_hpolytope(
+    ...     [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]], [1.0, 1.0, 1.0, 1.0])
+    >>> represents(square, "box"), represents(square, "point")
+    (True, False)
+    >>> triangle = ConstrainedZonotope.from_vertices([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> represents(triangle, "zonotope")
+    False
+    """
+    if kind not in REPRESENTABLE_KINDS:
+        raise ValueError(f"kind must be one of {REPRESENTABLE_KINDS}, got {kind!r}")
+    if tol is not None:
+        tol = check_real_scalar("tol", tol, nonnegative=True)
+    if kind == "empty":
+        return Z.is_empty(FEASIBILITY_TOL if tol is None else max(tol, FEASIBILITY_TOL))
+    if Z.is_empty():
+        return False
+    if kind == "zonotope" and Z.n_con == 0 and np.isfinite(Z.h).all():
+        return True
+    box = Z.interval_hull()
+    if not (np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
+        return False  # unbounded: not a point, a box or a (bounded) zonotope
+    mag = float(np.max(np.abs(np.concatenate([box.lo, box.hi])), initial=0.0))
+    t = CONTAINMENT_RTOL * (1.0 + mag) if tol is None else tol
+    if kind in ("point", "origin"):
+        if not (box.width <= t).all():
+            return False
+        return kind == "point" or bool(np.abs(box.center).max(initial=0.0) <= t)
+    if kind == "box":
+        return _is_its_hull(Z, box, t)
+    return _is_zonotope(Z, t)
+
+
+def _corners(box) -> NDArray[np.float64]:
+    n = box.lo.size
+    signs = ((np.arange(2**n)[:, None] >> np.arange(n)[None, :]) & 1).astype(bool)
+    return np.where(signs, box.hi[None, :], box.lo[None, :])
+
+
+def _is_its_hull(Z: ConstrainedZonotope, box, t: float) -> bool:
+    if Z.dim > 12:
+        raise NotImplementedError("represents(..., 'box') checks the 2^n corners of the hull; "
+                                  f"n = {Z.dim} is above 12")
+    if Z.n_con == 0 and ((Z.G != 0.0).sum(axis=0) <= 1).all():
+        return True  # axis-aligned generators: a box
+    Zt = Z + ConstrainedZonotope.from_box(np.full(Z.dim, -t), np.full(Z.dim, t)) if t > 0 else Z
+    return all(Zt.contains(v) for v in _corners(box))
+
+
+def _is_zonotope(Z: ConstrainedZonotope, t: float) -> bool:
+    from .polytope import vertices
+    from .reduction import reduce_exact
+
+    R = reduce_exact(Z)
+    if R.n_con == 0:
+        return True
+    V = vertices(R)
+    centred = V - V.mean(axis=0)
+    _, sv, Vt = np.linalg.svd(centred, full_matrices=False)
+    d = int((sv > max(t, 1e-12 * float(sv.max(initial=0.0)))).sum())
+    if d <= 1:
+        return True  # a point or a segment
+    P = centred @ Vt[:d].T  # coordinates in the affine hull
+    if d == 2:
+        return _symmetric(P, t)
+    if d == 3:
+        from scipy.spatial import ConvexHull
+
+        hull = ConvexHull(P)
+        scale = 1.0 + float(np.abs(P).max())
+        ptol = max(t, 1e-9 * scale)
+        planes: list[NDArray[np.float64]] = []
+        for eq in hull.equations:  # (unit normal, offset) of each simplex: one per face
+            if not any(np.abs(eq - q).max() <= 1e-9 * scale for q in planes):
+                planes.append(eq)
+        for eq in planes:
+            F = P[np.abs(P @ eq[:3] + eq[3]) <= ptol]
+            if not _symmetric(F, t):
+                return False
+        return True
+    raise NotImplementedError(
+        f"represents(..., 'zonotope') decides polytopes up to 3 (affine) dimensions; this one "
+        f"has {d} and constraints that exact reduction cannot remove")
+
+
+def _symmetric(P: NDArray[np.float64], t: float) -> bool:
+    """Whether the point set ``P`` is centrally symmetric about its centroid, up to ``t``
+    (every reflected point within ``t`` of a point, infinity norm)."""
+    c = P.mean(axis=0)
+    Q = 2.0 * c - P
+    dist = np.abs(Q[:, None, :] - P[None, :, :]).max(axis=2).min(axis=1)
+    return bool((dist <= max(t, 8.0 * np.finfo(float).eps * (1.0 + np.abs(P).max()))).all())

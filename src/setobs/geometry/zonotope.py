@@ -36,6 +36,8 @@ __all__ = ["ConstrainedZonotope"]
 def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.float64]:
     """``[[X, 0], [0, Y]]`` (scipy's ``block_diag`` costs ~10x more on small matrices)."""
     out = np.zeros((X.shape[0] + Y.shape[0], X.shape[1] + Y.shape[1]))
+    if not out.shape[0]:
+        return out
     out[: X.shape[0], : X.shape[1]] = X
     out[X.shape[0] :, X.shape[1] :] = Y
     return out
@@ -73,7 +75,7 @@ def _sum_err(s, err) -> NDArray[np.float64] | None:
     ``gamma_2 |s|`` also covers the rounding of that product (zero where ``s = 0``:
     a floating-point sum is zero only if exact)."""
     new = np.abs(s)
-    if not new.any():
+    if not np.count_nonzero(new):  # (count_nonzero: ~0.3 us against ~1.4 for .any())
         return err
     new *= _GAMMA2
     return new if err is None else _add(err, new)
@@ -81,7 +83,7 @@ def _sum_err(s, err) -> NDArray[np.float64] | None:
 
 def _map_err(M, c, err) -> NDArray[np.float64] | None:
     """Bound for ``fl(M c)`` given the bound ``err`` carried by ``c``."""
-    if err is None and not c.any():
+    if err is None and not np.count_nonzero(c):
         return None
     k = M.shape[1]
     base = gamma(k + 1) * np.abs(c)
@@ -95,12 +97,18 @@ def _map_err(M, c, err) -> NDArray[np.float64] | None:
 def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
     """Bound for ``fl(y - C c)`` given the bounds carried by ``c`` and ``y``."""
     k = C.shape[1]
-    base = gamma(k + 1) * (np.abs(y) + np.abs(C) @ np.abs(c))
+    absC = np.abs(C)
+    base = absC @ np.abs(c)
+    base += np.abs(y)
+    base *= gamma(k + 1)
     if cerr is not None:
-        base = base + np.abs(C) @ cerr
+        base += absC @ cerr
     if yerr is not None:
-        base = base + yerr
-    return base * (1.0 + gamma(k + 3)) if base.any() else None
+        base += yerr
+    if not np.count_nonzero(base):
+        return None
+    base *= 1.0 + gamma(k + 3)
+    return base
 
 
 def _rebuild(G, c, A, b, h, unbounded_radius, cerr, berr) -> ConstrainedZonotope:
@@ -226,14 +234,14 @@ class ConstrainedZonotope:
         the exact operations). ``cerr``, ``berr``: as in :meth:`_trusted`."""
         self = object.__new__(cls)
         setattr_ = object.__setattr__
-        if cerr is not None and not cerr.any():
+        if cerr is not None and not np.count_nonzero(cerr):
             cerr = None
-        if berr is not None and not berr.any():
+        if berr is not None and not np.count_nonzero(berr):
             berr = None
         for name, val in (("_G", G), ("_c", c), ("_A", A), ("_b", b), ("_h", h),
                           ("_cerr", cerr), ("_berr", berr)):
-            if val is not None and val.flags.writeable:
-                val.flags.writeable = False
+            if val is not None:
+                val.setflags(write=False)
             setattr_(self, name, val)
         setattr_(self, "unbounded_radius", unbounded_radius)
         setattr_(self, "_cache", {})
@@ -519,6 +527,7 @@ class ConstrainedZonotope:
             np.concatenate((self._h, other._h)),
             min(self.unbounded_radius, other.unbounded_radius),
             _sum_err(c, _add(self._cerr, other._cerr)),
+            None if self._berr is None and other._berr is None else
             _cat(self._berr, self.n_con, other._berr, other.n_con),
         )
 
@@ -660,8 +669,10 @@ class ConstrainedZonotope:
         b = np.concatenate([self._b, other._b, other._c - R_a @ self._c])
         new_err = _diff_err(other._c, R_a, self._c, self._cerr, other._cerr)
         berr = _cat(_cat(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err, other.dim)
+        G = np.zeros((self.dim, self.n_gen + other.n_gen))
+        G[:, : self.n_gen] = self._G
         return ConstrainedZonotope._owned(
-            np.hstack([self._G, np.zeros((self.dim, other.n_gen))]), self._c, A, b,
+            G, self._c, A, b,
             np.concatenate([self._h, other._h]), min(self.unbounded_radius, other.unbounded_radius),
             self._cerr, berr,
         )
@@ -889,7 +900,15 @@ class ConstrainedZonotope:
             Feasibility tolerance (normalised constraint violation).
         """
         xv = as_vector("x", x, size=self.dim)
-        return not self.intersect_affine(np.eye(self.dim), xv).is_empty(tol)
+        # the factor set of Z cap {x} (rows A xi = b, G xi = x - c), built directly: the
+        # rounding of fl(x - c) is at most u |fl(x - c)| (one subtraction), and c's own
+        # uncertainty c_err adds to it
+        d = xv - self._c
+        err = _sum_err(d, self._cerr)
+        fp = FactorPolytope(np.vstack([self._A, self._G]), np.concatenate([self._b, d]),
+                            self._h, unbounded_radius=self.unbounded_radius,
+                            b_err=_cat(self._berr, self.n_con, err, self.dim))
+        return not fp.emptiness(tol).empty
 
     # ------------------------------------------------------------------ more operations
     def intersect_halfspace(self, a: ArrayLike, beta: float) -> ConstrainedZonotope:
@@ -986,6 +1005,19 @@ class ConstrainedZonotope:
 
         return interval_matrix_map(self, M_lo, M_hi)
 
+    def quad_map(self, Q: ArrayLike) -> ConstrainedZonotope:
+        """Outer bound of ``{(z^T Q_i z)_i : z in Z}`` (CORA's ``quadMap``); see
+        :func:`setobs.geometry.operations.quad_map`.
+
+        Parameters
+        ----------
+        Q : array_like, shape (m, n, n)
+            The matrices ``Q_i``.
+        """
+        from .operations import quad_map
+
+        return quad_map(self, Q)
+
     def is_subset(self, other: ConstrainedZonotope) -> Any:
         """Whether ``Z subset other`` (three-valued); see
         :func:`setobs.geometry.relations.is_subset`.
@@ -999,18 +1031,35 @@ class ConstrainedZonotope:
 
         return is_subset(self, other)
 
-    def is_equal(self, other: ConstrainedZonotope) -> Any:
-        """Whether the two sets are equal (three-valued); see
-        :func:`setobs.geometry.relations.is_equal`.
+    def is_equal(self, other: ConstrainedZonotope, tol: float = 0.0) -> Any:
+        """Whether the two sets are equal (three-valued), up to the Hausdorff distance
+        ``tol`` (infinity norm); see :func:`setobs.geometry.relations.is_equal`.
 
         Parameters
         ----------
         other : ConstrainedZonotope
             The other set.
+        tol : float
+            Distance up to which the sets count as equal (default 0).
         """
         from .relations import is_equal
 
-        return is_equal(self, other)
+        return is_equal(self, other, tol)
+
+    def represents(self, kind: str, tol: float | None = None) -> bool:
+        """Whether the set is (up to ``tol``) empty, a point, the origin, a box or a
+        zonotope (CORA's ``representsa``); see :func:`setobs.geometry.relations.represents`.
+
+        Parameters
+        ----------
+        kind : {"empty", "point", "origin", "box", "zonotope"}
+            The kind.
+        tol : float, optional
+            Absolute tolerance in the set's units.
+        """
+        from .relations import represents
+
+        return represents(self, kind, tol)
 
     def nearest_point(self, p: ArrayLike) -> NDArray[np.float64]:
         """Euclidean projection of ``p`` onto the set; see
