@@ -127,12 +127,17 @@ def peer_section(repeats: int) -> dict:
               f"{1e3 * r['zonoopt_s_per_constraint']:.2f} ms; support excess mean "
               f"{r['fast_support_excess_mean']:.3f} "
               f"(ZonoOpt {r['zonoopt_support_excess_mean']:.3f})")
+    floor = _peers.python_floor(np.random.default_rng(35), max(40, 40 * repeats))
+    for shape, r in floor.items():
+        print(f"  bare Python sum ({shape}): {1e6 * r['bare_python_s']:.1f} us, ZonoOpt "
+              f"{1e6 * r['zonoopt_s']:.1f} us")
     inside = sum(r["zonoopt_hull_inside_certified_box"] for r in rows)
     return {
         "zonoopt": metadata.version("zonoopt"),
         "ratios_by_dimension": ratios,
         "operations": rows,
         "zonoopt_hulls_inside_certified_box": f"{inside} of {len(rows)}",
+        "python_floor_of_a_sum": floor,
         "elimination": elim,
         "targets": {
             "every_operation_ratio_at_most_1": {

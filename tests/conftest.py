@@ -94,6 +94,18 @@ def exact_extremes(Z: ConstrainedZonotope, d: np.ndarray) -> tuple[Fraction, Fra
     return min(vals), max(vals)
 
 
+def assert_hull_tight(Z: ConstrainedZonotope, box, rtol: float = 1e-9) -> None:
+    """The box contains the exact extremes of ``Z`` in each coordinate (rational vertices)
+    and is within ``rtol`` (relative to ``1 + |lo| + |hi|``) of them."""
+    for i in range(Z.dim):
+        e = np.zeros(Z.dim)
+        e[i] = 1.0
+        lo, hi = exact_extremes(Z, e)
+        assert Fraction(box.lo[i]) <= lo and Fraction(box.hi[i]) >= hi
+        scale = 1.0 + abs(float(lo)) + abs(float(hi))
+        assert float(lo) - box.lo[i] <= rtol * scale and box.hi[i] - float(hi) <= rtol * scale
+
+
 def cripple_highs(monkeypatch) -> None:
     """Make every HiGHS model stop before its first iteration (simplex and IPM)."""
     from setobs.geometry.lp import FactorPolytope

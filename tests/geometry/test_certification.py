@@ -14,7 +14,13 @@ from setobs import ConstrainedZonotope
 from setobs.exceptions import SolverWarning
 from setobs.geometry.lp import FactorPolytope, lagrangian_lower_bound
 from setobs.geometry.zonotope import factor_polytope
-from tests.conftest import cripple_highs, disable_compiled_lps, exact_extremes, random_cz
+from tests.conftest import (
+    assert_hull_tight,
+    cripple_highs,
+    disable_compiled_lps,
+    exact_extremes,
+    random_cz,
+)
 from tests.oracles import assert_outward_sums, outward_sum_cases
 
 seeds = st.integers(0, 2**32 - 1)
@@ -150,13 +156,7 @@ def test_an_lp_no_setting_decides_is_decided_by_the_perturbed_restart(seed, monk
         warnings.simplefilter("error", SolverWarning)
         box = Z.interval_hull()
     assert made and factor_polytope(Z).fallbacks == 0
-    for i in range(2):
-        e = np.zeros(2)
-        e[i] = 1.0
-        lo, hi = exact_extremes(Z, e)
-        assert Fraction(box.lo[i]) <= lo and Fraction(box.hi[i]) >= hi
-        scale = 1.0 + abs(float(lo)) + abs(float(hi))
-        assert float(lo) - box.lo[i] <= 1e-9 * scale and box.hi[i] - float(hi) <= 1e-9 * scale
+    assert_hull_tight(Z, box)
 
 
 def test_highs_infeasible_claim_is_checked(monkeypatch):

@@ -333,27 +333,18 @@ def is_equal(Z: ConstrainedZonotope, W: ConstrainedZonotope, tol: float = 0.0
     True
     """
     tol = check_real_scalar("tol", tol, nonnegative=True)
+    Zb, Wb = Z, W
     if tol > 0.0:
         if not isinstance(W, ConstrainedZonotope):
             raise TypeError(f"is_equal expects a ConstrainedZonotope, got {type(W).__name__}")
         if W.dim != Z.dim:
             raise DimensionError(f"equality: dimensions differ ({Z.dim} vs {W.dim})")
         B = ConstrainedZonotope.from_box(np.full(Z.dim, -tol), np.full(Z.dim, tol))
-        Z, W, Zb, Wb = Z, W, Z + B, W + B
-        a = is_subset(Z, Wb)
-        if a.holds is False:
-            return ContainmentResult(False, a.witness, a.method, a.margin, a.tol)
-        b = is_subset(W, Zb)
-        if b.holds is False:
-            return ContainmentResult(False, b.witness, b.method, b.margin, b.tol)
-        holds = True if (a.holds and b.holds) else None
-        return ContainmentResult(holds, None, f"{a.method}/{b.method}",
-                                 float(np.nanmax([a.margin, b.margin, -np.inf])),
-                                 max(a.tol, b.tol))
-    a = is_subset(Z, W)
+        Zb, Wb = Z + B, W + B
+    a = is_subset(Z, Wb)
     if a.holds is False:
         return ContainmentResult(False, a.witness, a.method, a.margin, a.tol)
-    b = is_subset(W, Z)
+    b = is_subset(W, Zb)
     if b.holds is False:
         return ContainmentResult(False, b.witness, b.method, b.margin, b.tol)
     holds = True if (a.holds and b.holds) else None
