@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import qr
 
-from .._rounding import gamma
+from .._rounding import UNIT_ROUNDOFF, gamma
 from ..exceptions import DimensionError, EmptySetError
 from ..tolerances import (
     ELIMINATION_ERR_RTOL,
@@ -457,12 +457,16 @@ PROPAGATION_SWEEPS: int = 10
 
 
 def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np.float64],
-                lo: NDArray[np.float64], hi: NDArray[np.float64]
+                lo: NDArray[np.float64], hi: NDArray[np.float64],
+                b_err: NDArray[np.float64] | None = None
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """For every factor ``j``, the intersection over rows ``i`` (``A_ij != 0``) of the
     ranges ``(b_i - sum_(k != j) A_ik xi_k) / A_ij`` with ``xi_k`` in ``[lo_k, hi_k]``
     (interval arithmetic in midpoint-radius form; a half-infinite bound counts as
-    unbounded)."""
+    unbounded), widened by the uncertainty ``b_err`` of ``b`` and by a bound on the
+    rounding of the evaluation, ``2 gamma_(n_g + 8) (|b_i| + |A_i| (|m| + r)) / |A_ij|``
+    (every term of the row's sums, the exclusion of ``j`` and the division), so that the
+    ranges are outer in floating point too."""
     fin = np.isfinite(lo) & np.isfinite(hi)
     m = np.where(fin, 0.5 * (lo + hi), 0.0)
     r = np.where(fin, 0.5 * (hi - lo), 0.0)
@@ -470,9 +474,13 @@ def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np
     S = A @ m
     Rr = absA @ r
     n_inf = nz @ (~fin).astype(np.float64)  # unbounded factors per row
+    err = 2.0 * gamma(A.shape[1] + 8) * (np.abs(b) + absA @ (np.abs(m) + r))
+    if b_err is not None:
+        err = err + b_err
     with np.errstate(divide="ignore", invalid="ignore"):
         centre = (b[:, None] - S[:, None] + A * m[None, :]) / A
-        rad = np.maximum(Rr[:, None] - absA * r[None, :], 0.0) / absA
+        rad = (np.maximum(Rr[:, None] - absA * r[None, :], 0.0) + err[:, None]) / absA
+        rad *= 1.0 + 4.0 * UNIT_ROUNDOFF
         # a row bounds xi_j only if every other factor in it is bounded
         others_inf = n_inf[:, None] - (nz & ~fin[None, :])
         rad = np.where(others_inf > 0.5, np.inf, rad)
@@ -482,7 +490,8 @@ def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np
 
 
 def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
-                             sweeps: int = PROPAGATION_SWEEPS
+                             sweeps: int = PROPAGATION_SWEEPS,
+                             b_err: ArrayLike | None = None
                              ) -> tuple[NDArray[np.float64], NDArray[np.float64],
                                         NDArray[np.float64], NDArray[np.float64]]:
     """Factor bounds by interval constraint propagation (Scott et al. 2016, Sec. 4.2).
@@ -500,12 +509,15 @@ def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
         Factor bounds (``inf`` allowed).
     sweeps : int
         Largest number of sweeps.
+    b_err : array_like, shape (n_c,), optional
+        Uncertainty of ``b``: the bounds hold for every right-hand side within it.
 
     Returns
     -------
     E_lo, E_hi : ndarray, shape (n_g,)
-        Tightened bounds ``E_j``: outer bounds of ``xi_j`` over the factor set (in
-        exact arithmetic; floating-point here, used only to rank choices).
+        Tightened bounds ``E_j``: outer bounds of ``xi_j`` over the factor set (each
+        range is widened by a bound on its rounding, so they are outer in floating
+        point as well).
     R_lo, R_hi : ndarray, shape (n_g,)
         The ranges ``R_j`` implied by the constraints and the other factors' ``E_k``
         in the last sweep (``+-inf`` where no row bounds ``xi_j``). ``R_j`` strictly
@@ -515,19 +527,20 @@ def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
     Notes
     -----
     Cost ``O(n_c n_g)`` per sweep, no LP: this is the "iterative method" Scott et
-    al. use for the ranges (CORA's ``reduceConstraints`` does the same). The
-    ranges are not certified, so :func:`eliminate_constraints` uses them only to
-    choose which bound to drop; the result is a superset whatever the choice.
+    al. use for the ranges (CORA's ``reduceConstraints`` does the same).
+    :func:`eliminate_constraints` shrinks the factor bounds to ``E`` (the set is
+    unchanged: ``E`` contains every factor's range) and ranks the choices by ``R``.
     """
     A_a = np.asarray(A, dtype=np.float64)
     b_a = np.asarray(b, dtype=np.float64)
     h_a = np.asarray(h, dtype=np.float64)
+    be = None if b_err is None else np.asarray(b_err, dtype=np.float64)
     absA = np.abs(A_a)
     lo, hi = -h_a.copy(), h_a.copy()
     R_lo, R_hi = np.full(h_a.size, -np.inf), np.full(h_a.size, np.inf)
     scale = np.where(np.isfinite(h_a) & (h_a > 0), h_a, 1.0)
     for _ in range(max(int(sweeps), 1)):
-        R_lo, R_hi = _row_ranges(A_a, absA, b_a, lo, hi)
+        R_lo, R_hi = _row_ranges(A_a, absA, b_a, lo, hi, be)
         new_lo = np.maximum(lo, R_lo)
         new_hi = np.minimum(hi, R_hi)
         ok = new_lo <= new_hi  # (crossing: rounding or an empty set; keep the old bound)
@@ -592,7 +605,14 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int) -> Constrained
         # factors' own bounds (one sweep from h), so only such factors are candidates
         R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h)
         cand = bounded & np.isfinite(R0_lo) & np.isfinite(R0_hi)
-        _, _, R_lo, R_hi = propagated_factor_ranges(Z.A, Z.b, h)
+        E_lo, E_hi, R_lo, R_hi = propagated_factor_ranges(Z.A, Z.b, h, b_err=Z.b_err)
+        # Scott et al.'s rescaling, symmetric (no recentring, so no rounding): the bounds
+        # shrink to the outer ranges E, which leaves the set as it is, and a bound
+        # dropped later relaxes from there
+        shrunk = np.minimum(h, np.maximum(-E_lo, E_hi))
+        if (shrunk < h).any():
+            h = shrunk
+            Z = trusted_cz(Z.G, Z.c, Z.A, Z.b, h, Z.unbounded_radius, Z.c_err, Z.b_err)
         reach = np.maximum(-R_lo, R_hi)  # (inside the one-sweep range, which is finite)
         reach = np.where(np.isfinite(reach), reach, np.maximum(-R0_lo, R0_hi))
         r = np.full(Z.n_gen, np.inf)
