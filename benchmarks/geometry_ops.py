@@ -125,8 +125,10 @@ def peer_section(repeats: int) -> dict:
         print(f"  eliminate {r['eliminated']:2d}: {1e3 * r['fast_s_per_constraint']:.2f} ms per "
               f"constraint ({r['fast_linprogs_per_constraint']:.2f} linprog), ZonoOpt "
               f"{1e3 * r['zonoopt_s_per_constraint']:.2f} ms; support excess mean "
-              f"{r['fast_support_excess_mean']:.3f} "
-              f"(ZonoOpt {r['zonoopt_support_excess_mean']:.3f})")
+              f"{r['fast_support_excess_mean']:.4f} (ZonoOpt "
+              f"{r['zonoopt_certified_support_excess_mean']:.4f} certified, "
+              f"{r['zonoopt_support_excess_mean']:.4f} its own; lp mode "
+              f"{r['lp_support_excess_mean']:.4f} at {1e3 * r['lp_s_per_constraint']:.1f} ms)")
     floor = _peers.python_floor(np.random.default_rng(35), max(40, 40 * repeats))
     for shape, r in floor.items():
         print(f"  bare Python sum ({shape}): {1e6 * r['bare_python_s']:.1f} us, ZonoOpt "

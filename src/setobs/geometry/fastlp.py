@@ -39,6 +39,8 @@ emptiness with a certified phase-1 LP.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
@@ -301,6 +303,28 @@ class FixedStructureLP:
         self.binv0 = np.diag(1.0 / (R * S[n:]))
         self.maxit = 20 * (m + 5)
         return self
+
+    def with_objectives(self, W: NDArray[np.float64]) -> FixedStructureLP:
+        """The same bounded structure (:meth:`bounded`) with other objectives: the
+        matrices and their scaling are shared, so a state of this structure warm-starts
+        the other's LPs (the same ``A``: any basis stays a basis).
+
+        Parameters
+        ----------
+        W : ndarray, shape (n_lp, n)
+            Objectives over the original factors (without the artificial columns).
+        """
+        if self.fidx.size or self.W.shape[1] != W.shape[1] + self.m:
+            raise ValueError("with_objectives applies to structures made by bounded()")
+        out = copy.copy(self)
+        n = W.shape[1]
+        Wa = np.zeros((W.shape[0], n + self.m))
+        Wa[:, :n] = W
+        out.W, out.n_lp = Wa, Wa.shape[0]
+        out.yU = np.zeros((out.n_lp, self.m))
+        out.dirstat = np.zeros(out.n_lp, dtype=np.int64)
+        out.Wred = np.ascontiguousarray(Wa * self.S_B)
+        return out
 
     def _unusable(self, why: str) -> None:
         self.usable = False

@@ -49,6 +49,7 @@ __all__ = [
     "propagated_factor_ranges",
     "reduce_exact",
     "reduce_order",
+    "relaxed_overshoots",
     "remove_redundancy",
     "rescale",
 ]
@@ -218,12 +219,16 @@ def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_]
     fp = factor_polytope(Z)
     lo = np.full(cols.size, -np.inf)
     hi = np.full(cols.size, np.inf)
+    W = np.zeros((2 * cols.size, Z.n_gen))
+    W[2 * np.arange(cols.size), cols] = 1.0
+    W[2 * np.arange(cols.size) + 1, cols] = -1.0
+    fast, ok = fp.minimize_many(W)  # (the compiled batch, where every bound is finite)
     e = np.zeros(Z.n_gen)
     for t, j in enumerate(cols):
         e[j] = 1.0
-        lo[t] = fp.minimize(e).bound
+        lo[t] = fast[2 * t] if ok[2 * t] else fp.minimize(e).bound
         if lo[t] > -Z.h[j]:  # otherwise the bound is active: no need for the other side
-            hi[t] = -fp.minimize(-e).bound
+            hi[t] = -fast[2 * t + 1] if ok[2 * t + 1] else -fp.minimize(-e).bound
         e[j] = 0.0
     return lo, hi
 
@@ -400,6 +405,71 @@ def _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets, max_steps: int | N
     return G, c, A, b, h, cerr, berr, steps
 
 
+def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.float64]:
+    """Relative overshoots ``r_j = max(0, max |xi_j| / h_j - 1)`` of the factors ``cand``
+    over the factor set with ``xi_j``'s own bound dropped (certified; the ``"lp"`` mode
+    of :func:`eliminate_constraints`).
+
+    Where every bound is finite, by the compiled simplex: with ``xi_j``'s bound
+    dropped, ``|xi_j|`` is still at most its one-sweep propagated range ``R0_j`` (an
+    outer bound over the relaxed set: each row bounds ``xi_j`` by the other factors'
+    own bounds, rounding included), so the relaxed set is the bounded polytope with
+    ``h_j = R0_j`` and its two LPs are solved on one structure whose state carries the
+    basis from candidate to candidate (certified bounds). The others, and any LP not
+    solved there, on HiGHS.
+
+    Parameters
+    ----------
+    Z : ConstrainedZonotope
+        The set.
+    cand : array_like of int
+        The factors.
+
+    Returns
+    -------
+    ndarray, shape (n_gen,)
+        ``r_j`` for the factors in ``cand`` (``inf`` where the relaxed set is unbounded
+        in ``xi_j``); ``inf`` for the others.
+    """
+    cand = np.asarray(cand, dtype=int).reshape(-1)
+    r = np.full(Z.n_gen, np.inf)
+    h = Z.h
+    if not cand.size:
+        return r
+    todo = list(cand)
+    if np.isfinite(h).all() and Z.n_con:
+        from .fastlp import FixedStructureLP
+
+        R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h, Z.b_err)
+        reach0 = np.maximum(-R0_lo, R0_hi)
+        base = FixedStructureLP.bounded(Z.A, np.zeros((2, Z.n_gen)))
+        state = None
+        zeros = np.zeros(Z.n_con)
+        todo = []
+        for j in cand:
+            if not np.isfinite(reach0[j]):
+                continue  # (unbounded when relaxed: never chosen)
+            if reach0[j] <= h[j]:
+                r[j] = 0.0  # the bound is implied (by one row already)
+                continue
+            W = np.zeros((2, Z.n_gen))
+            W[0, j], W[1, j] = 1.0, -1.0
+            lp = base.with_objectives(W)
+            state = lp.new_state() if state is None else state
+            hj = h.copy()
+            hj[j] = reach0[j]
+            bounds, ok = lp.minimize_all(Z.b, np.concatenate([hj, zeros]), state,
+                                         b_err=Z.b_err if Z.b_err.any() else None)
+            if ok.all():
+                reach = max(-bounds[0], -bounds[1])
+                r[j] = max(0.0, reach / h[j] - 1.0)
+            else:
+                todo.append(j)
+    for j in todo:
+        r[j] = _overshoot(Z, int(j))
+    return r
+
+
 def _overshoot(Z: ConstrainedZonotope, j: int) -> float:
     """Relative overshoot ``r_j = max(0, max|xi_j| / h_j - 1)`` of factor ``j`` when its
     bound is dropped (certified outer range of ``xi_j`` over the relaxed factor set)."""
@@ -450,6 +520,13 @@ def hausdorff_heuristic(Z: ConstrainedZonotope, j: int, r: float) -> float:
 #: ``2 n_g`` LPs per step cost a few milliseconds; above it they dominate (a 3-D
 #: polytope with 60 facets, ``63 x 60``: seconds per eliminated constraint).
 FAST_ELIMINATION_SIZE: int = 400
+
+#: Candidates of the fast elimination whose overshoot is then computed exactly (two
+#: certified LPs each, :func:`relaxed_overshoots`): the propagated overshoots rank the
+#: factors, the exact ones of the best few choose. On the 60-facet polytope (30
+#: eliminations) the support excess fell from 0.17 (propagation alone) to 0.016 for
+#: 5 ms per eliminated constraint instead of 1.2 (4: 0.026, 16: 0.019).
+FAST_ELIMINATION_REFINE: int = 8
 
 #: Sweeps of the interval propagation of :func:`propagated_factor_ranges` (it stops
 #: earlier once no bound moves by more than 1e-3 of its factor's bound).
@@ -617,7 +694,13 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int) -> Constrained
         reach = np.where(np.isfinite(reach), reach, np.maximum(-R0_lo, R0_hi))
         r = np.full(Z.n_gen, np.inf)
         r[cand] = np.maximum(0.0, reach[cand] / h[cand] - 1.0)
-        Z, eliminated = _drop_best_bound(Z, hausdorff_heuristics(Z, r), budgets)
+        score = hausdorff_heuristics(Z, r)
+        # the propagated overshoots rank; the exact ones of the best few decide
+        top = np.argsort(score, kind="stable")[:FAST_ELIMINATION_REFINE]
+        top = top[np.isfinite(score[top])]
+        if top.size > 1:
+            score = hausdorff_heuristics(Z, relaxed_overshoots(Z, top))
+        Z, eliminated = _drop_best_bound(Z, score, budgets)
         if not eliminated:
             break  # no candidate could be eliminated
     return Z
@@ -642,13 +725,15 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
     With ``method="fast"`` the ranges come from interval constraint propagation
     (:func:`propagated_factor_ranges`, Scott et al.'s iterative method) and the
     heuristic of every factor from one factorisation
-    (:func:`hausdorff_heuristics`): no LP at all. Only unbounded factors are
-    eliminated exactly beforehand. Whatever bound is dropped, the result
+    (:func:`hausdorff_heuristics`); the :data:`FAST_ELIMINATION_REFINE` best
+    candidates then get their exact overshoots (:func:`relaxed_overshoots`, two LPs
+    each) and those decide. Only unbounded factors are eliminated exactly beforehand.
+    Whatever bound is dropped, the result
     ``{G xi + c : A xi = b, |xi_k| <= h_k, k != j}`` contains the set (dropping a
     bound only enlarges the factor set, and eliminating an unbounded factor with
-    a row is exact), so the propagated ranges, which are not certified, only
-    steer the choice; the candidates are restricted to factors that some row
-    bounds through the other factors' own bounds, so the result stays bounded.
+    a row is exact), so the overshoots only steer the choice; the candidates are
+    restricted to factors that some row bounds through the other factors' own bounds,
+    so the result stays bounded.
 
     Parameters
     ----------
@@ -657,10 +742,11 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
     max_constraints : int
         Largest number of constraints of the result.
     method : {"auto", "fast", "lp"}
-        How the overshoots are computed: certified LPs (``"lp"``, tighter choices,
-        ``2 n_g`` LPs per eliminated constraint) or interval propagation
-        (``"fast"``, milliseconds). ``"auto"`` (default) uses ``"fast"`` when
-        ``n_gen * n_con`` exceeds :data:`FAST_ELIMINATION_SIZE`.
+        How the overshoots are computed: certified LPs for every candidate (``"lp"``,
+        after :func:`reduce_exact`; the tightest) or interval propagation refined by
+        the exact overshoots of the best few (``"fast"``, milliseconds). ``"auto"``
+        (default) uses ``"fast"`` when ``n_gen * n_con`` exceeds
+        :data:`FAST_ELIMINATION_SIZE`.
 
     Returns
     -------
@@ -677,9 +763,10 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
 
     Notes
     -----
-    Cost per eliminated constraint: ``"lp"``, two LPs per candidate factor plus one
-    factorisation for the heuristics; ``"fast"``, ``O(n_c n_g)`` per propagation
-    sweep plus the same factorisation. CORA's ``reduceConstraints`` and ZonoOpt's
+    Cost per eliminated constraint: ``"lp"``, two LPs per candidate factor (on the
+    compiled simplex where every bound is finite) plus one factorisation for the
+    heuristics; ``"fast"``, ``O(n_c n_g)`` per propagation sweep, the same
+    factorisation and ``2 FAST_ELIMINATION_REFINE`` LPs. CORA's ``reduceConstraints`` and ZonoOpt's
     ``constraint_reduction`` follow the same paper with the interval ranges. On a
     3-D polytope with 60 facets (63 generators, 60 constraints),
     ``benchmarks/geometry_ops.py`` records the time per eliminated constraint and
@@ -710,9 +797,7 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
     budgets = _budgets(Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err)
     while Z.n_con > max_constraints:
         cand = np.flatnonzero(np.isfinite(Z.h) & (Z.h > 0) & Z.A.any(axis=0))
-        r = np.full(Z.n_gen, np.inf)
-        for j in cand:
-            r[j] = _overshoot(Z, int(j))
+        r = relaxed_overshoots(Z, cand)
         Z, eliminated = _drop_best_bound(Z, hausdorff_heuristics(Z, r), budgets)
         if not eliminated:
             break  # no candidate could be eliminated
