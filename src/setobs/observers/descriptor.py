@@ -19,8 +19,10 @@ __all__ = ["DescriptorObserver"]
 class DescriptorObserver(PointObserver):
     """Descriptor observer for ``x+ = Phi x + Gamma u + G d``, ``y = Xi x + F n`` (Chang fragment).
 
-    **Reconstructed** from the surviving fragment of Chang's report (its eqs. (8)-(16)
-    are missing; eqs. (2), (6)-(7), (17)-(19) and Lemmas 1-4 survive):
+    **Reconstructed** from the surviving fragment of Chang's report (its displayed
+    eqs. (8)-(16) are missing, although the text refers to (9), the observer, and
+    (16), which Lemma 4 turns into (17); eqs. (2), (6)-(7), (17)-(19) and Lemmas 1-4
+    survive):
 
     * descriptor augmentation (6)-(7): ``z = [x; n]``,
       ``E z(k+1) = Abar z(k) + Bbar [u(k); y(k)] + [G d(k); 0]``,
