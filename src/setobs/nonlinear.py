@@ -3,7 +3,7 @@
 ``x(k+1) = f(x(k), w(k))``, ``w(k+1) = s(w(k))``, ``y(k) = h(x(k), w(k))``: the
 system (3) of the modular-observer paper, for its nonlinear modular observer
 (:class:`setobs.observers.NonlinearModularObserver`, designed by
-:func:`setobs.analysis.design_modular`).
+:func:`setobs.analysis.modular.design_modular`).
 """
 
 from __future__ import annotations

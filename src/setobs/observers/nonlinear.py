@@ -62,7 +62,7 @@ class NonlinearModularObserver(PointObserver):
 
     An identity observer ``x~`` for the disturbance-free part, a disturbance
     observer ``w^`` and a corrector ``x^ = Xi(x~, w^)``, designed by
-    :func:`setobs.analysis.design_modular` (power series of Section VII) so that
+    :func:`setobs.analysis.modular.design_modular` (power series of Section VII) so that
     in ``z0 = Phi0(x~)``, ``zw = Psi(x~, w^)`` the observer is linear with the
     eigenvalues of ``A0`` and ``Aw``.
 
@@ -84,7 +84,7 @@ class NonlinearModularObserver(PointObserver):
     system : NonlinearSystem or ModularDesign
         The plant, or a finished design (then ``A0`` ... ``order`` must be omitted).
     A0, B0, Aw, Bw, order
-        The design's parameters (:func:`~setobs.analysis.design_modular`).
+        The design's parameters (:func:`~setobs.analysis.modular.design_modular`).
     x0 : array_like, shape (n,), optional
         Initial ``x~`` (default 0).
     w0 : array_like, shape (q,), optional
