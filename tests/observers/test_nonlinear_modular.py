@@ -164,3 +164,27 @@ def test_interface_pickling_and_bad_input():
         NonlinearModularObserver(sys)
     with pytest.raises(Exception, match="inputs"):
         obs.step([0.1], [1.0])
+
+
+def test_refusals_name_the_problem():
+    """Issue 35: an unstable A0 (1.5: the estimates grew to 2e57 with no error) or a
+    marginal Aw (eigenvalue -1) is refused at design time; so is an order whose series
+    would take minutes (25 on the paper's plant: 351 monomials, 51 s), with its size
+    and the way out; order 0 is refused as before."""
+    from setobs.analysis.modular import design_modular
+    from setobs.examples import modular_example
+    from setobs.exceptions import DesignError, DimensionError
+
+    sys = modular_example()
+    with pytest.raises(DesignError, match=r"A0 has spectral radius 1\.5"):
+        design_modular(sys, 1.5, 1.0, 0.6, 1.0, order=5)
+    with pytest.raises(DesignError, match="Aw has spectral radius 1 "):
+        design_modular(sys, 0.4, 1.0, -1.0, 1.0, order=5)
+    with pytest.raises(DimensionError, match=r"351 monomials.*max_terms = 250"):
+        NonlinearModularObserver(sys, 0.4, 1.0, 0.6, 1.0, order=25)
+    with pytest.raises(DimensionError, match="integer >= 1"):
+        NonlinearModularObserver(sys, 0.4, 1.0, 0.6, 1.0, order=0)
+    d = design_modular(sys, 0.4, 1.0, 0.6, 1.0, order=4, max_terms=15)  # C(6, 2) = 15
+    assert d.order == 4
+    with pytest.raises(DimensionError, match="21 monomials"):
+        design_modular(sys, 0.4, 1.0, 0.6, 1.0, order=5, max_terms=15)
