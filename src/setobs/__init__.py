@@ -13,6 +13,7 @@ from . import (
 )
 from .exceptions import (
     DesignError,
+    DesignWarning,
     DimensionError,
     EmptySetError,
     ExistenceError,
@@ -36,6 +37,7 @@ __all__ = [
     "Box",
     "ConstrainedZonotope",
     "DesignError",
+    "DesignWarning",
     "DimensionError",
     "EmptySetError",
     "ExistenceError",

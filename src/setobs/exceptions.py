@@ -14,6 +14,7 @@ from typing import Any
 
 __all__ = [
     "DesignError",
+    "DesignWarning",
     "DimensionError",
     "EmptySetError",
     "ExistenceError",
@@ -83,6 +84,12 @@ class DesignError(SetobsError, ValueError):
 
     def __reduce__(self):
         return (type(self), (str(self), self.condition))
+
+
+class DesignWarning(RuntimeWarning):
+    """The observer design was made, but a diagnostic says not to trust it far: a small
+    divisor (near resonance), a nearly singular linear part, or series residuals that
+    grow with the truncation order at the points checked."""
 
 
 class ExistenceError(SetobsError, ValueError):

@@ -49,10 +49,12 @@ __all__ = [
     "HREP_FLAT_RTOL",
     "HREP_SNAP_TOL",
     "HREP_VERIFY_RTOL",
+    "ILL_CONDITIONED_RTOL",
     "IMAG_DISPLAY_RTOL",
     "KALMAN_MEASUREMENT_FLOOR",
     "LP_REFINE_GAP",
     "MAX_MAGNITUDE",
+    "NEAR_RESONANCE_RTOL",
     "NEWTON_RTOL",
     "PONTRYAGIN_MATCH_RTOL",
     "PRIMAL_RESIDUAL_RTOL",
@@ -61,6 +63,7 @@ __all__ = [
     "RANK_RTOL",
     "REDUNDANT_BOUND_MARGIN",
     "RELAXED_EXACT_GAP",
+    "RESIDUAL_GROWTH_FACTOR",
     "RESONANCE_RTOL",
     "SERIES_TAIL_RTOL",
     "UNBOUNDED_RADIUS",
@@ -266,6 +269,17 @@ NEWTON_RTOL: float = 1e-12
 #: modulus, at least 1) of a product of the linearization's eigenvalues is
 #: resonant (Proposition 2, assumption 2).
 RESONANCE_RTOL: float = 1e-9
+#: A smallest divisor below this (relative like :data:`RESONANCE_RTOL`) is near
+#: resonance: the series' coefficients grow like its inverse, and the modular design
+#: warns (:class:`~setobs.exceptions.DesignWarning`).
+NEAR_RESONANCE_RTOL: float = 1e-2
+#: A linear part (``T0`` of (31), ``d Psi / d w`` of (35)) whose smallest singular
+#: value is below this fraction of its largest is nearly singular: the modular design
+#: warns (the inverse maps amplify by the inverse ratio).
+ILL_CONDITIONED_RTOL: float = 1e-6
+#: A residual of (31), (28) or (35) at the full order above this multiple of its
+#: smallest over the lower orders grows with the order (``ModularDesign.diagnostics``).
+RESIDUAL_GROWTH_FACTOR: float = 10.0
 #: A truncated series is trusted at a point when its top-degree terms there weigh
 #: at most this fraction of its linear terms (:func:`~setobs.analysis.powerseries.series_tail`).
 SERIES_TAIL_RTOL: float = 1e-2

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -204,3 +205,59 @@ def test_extension_along_the_observer_map_reaches_beyond_the_radius():
     z = d.extend_to_z([1.0], [0.0])
     np.testing.assert_allclose(z, [float(phi0.subs(x, 1)), float(Psi.subs({x: 1, w: 0}))],
                                rtol=1e-5)
+
+
+def test_diagnostics_by_order_fall_inside_the_radius_and_warn_beyond_the_pole():
+    """Issue 35: the residuals of (31), (28), (35) by truncation order. Near the
+    equilibrium (default points, half the radius estimate) each falls at every order and
+    nothing is flagged; the smallest divisor is 0.1 (|Aw - 0.5| = |A0 - 0.5|, by hand:
+    the linearization's eigenvalues are 1/2 and 1). At |w| > 1, beyond the exact
+    solution's pole at w = -1 (its closed form, ``_closed_forms``), the series diverge:
+    the residual of (28) grows with the order and a DesignWarning says so."""
+    from setobs.exceptions import DesignWarning
+
+    d = design_modular(modular_example(), A0, B0, AW, BW, order=7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DesignWarning)
+        g = d.diagnostics()
+    assert g.orders == tuple(range(1, 8)) and g.growing == ()
+    assert g.min_divisor == pytest.approx(0.1)
+    for key in ("31", "28", "35"):
+        assert all(b < a for a, b in itertools.pairwise(g.residuals[key])), key
+    with pytest.warns(DesignWarning, match=r"eq\. \(28\)"):
+        far = d.diagnostics(points=[[0.0, 1.5], [0.3, -1.2]])
+    assert "28" in far.growing and far.residuals["28"][-1] > 10 * far.residuals["28"][0]
+    assert "| 7 |" in far.to_markdown()
+
+
+def test_truncated_design_equals_a_design_at_that_order():
+    """The series are solved degree by degree: truncating an order-7 design at 4 gives the
+    order-4 design's coefficients (to rounding)."""
+    d7 = design_modular(modular_example(), A0, B0, AW, BW, order=7).truncated(4)
+    d4 = design_modular(modular_example(), A0, B0, AW, BW, order=4)
+    n4 = len(d4.basis_v)
+    np.testing.assert_allclose(d7.Xi[:, :n4], d4.Xi, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(d7.Psi.C[:, :n4], d4.Psi.C, rtol=1e-10, atol=1e-12)
+    assert not d7.Xi[:, n4:].any()
+
+
+def test_near_resonance_and_a_nearly_singular_linear_part_warn_at_design_time():
+    """A0 = 0.2503 against 0.5^2 = 0.25: divisor 3e-4 (by hand), near resonance; and two
+    observer eigenvalues 1e-7 apart on the two-state pendulum make the rows of T0
+    (``T0 F - A0 T0 = B0 H``, row i = H (F - a_i I)^-1) equal to within ~1e-7: nearly
+    singular (1e-9 apart it is refused as singular; 1e-3 apart it is fine)."""
+    from setobs.exceptions import DesignWarning
+
+    with pytest.warns(DesignWarning, match="smallest divisor 3.00e-04"):
+        design_modular(modular_example(), 0.2503, B0, AW, BW, order=3)
+    dt = 0.05
+    th, om, tau = sp.symbols("theta omega tau")
+    pend = NonlinearSystem([th + dt * om, om + dt * (-9.81 * sp.sin(th) - om + tau)], [th],
+                           [th, om], [tau], dt=dt)
+    with pytest.warns(DesignWarning, match="T0 is nearly singular"):
+        design_modular(pend, [0.7, 0.7 + 1e-7], None, [0.8], None, order=2)
+    with pytest.raises(DesignError, match="singular"):
+        design_modular(pend, [0.7, 0.7 + 1e-9], None, [0.8], None, order=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DesignWarning)
+        design_modular(pend, [0.7, 0.701], None, [0.8], None, order=2)

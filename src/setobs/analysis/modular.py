@@ -29,7 +29,9 @@ relates the two and is checked by :meth:`ModularDesign.proposition7_residuals`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,15 +40,21 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_sylvester
 
 from .._validation import as_matrix
-from ..exceptions import DesignError, DimensionError
-from ..tolerances import NEWTON_RTOL, RESONANCE_RTOL
+from ..exceptions import DesignError, DesignWarning, DimensionError
+from ..tolerances import (
+    ILL_CONDITIONED_RTOL,
+    NEAR_RESONANCE_RTOL,
+    NEWTON_RTOL,
+    RESIDUAL_GROWTH_FACTOR,
+    RESONANCE_RTOL,
+)
 from ._linalg import rank_decision
 from .existence import ExistenceReport
 from .observability import observability
 from .powerseries import LFESolution, Monomials, invert, min_divisor, solve_lfe, taylor
 
-__all__ = ["ModularDesign", "design_modular", "design_simultaneous", "newton",
-           "nonlinear_modular_conditions", "radius_estimate"]
+__all__ = ["DesignDiagnostics", "ModularDesign", "design_modular", "design_simultaneous",
+           "newton", "nonlinear_modular_conditions", "radius_estimate"]
 
 #: Iteration cap of Newton's method on the implicit maps (eqs. (32), (36)).
 NEWTON_MAXITER = 50
@@ -106,6 +114,48 @@ class _Poly:
 
     def jacobian(self, v: ArrayLike) -> NDArray[np.float64]:
         return (self.D @ self.basis.monomials(v)).T  # (r, n_vars)
+
+
+@dataclass(frozen=True)
+class DesignDiagnostics:
+    """Diagnostics of a modular design (:meth:`ModularDesign.diagnostics`).
+
+    Attributes
+    ----------
+    orders : tuple of int
+        The truncation orders checked (1 to the design's).
+    residuals : dict
+        ``"31"``, ``"28"``, ``"35"``: the largest residual at the points, per order.
+    min_divisor : float
+        The smallest divisor of the non-resonance condition (assumption 2).
+    radius : dict
+        Root-test radius estimates of ``Phi0``, ``Xi`` and ``Psi``.
+    growing : tuple of str
+        The equations whose residual at the full order exceeds
+        :data:`~setobs.tolerances.RESIDUAL_GROWTH_FACTOR` times its smallest.
+    points : ndarray, shape (N, n + q)
+        Where the residuals were evaluated.
+    """
+
+    orders: tuple[int, ...]
+    residuals: dict[str, tuple[float, ...]]
+    min_divisor: float
+    radius: dict[str, float]
+    growing: tuple[str, ...]
+    points: NDArray[np.float64]
+
+    def to_markdown(self) -> str:
+        """The residuals by order as a Markdown table, then the divisor and radii."""
+        lines = ["| order | (31) | (28) | (35) |", "|---|---|---|---|"]
+        for i, k in enumerate(self.orders):
+            lines.append(f"| {k} | " + " | ".join(f"{self.residuals[e][i]:.2e}"
+                                                 for e in ("31", "28", "35")) + " |")
+        lines.append("")
+        lines.append(f"smallest divisor {self.min_divisor:.3g}; radius estimates "
+                     + ", ".join(f"{k} {v:.3g}" for k, v in self.radius.items())
+                     + ("; growing with the order: " + ", ".join(self.growing)
+                        if self.growing else ""))
+        return "\n".join(lines)
 
 
 @dataclass
@@ -316,6 +366,82 @@ class ModularDesign:
             r35 = self.Psi_at(x_next, sw) - self.Aw @ self.Psi_at(x, w) - self.Bw @ yv
             for key, r in (("31", r31), ("28", r28), ("35", r35)):
                 out[key] = max(out[key], float(np.abs(r).max()))
+        return out
+
+    def truncated(self, order: int) -> ModularDesign:
+        """The same design truncated at a lower ``order``: the series are solved degree by
+        degree, so their terms up to ``order`` are those of a design at that order.
+
+        Parameters
+        ----------
+        order : int
+            The degree kept (``1 <= order <= self.order``).
+        """
+        if not 1 <= order <= self.order:
+            raise DimensionError(f"order must be in [1, {self.order}], got {order}")
+
+        def cut(C: NDArray[np.float64], basis: Monomials) -> NDArray[np.float64]:
+            out = np.array(C, dtype=float)
+            if order < basis.order:
+                out[:, basis.block[order + 1].start:] = 0.0
+            return out
+
+        bx, bv = self.basis_x, self.basis_v
+        bxy = Monomials(self.system.n + self.system.l, self.order)
+        return dataclasses.replace(
+            self, order=order,
+            Phi0=LFESolution(bx, cut(self.Phi0.C, bx), self.Phi0.conditions),
+            Phi0_inverse=cut(self.Phi0_inverse, bx), phi0=cut(self.phi0, bxy),
+            Xi=cut(self.Xi, bv), Psi=LFESolution(bv, cut(self.Psi.C, bv), self.Psi.conditions),
+            _cache={})
+
+    def diagnostics(self, points: ArrayLike | None = None) -> DesignDiagnostics:
+        """Residuals of (31), (28) and (35) by truncation order, the smallest divisor and
+        the series' radius estimates; a :class:`~setobs.exceptions.DesignWarning` when a
+        residual grows with the order (the series diverge at those points: do not run
+        the observer there, or lower the order).
+
+        Parameters
+        ----------
+        points : array_like, shape (N, n + q), optional
+            Where to check, rows ``(x, w)``, e.g. the states and disturbances the
+            observer will meet. Default: 20 points (fixed seed) uniform in the box of
+            half-width half the smallest radius estimate of ``Phi0``, ``Xi``, ``Psi``.
+
+        Returns
+        -------
+        DesignDiagnostics
+        """
+        radii = {"Phi0": radius_estimate(self.Phi0.C, self.basis_x),
+                 "Xi": radius_estimate(self.Xi, self.basis_v),
+                 "Psi": radius_estimate(self.Psi.C, self.basis_v)}
+        if points is None:
+            rho = min(radii.values())
+            half = 0.5 * (rho if np.isfinite(rho) else 1.0)
+            points = np.random.default_rng(0).uniform(
+                -half, half, size=(20, self.system.n + self.system.q))
+        pts = np.atleast_2d(np.asarray(points, dtype=float))
+        if pts.shape[1] != self.system.n + self.system.q:
+            raise DimensionError(f"points must have n + q = {self.system.n + self.system.q} "
+                                 f"columns, got {pts.shape[1]}")
+        orders = tuple(range(1, self.order + 1))
+        res: dict[str, list[float]] = {"31": [], "28": [], "35": []}
+        for k in orders:
+            r = self.truncated(k).residuals(pts)
+            for key in res:
+                res[key].append(r[key])
+        growing = tuple(key for key, seq in res.items()
+                        if seq[-1] > RESIDUAL_GROWTH_FACTOR * min(seq) and seq[-1] > 0.0)
+        out = DesignDiagnostics(orders, {k: tuple(v) for k, v in res.items()},
+                                float(self.report.numbers.get("min divisor", np.nan)),
+                                radii, growing, pts)
+        if growing:
+            warnings.warn(
+                "modular design: the residuals of eq. " + ", ".join(f"({k})" for k in growing)
+                + f" grow with the order at the points checked (at order {self.order}: "
+                + ", ".join(f"{res[k][-1]:.2e}" for k in growing) + ", smallest "
+                + ", ".join(f"{min(res[k]):.2e}" for k in growing)
+                + "): the series diverge there", DesignWarning, stacklevel=2)
         return out
 
     def proposition7_residuals(self, simultaneous: tuple[LFESolution, LFESolution],
@@ -617,5 +743,28 @@ def design_modular(system: Any, A0: ArrayLike, B0: ArrayLike | None, Aw: ArrayLi
         raise DesignError("modular design: d Psi/d w is singular at 0, the algebraic equation "
                           "(36) has no unique solution (choose (Aw, Bw) differently)",
                           "invertible Psi")
+    _warn_conditioning(report, Phi0.T, Psi_w, np.concatenate([np.linalg.eigvals(A0a),
+                                                               np.linalg.eigvals(Awa)]))
     return ModularDesign(system, int(order), A0a, B0a, Awa, Bwa, Phi0, Ginv, phi0, Xi, Psi,
                          report)
+
+
+def _warn_conditioning(report: ExistenceReport, T0: NDArray[np.float64],
+                       Psi_w: NDArray[np.float64], eigs: NDArray[np.complex128]) -> None:
+    """:class:`DesignWarning` for a design that is made but fragile: a smallest divisor
+    near resonance (the coefficients grow like its inverse) or a nearly singular linear
+    part of ``Phi0`` or ``Psi`` (the inverse maps amplify by the inverse ratio)."""
+    md = float(report.numbers.get("min divisor", np.inf))
+    scale = max(1.0, float(np.abs(eigs).max(initial=0.0)))
+    if md <= NEAR_RESONANCE_RTOL * scale:
+        warnings.warn(f"modular design: smallest divisor {md:.2e}, near resonance (below "
+                      f"{NEAR_RESONANCE_RTOL:g}): the series' coefficients grow like its "
+                      "inverse; move the eigenvalues of A0 or Aw away from the products of "
+                      "the linearization's eigenvalues", DesignWarning, stacklevel=3)
+    for name, M in (("Phi0's linear part T0", T0), ("d Psi / d w", Psi_w)):
+        sv = np.linalg.svd(M, compute_uv=False)
+        if sv.size and sv.min() <= ILL_CONDITIONED_RTOL * sv.max():
+            warnings.warn(f"modular design: {name} is nearly singular (singular values "
+                          f"{sv.min():.2e} to {sv.max():.2e}): its inverse amplifies errors by "
+                          f"{sv.max() / max(sv.min(), 1e-300):.1e}", DesignWarning,
+                          stacklevel=3)
