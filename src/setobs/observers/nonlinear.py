@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import as_matrix, as_vector
+from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis.modular import ModularDesign, design_modular
 from ..exceptions import DimensionError
-from ..tolerances import SERIES_TAIL_RTOL
+from ..tolerances import TRUST_TOL
 from .base import ObserverResult, PointObserver
 
 __all__ = ["NonlinearModularObserver", "NonlinearObserverResult"]
@@ -22,8 +22,8 @@ COORDINATES = ("linearizing", "original")
 
 @dataclass(frozen=True)
 class NonlinearObserverResult(ObserverResult):
-    """:class:`ObserverResult` with the disturbance-free estimate and the steps whose
-    series had not converged at the point.
+    """:class:`ObserverResult` with the disturbance-free estimate, the estimates'
+    consistency with the model and the data, and the steps not to trust.
 
     Attributes
     ----------
@@ -45,15 +45,20 @@ class NonlinearObserverResult(ObserverResult):
         ``"y_0..y_(k-1)"``: ``w^`` at ``k`` uses the measurements before ``k``.
     x_tilde : ndarray, shape (N, n)
         The disturbance-free observer's estimate ``x~`` (eq. (24)).
+    consistency : ndarray, shape (N,)
+        An estimate of each step's error from the model and the data alone, in the
+        units of ``(x, w)`` (:meth:`NonlinearModularObserver.consistency`: the
+        model's output predictions from ``(x^_k, w^_k)`` against the next
+        measurements, divided by their sensitivity to an error); ``inf`` for the last
+        steps, which too few outputs follow to check.
     untrusted : ndarray of bool, shape (N,)
-        Steps whose estimate came from a truncated series whose top-degree terms
-        weigh more than :data:`~setobs.tolerances.SERIES_TAIL_RTOL` of its linear
-        terms at the point (:func:`~setobs.analysis.powerseries.series_tail`: the
-        readout at ``z``; in original coordinates ``Psi`` and ``Xi`` at
-        ``(x~, w^)``), or from a Newton solve that did not converge.
+        Steps whose consistency exceeds the observer's ``trust_tol``, whose estimate
+        came from a Newton solve that did not converge (original coordinates), and
+        step 0 (the initial guess).
     """
 
     x_tilde: NDArray[np.float64] | None = None
+    consistency: NDArray[np.float64] | None = None
     untrusted: NDArray[np.bool_] | None = None
 
 
@@ -90,11 +95,19 @@ class NonlinearModularObserver(PointObserver):
     w0 : array_like, shape (q,), optional
         Initial ``w^`` (default 0).
     coordinates : {"linearizing", "original"}
+    trust_tol : float
+        Consistency (see :class:`NonlinearObserverResult`: an error estimate, in the
+        units of ``x`` and ``w``) above which a step is flagged untrusted (default
+        :data:`~setobs.tolerances.TRUST_TOL`). With measurement noise, set it above
+        the noise's effect (the consistency of the noise alone is about the noise
+        divided by the outputs' sensitivity).
 
     Notes
     -----
     ``step(y_k)`` returns ``w^_k``, computed from ``y_0, ..., y_(k-1)`` like the
-    library's other point observers; :meth:`state_estimate` is ``x^_k``.
+    library's other point observers; :meth:`state_estimate` is ``x^_k``. The
+    trust measure (:meth:`consistency`) looks ahead over the record, so :meth:`run`
+    gives it.
 
     Examples
     --------
@@ -115,7 +128,8 @@ class NonlinearModularObserver(PointObserver):
     def __init__(self, system: Any, A0: ArrayLike | None = None, B0: ArrayLike | None = None,
                  Aw: ArrayLike | None = None, Bw: ArrayLike | None = None, *,
                  order: int | None = None, x0: ArrayLike | None = None,
-                 w0: ArrayLike | None = None, coordinates: str = "linearizing") -> None:
+                 w0: ArrayLike | None = None, coordinates: str = "linearizing",
+                 trust_tol: float = TRUST_TOL) -> None:
         if isinstance(system, ModularDesign):
             if any(a is not None for a in (A0, B0, Aw, Bw, order)):
                 raise TypeError("pass either a ModularDesign or the design's parameters")
@@ -127,6 +141,7 @@ class NonlinearModularObserver(PointObserver):
                                     order=7 if order is None else int(order))
         if coordinates not in COORDINATES:
             raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+        self.trust_tol = check_real_scalar("trust_tol", trust_tol, positive=True)
         self.design = design
         self.sys = design.system
         self.delay = 0
@@ -135,7 +150,6 @@ class NonlinearModularObserver(PointObserver):
         self.x0 = np.zeros(n) if x0 is None else as_vector("x0", x0, size=n)
         self.w0 = np.zeros(q) if w0 is None else as_vector("w0", w0, size=q)
         self._R = design.readout()
-        self._tail_R = self._R[: n + q]
         self.reset()
 
     @property
@@ -149,7 +163,7 @@ class NonlinearModularObserver(PointObserver):
         d = self.design
         self.x_tilde, self.w_hat = self.x0.copy(), self.w0.copy()
         self.x_hat = d.Xi_at(self.x_tilde, self.w_hat)
-        self.trusted = True
+        self.trusted = True  # (the Newton solves of the original coordinates converged)
         if self.coordinates == "linearizing":
             self.z = d.extend_to_z(self.x_tilde, self.w_hat)
 
@@ -157,7 +171,6 @@ class NonlinearModularObserver(PointObserver):
         n, q = self.sys.n, self.sys.q
         basis = self.design.basis_v
         mon = basis.monomials(self.z)
-        self.trusted = bool(basis.tail(self._tail_R, mon) <= SERIES_TAIL_RTOL)
         out = self._R @ mon
         self.x_tilde, self.w_hat, self.x_hat = out[:n], out[n:n + q], out[n + q:]
 
@@ -192,10 +205,84 @@ class NonlinearModularObserver(PointObserver):
             mon = d.basis_v.monomials(np.concatenate([xn, wn]))
             self.x_tilde, self.w_hat = xn, wn
             self.x_hat = d.Xi @ mon                           # eq. (26)
-            inside = max(d.basis_v.tail(d.Psi.C, mon), d.basis_v.tail(d.Xi, mon)
-                         ) <= SERIES_TAIL_RTOL
-            self.trusted = bool(ok1 and ok2 and ok3 and inside)
+            self.trusted = bool(ok1 and ok2 and ok3)
         return w_out
+
+    def consistency(self, Y: ArrayLike, x_hat: ArrayLike, w_hat: ArrayLike
+                    ) -> NDArray[np.float64]:
+        """How far each estimate ``(x^_k, w^_k)`` is from explaining the data: an
+        estimate of its error, from the model alone (no truth, no series).
+
+        From ``(x^_k, w^_k)`` the model (``f``, ``s``, ``h``, exactly) predicts the next
+        ``H`` outputs (``H = 2 (n + q)``, fewer at the end of the record); ``r_k`` is
+        the largest deviation from the measured ``y_k, ..., y_(k+H-1)``. The true
+        states and disturbance give no deviation (noise-free), and an estimate off by
+        ``e`` gives about ``J_k e``, with ``J_k`` the Jacobian of the predicted outputs in
+        ``(x_k, w_k)`` at the estimate (finite differences along the prediction). The
+        least-squares (Gauss-Newton) correction ``J_k^+ (y - y_pred)`` is therefore the
+        error itself to first order; its largest entry is returned, in the units of
+        ``(x, w)`` (absolute: an estimate that diverges must not hide behind its own
+        size). With measurement noise it adds ``J_k^+ noise``.
+        Dividing by the sensitivity matters: with a small sampling time (a pendulum at
+        ``dt = 0.05``) a disturbance error moves the next outputs by ``dt^2`` of
+        itself. The last steps of a record, with too few outputs after them to
+        determine ``(x, w)``, get ``inf`` (cannot be checked).
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+            The record.
+        x_hat : array_like, shape (N, n)
+        w_hat : array_like, shape (N, q)
+            The estimates (``result.x_hat``, ``result.estimate``).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+        """
+        sys = self.sys
+        Ya = as_matrix("Y", Y, cols=sys.l)
+        Xh = as_matrix("x_hat", x_hat, rows=Ya.shape[0], cols=sys.n, allow_nan=True,
+                       allow_inf=True)
+        Wh = as_matrix("w_hat", w_hat, rows=Ya.shape[0], cols=sys.q, allow_nan=True,
+                       allow_inf=True)
+        N, H = Ya.shape[0], 2 * (sys.n + sys.q)
+        nv = sys.n + sys.q
+        out = np.empty(N)
+        with np.errstate(all="ignore"):
+            for k in range(N):
+                h = min(H, N - k)
+                v0 = np.concatenate([Xh[k], Wh[k]])
+                pred = self._predict(v0, h)
+                dy = (Ya[k:k + h] - pred).ravel()
+                # the outputs' first-order sensitivity to (x_k, w_k) along the prediction
+                J = np.empty((pred.size, nv))
+                for c in range(nv):
+                    dv = 1e-6 * (1.0 + abs(v0[c]))
+                    vc = v0.copy()
+                    vc[c] += dv
+                    J[:, c] = (self._predict(vc, h) - pred).ravel() / dv
+                if not (np.isfinite(J).all() and np.isfinite(dy).all()) or J.shape[0] < nv:
+                    out[k] = np.inf  # (too few outputs after k to determine (x, w))
+                    continue
+                U, sv, Vt = np.linalg.svd(J, full_matrices=False)
+                if sv.min() <= 1e-9 * max(sv.max(), 1e-300):
+                    out[k] = np.inf
+                    continue
+                # the Gauss-Newton correction J^+ dy: the error itself to first order
+                e = Vt.T @ ((U.T @ dy) / sv)
+                out[k] = float(np.abs(e).max())
+        return out
+
+    def _predict(self, v: NDArray[np.float64], h: int) -> NDArray[np.float64]:
+        """The model's outputs ``y_k .. y_(k+h-1)`` from ``(x_k, w_k) = v``."""
+        sys = self.sys
+        x, w = v[: sys.n], v[sys.n:]
+        out = np.empty((h, sys.l))
+        for j in range(h):
+            out[j] = sys.h_num(x, w)
+            x, w = sys.f_num(x, w), sys.s_num(w)
+        return out
 
     def state_estimate(self) -> NDArray[np.float64]:
         """``x^_k`` (the corrected state estimate)."""
@@ -224,20 +311,35 @@ class NonlinearModularObserver(PointObserver):
         D = np.empty((N, self.sys.q))
         X = np.empty((N, self.sys.n))
         Xt = np.empty((N, self.sys.n))
-        bad = np.zeros(N, dtype=bool)
+        newton_ok = np.ones(N, dtype=bool)
         for k in range(N):
-            bad[k] = not self.trusted
+            newton_ok[k] = self.trusted
             D[k] = self.step(Ya[k])
             X[k], Xt[k] = self._xk, self._xtk
-        if bad.any():
-            warnings.warn(f"{int(bad.sum())} of {N} estimates came from a series not converged "
-                          "at the point (its top-degree terms weigh more than SERIES_TAIL_RTOL) "
-                          "or an unconverged Newton solve "
-                          "(result.untrusted); a higher order or a design closer to the "
-                          "operating point may help", RuntimeWarning, stacklevel=2)
+        cons = self.consistency(Ya, X, D)
+        bad = ~newton_ok | ~(cons <= self.trust_tol)
+        bad[0] = True  # (the initial guess: no measurement behind it)
+        # Warn when trust is never reached, or lost after it was (the transient before
+        # the observer converges, and the last steps that too few outputs follow to
+        # check, are flagged in result.untrusted but expected)
+        end = N
+        while end > 0 and np.isinf(cons[end - 1]) and newton_ok[end - 1]:
+            end -= 1
+        ok = ~bad[:end]
+        later = bad[int(np.argmax(ok)):end] if ok.any() else bad[:end]
+        if N > 1 and (not ok.any() or later.any()):
+            what = ("no estimate of the run" if not ok.any() else
+                    f"{int(later.sum())} estimates after the transient (from step "
+                    f"{int(np.argmax(ok))})")
+            warnings.warn(f"{what} consistent with the model and the data to trust_tol = "
+                          f"{self.trust_tol:g} (result.consistency: an error estimate; "
+                          "result.untrusted), or from an unconverged Newton solve; a higher "
+                          "order, a design closer to the operating point, or the linearizing "
+                          "coordinates may help", RuntimeWarning, stacklevel=2)
         return NonlinearObserverResult(D, X, 0, self.gains, dt=self.sys.dt,
                                        names=tuple(self.sys.disturbance_names),
-                                       observer=self.name, x_tilde=Xt, untrusted=bad)
+                                       observer=self.name, x_tilde=Xt, consistency=cons,
+                                       untrusted=bad)
 
     def __repr__(self) -> str:
         return (f"NonlinearModularObserver(order={self.design.order}, "
