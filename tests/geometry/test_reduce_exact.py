@@ -123,7 +123,13 @@ def test_random_sets_keep_their_geometry(seed):
 
 
 def test_exact_mode_posterior_of_the_paper_example(rng):
-    """The exact-mode set at k = 5: 13 generators / 10 constraints, all but one row redundant."""
+    """The exact-mode set at k = 5 of Li-Cong-Dong's example: by eqs. (20)-(24) it has
+    n + q = 5 free factors (x_0, d_0), q = 2 increment factors per step (10) and
+    l = 2 rows per measurement (12): (15, 12), a count from the algorithm's definition.
+    reduce_exact gives the same set (supports in random directions against scipy's
+    linprog over the original representation, ``lp_support``) with at most 2 rows and
+    6 factors: the 5 free factors go with 5 rows exactly, and the increments' bounds
+    the data imply are redundant."""
     from benchmarks.smfdo import data
 
     sys, Y, _ = data(8)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import setobs as so
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign, run_one
 
 SPECS = [ObserverSpec("SMFDO d=5", "smfdo", {"window": 5}), ObserverSpec("PIO", "pio"),
@@ -90,23 +91,42 @@ def test_bad_scenarios():
         ObserverSpec("x", "particle_filter")
 
 
-def test_paper_claims_fig1b_small_campaign():
-    """Li-Cong-Dong Sec. V on a small campaign (the notebook runs the full 5000 runs):
+def test_paper_claims_fig1b_on_own_simulations():
+    """Li-Cong-Dong Sec. V, Fig. 1(b), on 8 runs simulated here, not by the campaign
+    (x+ = Phi x + G d, y = Xi x with the paper's example; d a random walk with
+    increments uniform in [-1, 1]^2 from 0; x0 uniform in [-1, 1]^3; the truth d is
+    known), scored by each run's mean |d^ - d|_inf over k >= 10:
 
-    * ">40 % better than the SFODO baseline": holds against a PIO with working gains at the
-      stated poles (the printed baseline gains are unstable, so that comparison is moot);
-    * "no significant improvement from delta = 3 to 20": does NOT hold; delta = 3 is clearly
-      worse, while 10 -> 20 changes little. Pinned here.
+    * ">40 % better than the SFODO baseline": against a PIO with working gains at the
+      stated poles (the printed baseline gains are unstable, so that comparison is
+      moot), in every run: 8 of 8, a one-sided sign test's p = 1/256;
+    * "no significant improvement from delta = 3 to 20": does NOT hold; delta = 3 is
+      worse than 20 by more than 15 % in every run, while 10 -> 20 changes the mean
+      error by less than 8 %. Pinned here; the notebook runs the 5000-run campaign and
+      the audit's independent code agreed.
     """
-    specs = [ObserverSpec("d3", "smfdo", {"window": 3, "restart": "box"}),  # (Algorithm 1)
-             ObserverSpec("d10", "smfdo", {"window": 10, "restart": "box"}),
-             ObserverSpec("d20", "smfdo", {"window": 20, "restart": "box"}),
-             ObserverSpec("PIO", "pio")]
-    res = run_campaign(Scenario(horizon=70), specs, runs=4, processes=2, progress=False)
-    e = res.summary(start=10)["error_inf"]
-    assert 1 - e["d10"] / e["PIO"] > 0.4
-    assert 1 - e["d20"] / e["d3"] > 0.15  # delta = 3 is significantly worse
-    assert abs(1 - e["d20"] / e["d10"]) < 0.08  # 10 -> 20: small
+    sys = so.examples.chang2006()
+    X0 = so.ConstrainedZonotope.from_box(-np.ones(3), np.ones(3))
+    errs: dict[str, list[float]] = {"d3": [], "d10": [], "d20": [], "PIO": []}
+    for run in range(8):
+        rng = np.random.default_rng(100 + run)
+        x, d, Y, D = rng.uniform(-1, 1, 3), np.zeros(2), [], []
+        for _ in range(70):
+            Y.append(sys.Xi @ x)
+            D.append(d.copy())
+            x = sys.Phi @ x + sys.G @ d
+            d = d + rng.uniform(-1, 1, 2)
+        Y, D = np.array(Y), np.array(D)
+        for name, w in (("d3", 3), ("d10", 10), ("d20", 20)):
+            est = so.SMFDO(sys, window=w, restart="box", increment_set=np.ones(2),
+                           initial_state_set=X0).run(Y).estimate
+            errs[name].append(np.abs(est - D).max(axis=1)[10:].mean())
+        est = so.observers.PIO(sys).run(Y).estimate
+        errs["PIO"].append(np.abs(est - D).max(axis=1)[10:].mean())
+    e = {k: np.array(v) for k, v in errs.items()}
+    assert (1 - e["d10"] / e["PIO"] > 0.4).all()
+    assert (1 - e["d20"] / e["d3"] > 0.15).all()  # delta = 3 is significantly worse
+    assert abs(1 - e["d20"].mean() / e["d10"].mean()) < 0.08  # 10 -> 20: small
 
 
 @pytest.mark.slow
