@@ -170,3 +170,36 @@ def test_the_base_layer_imports_nothing_above_it():
                 bad += [f"{name}.py:{node.lineno}: import {a.name}" for a in node.names
                         if a.name.split(".")[0] == "setobs"]
     assert bad == []
+
+
+def unasserted_tests(root: Path) -> list[str]:
+    """Test functions under ``root`` with no ``assert``, no ``pytest.raises`` /
+    ``pytest.warns`` / ``pytest.fail`` and no call of an ``assert*`` or ``check*``
+    helper: tests that cannot fail."""
+    bad = []
+    for f in sorted(root.rglob("test_*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if not (isinstance(node, ast.FunctionDef) and node.name.startswith("test")):
+                continue
+            found = False
+            for a in ast.walk(node):
+                if isinstance(a, ast.Assert):
+                    found = True
+                elif isinstance(a, ast.Call):
+                    fn = a.func
+                    name = fn.attr if isinstance(fn, ast.Attribute) else getattr(fn, "id", "")
+                    found = name in ("raises", "warns", "fail") or name.startswith(
+                        ("assert", "check", "_check"))
+                if found:
+                    break
+            if not found:
+                bad.append(f"{f.relative_to(root)}::{node.name}")
+    return bad
+
+
+def test_every_test_can_fail(tmp_path):
+    """Issue 35: no test without an assertion (checked on the AST of every test module);
+    the checker sees one when there is one."""
+    assert unasserted_tests(ROOT / "tests") == []
+    (tmp_path / "test_x.py").write_text("def test_nothing():\n    x = 1 + 1\n")
+    assert unasserted_tests(tmp_path) == ["test_x.py::test_nothing"]
