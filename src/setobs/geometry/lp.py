@@ -329,6 +329,14 @@ def _status_name(h: highspy.Highs) -> str:
     return h.modelStatusToString(h.getModelStatus())
 
 
+#: Largest number of constraint rows for which the factor polytope's queries use the
+#: compiled dense simplex (the hull batch, the phase-1 LP). Above it HiGHS's sparse
+#: simplex wins: on the convex hull of two random sets with 100 rows the hull took 20
+#: ms compiled against 7 ms, with 320 rows 1.07 s against 51 ms (emptiness: 8 vs 3
+#: ms, 217 vs 19 ms); below 64 rows the compiled path was 2-9x faster.
+COMPILED_MAX_ROWS: int = 64
+
+
 def _polytope_size(fp: FactorPolytope) -> int:
     """Largest dimension of a factor polytope's matrices (the phase-1 LP's ``2 n_c``
     extra columns are identities: its products stay below OpenBLAS's thresholds)."""
@@ -783,8 +791,8 @@ class FactorPolytope:
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i`` by the compiled
         simplex (:meth:`FixedStructureLP.bounded <setobs.geometry.fastlp.FixedStructureLP.bounded>`:
         one dual simplex warm from the previous objective's basis, each multiplier
-        certified like the HiGHS path's). For polytopes with a constraint and every
-        bound finite; elsewhere nothing is solved.
+        certified like the HiGHS path's). For polytopes with every bound finite and
+        1 to :data:`COMPILED_MAX_ROWS` rows; elsewhere nothing is solved.
 
         Parameters
         ----------
@@ -801,7 +809,7 @@ class FactorPolytope:
             emptiness).
         """
         n_lp = W.shape[0]
-        if self.n_c == 0 or self._unb.any() or not n_lp:
+        if self.n_c == 0 or self.n_c > COMPILED_MAX_ROWS or self._unb.any() or not n_lp:
             return np.full(n_lp, -np.inf), np.zeros(n_lp, dtype=bool)
         from .fastlp import FixedStructureLP
 
@@ -1193,7 +1201,7 @@ class FactorPolytope:
     def _phase1(self, tol: float) -> EmptinessReport:
         if self.n_c == 0:
             return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
-        if not self._unb.any():
+        if not self._unb.any() and self.n_c <= COMPILED_MAX_ROWS:
             # every bound finite: the compiled phase 1, scaled and certified in one call
             from .fastlp import _simplex
 

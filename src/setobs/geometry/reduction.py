@@ -40,6 +40,7 @@ from ..tolerances import (
     ZERO_TOL,
 )
 from .box import box_center_radius
+from .lp import COMPILED_MAX_ROWS
 from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
 
 __all__ = [
@@ -410,7 +411,8 @@ def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.fl
     over the factor set with ``xi_j``'s own bound dropped (certified; the ``"lp"`` mode
     of :func:`eliminate_constraints`).
 
-    Where every bound is finite, by the compiled simplex: with ``xi_j``'s bound
+    Where every bound is finite (and the rows are at most
+    :data:`~setobs.geometry.lp.COMPILED_MAX_ROWS`), by the compiled simplex: with ``xi_j``'s bound
     dropped, ``|xi_j|`` is still at most its one-sweep propagated range ``R0_j`` (an
     outer bound over the relaxed set: each row bounds ``xi_j`` by the other factors'
     own bounds, rounding included), so the relaxed set is the bounded polytope with
@@ -437,7 +439,7 @@ def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.fl
     if not cand.size:
         return r
     todo = list(cand)
-    if np.isfinite(h).all() and Z.n_con:
+    if np.isfinite(h).all() and 0 < Z.n_con <= COMPILED_MAX_ROWS:
         from .fastlp import FixedStructureLP
 
         R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h, Z.b_err)
