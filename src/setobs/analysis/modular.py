@@ -682,8 +682,9 @@ def design_modular(system: Any, A0: ArrayLike, B0: ArrayLike | None, Aw: ArrayLi
             f"than max_terms = {max_terms}; the design's time grows about with the cube of "
             f"that (351 terms took 51 s on a two-variable plant): lower the order or raise "
             f"max_terms")
-    for name, M in (("A0", A0a), ("Aw", Awa)):
-        rho = float(np.abs(np.linalg.eigvals(M)).max(initial=0.0))
+    eigs = {"A0": np.linalg.eigvals(A0a), "Aw": np.linalg.eigvals(Awa)}
+    for name, ev in eigs.items():
+        rho = float(np.abs(ev).max(initial=0.0))
         if not rho < 1.0:
             raise DesignError(
                 f"modular design: {name} has spectral radius {rho:.4g} >= 1; the observer's "
@@ -743,8 +744,7 @@ def design_modular(system: Any, A0: ArrayLike, B0: ArrayLike | None, Aw: ArrayLi
         raise DesignError("modular design: d Psi/d w is singular at 0, the algebraic equation "
                           "(36) has no unique solution (choose (Aw, Bw) differently)",
                           "invertible Psi")
-    _warn_conditioning(report, Phi0.T, Psi_w, np.concatenate([np.linalg.eigvals(A0a),
-                                                               np.linalg.eigvals(Awa)]))
+    _warn_conditioning(report, Phi0.T, Psi_w, np.concatenate(list(eigs.values())))
     return ModularDesign(system, int(order), A0a, B0a, Awa, Bwa, Phi0, Ginv, phi0, Xi, Psi,
                          report)
 

@@ -322,14 +322,20 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
         elif Z.is_empty():  # no LP was needed; still decide emptiness
             raise EmptySetError("the set is empty")
     # 2. eliminate free factors with constraint rows, while the tracked rounding
-    # of c and b stays within its budget
-    G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, free,
-                                                   _budgets(G, c, A, b, h, cerr, berr))
-    # 3. unused parts
+    # of c and b stays within its budget; 3. drop the unused parts
+    return _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, free,
+                               _budgets(G, c, A, b, h, cerr, berr))
+
+
+def _eliminate_and_trim(Z: ConstrainedZonotope, G, c, A, b, h, cerr, berr, free, budgets
+                        ) -> ConstrainedZonotope:
+    """:func:`_eliminate_free` on the factors ``free``, then drop the exactly zero rows and
+    the unused factors (``h = 0``, or zero columns in ``G`` and ``A``): the set ``Z``'s
+    data after those exact steps, as a set."""
+    G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets)
     A, b, berr = _drop_zero_rows(A, b, berr)
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius,
-                                        cerr, berr)
+    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius, cerr, berr)
 
 
 def _drop_zero_rows(A, b, berr):
@@ -672,11 +678,7 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int) -> Constrained
     # exact first: factors already unbounded go with a row each (no LP needed)
     G, c, A, b, h, cerr, berr = Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err
     budgets = _budgets(G, c, A, b, h, cerr, berr)
-    G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, np.isinf(h),
-                                                   budgets)
-    A, b, berr = _drop_zero_rows(A, b, berr)
-    keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    Z = trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius, cerr, berr)
+    Z = _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, np.isinf(h), budgets)
     while Z.n_con > max_constraints:
         h = Z.h
         bounded = np.isfinite(h) & (h > 0) & Z.A.any(axis=0)

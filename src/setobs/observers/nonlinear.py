@@ -48,9 +48,9 @@ class NonlinearObserverResult(ObserverResult):
     consistency : ndarray, shape (N,)
         An estimate of each step's error from the model and the data alone, in the
         units of ``(x, w)`` (:meth:`NonlinearModularObserver.consistency`: the
-        model's output predictions from ``(x^_k, w^_k)`` against the next
-        measurements, divided by their sensitivity to an error); ``inf`` for the last
-        steps, which too few outputs follow to check.
+        Gauss-Newton correction that makes the model's output predictions from
+        ``(x^_k, w^_k)`` match the next measurements); ``inf`` for the last steps,
+        which too few outputs follow to check.
     untrusted : ndarray of bool, shape (N,)
         Steps whose consistency exceeds the observer's ``trust_tol``, whose estimate
         came from a Newton solve that did not converge (original coordinates), and
@@ -99,8 +99,8 @@ class NonlinearModularObserver(PointObserver):
         Consistency (see :class:`NonlinearObserverResult`: an error estimate, in the
         units of ``x`` and ``w``) above which a step is flagged untrusted (default
         :data:`~setobs.tolerances.TRUST_TOL`). With measurement noise, set it above
-        the noise's effect (the consistency of the noise alone is about the noise
-        divided by the outputs' sensitivity).
+        the noise's effect (the consistency of the noise alone is ``J^+`` applied to
+        it, see :meth:`consistency`).
 
     Notes
     -----
@@ -214,19 +214,19 @@ class NonlinearModularObserver(PointObserver):
         estimate of its error, from the model alone (no truth, no series).
 
         From ``(x^_k, w^_k)`` the model (``f``, ``s``, ``h``, exactly) predicts the next
-        ``H`` outputs (``H = 2 (n + q)``, fewer at the end of the record); ``r_k`` is
-        the largest deviation from the measured ``y_k, ..., y_(k+H-1)``. The true
-        states and disturbance give no deviation (noise-free), and an estimate off by
-        ``e`` gives about ``J_k e``, with ``J_k`` the Jacobian of the predicted outputs in
+        ``H`` outputs (``H = 2 (n + q)``, fewer at the end of the record), to compare
+        with the measured ``y_k, ..., y_(k+H-1)``. The true states and disturbance
+        predict them exactly (noise-free), and an estimate off by ``e`` deviates by
+        about ``J_k e``, with ``J_k`` the Jacobian of the predicted outputs in
         ``(x_k, w_k)`` at the estimate (finite differences along the prediction). The
         least-squares (Gauss-Newton) correction ``J_k^+ (y - y_pred)`` is therefore the
         error itself to first order; its largest entry is returned, in the units of
         ``(x, w)`` (absolute: an estimate that diverges must not hide behind its own
-        size). With measurement noise it adds ``J_k^+ noise``.
-        Dividing by the sensitivity matters: with a small sampling time (a pendulum at
-        ``dt = 0.05``) a disturbance error moves the next outputs by ``dt^2`` of
-        itself. The last steps of a record, with too few outputs after them to
-        determine ``(x, w)``, get ``inf`` (cannot be checked).
+        size). With measurement noise it adds ``J_k^+ noise``. Solving through ``J_k``
+        matters: with a small sampling time (a pendulum at ``dt = 0.05``) a
+        disturbance error moves the next outputs by only ``dt^2`` of itself, which raw
+        output residuals would miss. The last steps of a record, with too few outputs
+        after them to determine ``(x, w)``, get ``inf`` (cannot be checked).
 
         Parameters
         ----------
