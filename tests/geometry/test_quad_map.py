@@ -22,10 +22,11 @@ def test_cora_zonotope_case():
     generators (27.5, -5.75), (35, -9.5), (95, -14), (110, -26), (125, -32)."""
     Z = ConstrainedZonotope([[-3.0, -2.0], [2.0, 3.0]], [-4.0, 1.0])
     R = quad_map(Z, [[[1, -2], [-3, 4]], [[0.5, 0], [2, -1]]])
-    assert R.c.tolist() == [102.5, -16.25]
-    got = sorted(map(tuple, R.G.T.tolist()))
-    assert got == sorted([(27.5, -5.75), (35.0, -9.5), (95.0, -14.0), (110.0, -26.0),
-                          (125.0, -32.0)])
+    np.testing.assert_allclose(R.c, [102.5, -16.25], rtol=1e-12)
+    got = np.array(sorted(map(tuple, R.G.T.tolist())))
+    want = np.array(sorted([(27.5, -5.75), (35.0, -9.5), (95.0, -14.0), (110.0, -26.0),
+                            (125.0, -32.0)]))
+    np.testing.assert_allclose(got, want, rtol=1e-12)
 
 
 def test_square_on_an_interval():
