@@ -25,9 +25,11 @@ compares setobs with it on the same sets (``_peers.py``): Minkowski sum, linear
 map, generalized intersection, emptiness of an empty intersection, point
 containment and interval hull on random sets (n = 2..6; 10, 20, 40 generators; 0,
 5, 10 constraints), interleaved medians and their ratios by dimension; whether
-ZonoOpt's hull falls inside setobs' certified box; and constraint elimination on a
-3-D polytope with 60 facets (63 generators, 60 constraints): time per eliminated
-constraint, in 45 x 40 linprog units, and the support excess over the polytope's.
+ZonoOpt's hull falls inside setobs' certified box; what the least Python object of a
+sum costs (why the three set-building operations are compiled, ``setup.py``); and
+constraint elimination on a 3-D polytope with 60 facets (63 generators, 60
+constraints): time per eliminated constraint, in 45 x 40 linprog units, and the
+support excess over the polytope's.
 
 Run: ``python benchmarks/geometry_ops.py [--repeats N] [--peers-only]``; writes
 ``benchmarks/results/geometry_ops.json`` (``--peers-only`` keeps the file's cvxpy
@@ -49,7 +51,13 @@ import numpy as np
 import setobs
 from _common import linprog_unit, make_cz, timeit
 from setobs import ConstrainedZonotope
-from setobs.geometry import convex_hull, distance, intersect_polytope, is_subset_of_polytope
+from setobs.geometry import (
+    compiled_set_operations,
+    convex_hull,
+    distance,
+    intersect_polytope,
+    is_subset_of_polytope,
+)
 
 SIZES = [(3, 20, 10), (5, 60, 40)]
 M_ROWS = 20
@@ -136,6 +144,8 @@ def peer_section(repeats: int) -> dict:
     inside = sum(r["zonoopt_hull_inside_certified_box"] for r in rows)
     return {
         "zonoopt": metadata.version("zonoopt"),
+        # +, @ and intersect built in C (setup.py) or run in NumPy
+        "compiled_set_operations": compiled_set_operations(),
         "ratios_by_dimension": ratios,
         "operations": rows,
         "zonoopt_hulls_inside_certified_box": f"{inside} of {len(rows)}",

@@ -26,7 +26,7 @@ from .operations import (
 from .polytope import HRep, cz_from_hpolytope, polygon_2d, to_hrep, vertices
 from .reduction import eliminate_constraints, reduce_exact, reduce_order, remove_redundancy, rescale
 from .relations import ContainmentResult, is_equal, is_subset, is_subset_of_polytope, represents
-from .zonotope import ConstrainedZonotope
+from .zonotope import ConstrainedZonotope, compiled_set_operations
 
 __all__ = [
     "Box",
@@ -39,6 +39,7 @@ __all__ = [
     "LPResult",
     "QPResult",
     "VolumeResult",
+    "compiled_set_operations",
     "convex_hull",
     "cz_from_hpolytope",
     "distance",
