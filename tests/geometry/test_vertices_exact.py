@@ -6,6 +6,7 @@ Qhull (every returned point is a vertex of their hull)."""
 from __future__ import annotations
 
 import itertools
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 import setobs as so
+from tests.conftest import exact_factor_vertices
 from tests.oracles import assert_box_covers
 
 
@@ -90,3 +92,49 @@ def test_box_radius_is_rounded_up_only_where_inexact():
     hi = lo + np.abs(rng.normal(size=500)) * 10.0 ** rng.integers(-14, 3, 500)
     c, r = box_center_radius(lo, hi)
     assert_box_covers(c, r, lo, hi)
+
+
+def exact_ends(Z: so.ConstrainedZonotope) -> list[Fraction]:
+    """Exact min and max of ``c + g xi`` over the exact factor vertices (rationals)."""
+    c = Fraction(float(Z.c[0]))
+    vals = [c + sum((Fraction(float(g)) * x for g, x in zip(Z.G[0], xi, strict=True)),
+                    Fraction(0)) for xi in exact_factor_vertices(Z.A, Z.b, Z.h)]
+    return [min(vals), max(vals)]
+
+
+def test_a_constrained_1d_point_is_one_exact_vertex():
+    """{3 + 0.5 (xi_1 + xi_2) : xi_1 + xi_2 = 2, |xi| <= 1} = {4} (the only factor point is
+    (1, 1)); the certified hull's ends were 4 -+ 4e-16, two vertices."""
+    Z = so.ConstrainedZonotope([[0.5, 0.5]], [3.0], A=[[1.0, 1.0]], b=[2.0], h=[1.0, 1.0])
+    assert Z.vertices().tolist() == [[4.0]]
+    Z = so.ConstrainedZonotope([[1.0, 1.0]], [3.0], A=[[1.0, 1.0]], b=[1.0], h=[1.0, 1.0])
+    assert Z.vertices().tolist() == [[4.0]]  # a whole edge of factors maps to 4
+
+
+def test_a_constrained_1d_segment_has_exact_ends():
+    # xi_1 = xi_2, so 3 + xi_1 + xi_2 ranges over [1, 5]
+    Z = so.ConstrainedZonotope([[1.0, 1.0]], [3.0], A=[[1.0, -1.0]], b=[0.0], h=[1.0, 1.0])
+    assert Z.vertices().tolist() == [[1.0], [5.0]]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_random_1d_ends_are_the_nearest_floats_to_the_exact_ends(seed):
+    rng = np.random.default_rng(seed)
+    n_g = int(rng.integers(2, 6))
+    n_c = int(rng.integers(1, n_g))
+    A = rng.normal(size=(n_c, n_g))
+    Z = so.ConstrainedZonotope(rng.normal(size=(1, n_g)), rng.normal(size=1), A=A,
+                               b=A @ rng.uniform(-0.7, 0.7, n_g), h=rng.uniform(0.5, 2.0, n_g))
+    lo, hi = exact_ends(Z)
+    assert Z.vertices().ravel().tolist() == [float(lo), float(hi)]  # int / int: nearest
+
+
+def test_1d_ends_with_a_carried_rounding_bound_stay_outward():
+    """A measured right-hand side (``b_err``) makes the set uncertain: the ends are the
+    certified outward ones, which contain the exact ends of the set as stored."""
+    Z = so.ConstrainedZonotope([[0.1, 0.2]], [0.3]).intersect_affine(
+        [[1.0]], [0.3 + 0.07], y_err=[1e-12])
+    assert Z.n_con == 1
+    lo, hi = exact_ends(so.ConstrainedZonotope(Z.G, Z.c, Z.A, Z.b, Z.h))
+    V = Z.vertices().ravel()
+    assert Fraction(float(V[0])) < lo and Fraction(float(V[-1])) > hi

@@ -250,7 +250,9 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     points is confirmed by a certified support value (the set lies within
     ``VERTEX_RTOL`` times its size of that hull), otherwise
     :class:`~setobs.SolverError` is raised. In dimension 1 the vertices are
-    the certified interval-hull ends.
+    the ends of the set, each the float nearest to the exact end where exact rational
+    arithmetic verifies the LP's optimum (:func:`_exact_ends_1d`), otherwise the
+    certified (outward-rounded) interval-hull ends.
 
     Parameters
     ----------
@@ -277,9 +279,148 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
         if not box.is_bounded:
             raise UnboundedSetError("vertex enumeration needs a bounded set; this one is "
                                     "unbounded")
-        return np.unique(np.array([[box.lo[0]], [box.hi[0]]]), axis=0)
+        ends = _exact_ends_1d(Z)
+        if ends is None:
+            ends = np.array([box.lo[0], box.hi[0]])
+        return np.unique(ends).reshape(-1, 1)
     V, _, _ = _VerifiedHull(Z).run()
     return V
+
+
+#: Largest ``n_gen * max(n_con, 1)`` of a 1-D set whose ends :func:`vertices` verifies in
+#: exact rational arithmetic (above it, the certified outward ends are returned).
+MAX_EXACT_END_SIZE = 400
+
+
+def _exact_ends_1d(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
+    """The ends ``min`` and ``max`` of a bounded 1-D set ``{c + g xi : A xi = b, |xi| <= h}``
+    as the floats nearest to the exact ends, or ``None`` where this cannot be verified.
+
+    For each end, the solver's optimal point gives an exactly feasible point ``xi`` (its
+    factors at a bound are put at the bound, the others solved from ``A xi = b`` in
+    rational arithmetic; a face's extra freedom keeps the solver's values) and a
+    multiplier ``y`` (``a_j^T y = w_j`` for the factors not at a bound and those whose
+    reduced cost is zero at the dual LP's float optimum, solved in rational arithmetic).
+    Then ``w^T xi`` is at least the minimum and the Lagrangian bound
+    ``b^T y - sum_j h_j |w_j - a_j^T y|`` at most (weak duality): where the two are
+    equal, both are the exact minimum, and ``c + g^T xi`` rounded once is the nearest
+    float to the end. ``None`` when a rounding bound is carried (``c_err``, ``b_err``: the set is
+    then not exactly known), the set is larger than :data:`MAX_EXACT_END_SIZE`, or the
+    two values differ.
+    """
+    if (np.any(Z.c_err != 0.0) or np.any(Z.b_err != 0.0) or not np.isfinite(Z.h).all()
+            or Z.n_gen * max(Z.n_con, 1) > MAX_EXACT_END_SIZE):
+        return None
+    from fractions import Fraction
+
+    from .zonotope import factor_polytope
+
+    A = [[Fraction(float(v)) for v in row] for row in Z.A]
+    b = [Fraction(float(v)) for v in Z.b]
+    h = [Fraction(float(v)) for v in Z.h]
+    c = Fraction(float(Z.c[0]))
+    fp = factor_polytope(Z)
+    ends = []
+    for sign in (1, -1):  # min g xi, then min -g xi (an int sign: Fraction * float is a float)
+        w = sign * Z.G[0]
+        res = fp.minimize(w)
+        if res.status != "optimal" or res.point is None:
+            return None
+        value = _exact_lp_minimum(A, b, h, [Fraction(float(v)) for v in w],
+                                  np.asarray(res.point, dtype=np.float64))
+        if value is None:
+            return None
+        ends.append(float(c + sign * value))  # int / int: correctly rounded
+    return np.array([ends[0], ends[1]])
+
+
+def _exact_lp_minimum(A, b, h, w, xi_hat) -> object | None:
+    """The exact ``min w^T xi`` over ``{A xi = b, |xi| <= h}`` (rationals) verified from
+    the solver's minimiser ``xi_hat``, or ``None`` (see :func:`_exact_ends_1d`)."""
+    from fractions import Fraction
+
+    n_g = len(h)
+    xi: list = [None] * n_g
+    free = []
+    for j in range(n_g):
+        x = float(xi_hat[j])
+        hj = float(h[j])
+        if hj == 0.0 or abs(x) >= hj * (1.0 - 1e-9):
+            xi[j] = h[j] if x > 0 else -h[j]
+        else:
+            free.append(j)
+    m = len(b)
+    rhs = [b[i] - sum((A[i][j] * xi[j] for j in range(n_g) if xi[j] is not None),
+                      Fraction(0)) for i in range(m)]
+    sol = _rational_solve([[A[i][j] for j in free] for i in range(m)], rhs,
+                          [Fraction(float(xi_hat[j])) for j in free])
+    if sol is None:
+        return None
+    for j, v in zip(free, sol, strict=True):
+        if abs(v) > h[j]:
+            return None
+        xi[j] = v
+    primal = sum((w[j] * xi[j] for j in range(n_g)), Fraction(0))
+    tight = set(free)
+    y_hat = np.zeros(m)
+    if m:  # the dual LP in floats: its zero reduced costs say which equations y solves
+        from scipy.optimize import linprog
+
+        Af = np.array([[float(v) for v in row] for row in A])
+        wf = np.array([float(v) for v in w])
+        hf = np.array([float(v) for v in h])
+        eye = np.eye(n_g)
+        dual_lp = linprog(np.concatenate([-np.array([float(v) for v in b]), hf]),
+                          A_ub=np.block([[-Af.T, -eye], [Af.T, -eye]]),
+                          b_ub=np.concatenate([-wf, wf]),
+                          bounds=[(None, None)] * m + [(0, None)] * n_g, method="highs")
+        if dual_lp.status == 0:
+            y_hat = dual_lp.x[:m]
+            reduced = wf - Af.T @ y_hat
+            tight |= {j for j in range(n_g) if abs(reduced[j]) <= 1e-9 * (1.0 + abs(wf[j]))}
+    for T in (sorted(tight), free):
+        y = _rational_solve([[A[i][j] for i in range(m)] for j in T], [w[j] for j in T],
+                            [Fraction(float(v)) for v in y_hat])
+        if y is None:
+            continue
+        dual = sum((b[i] * y[i] for i in range(m)), Fraction(0)) - sum(
+            (h[j] * abs(w[j] - sum((A[i][j] * y[i] for i in range(m)), Fraction(0)))
+             for j in range(n_g)), Fraction(0))
+        if dual == primal:
+            return primal
+    return None
+
+
+def _rational_solve(M: list, r: list, default: list) -> list | None:
+    """A solution of ``M x = r`` in rationals (Gauss-Jordan), the unknowns without a pivot
+    at ``default``; ``None`` if the system is inconsistent."""
+    from fractions import Fraction
+
+    rows = [[*row, ri] for row, ri in zip(M, r, strict=True)]
+    k = len(default)
+    pivots: list[tuple[int, int]] = []
+    i0 = 0
+    for col in range(k):
+        p = next((i for i in range(i0, len(rows)) if rows[i][col] != 0), None)
+        if p is None:
+            continue
+        rows[i0], rows[p] = rows[p], rows[i0]
+        piv = rows[i0][col]
+        rows[i0] = [v / piv for v in rows[i0]]
+        for i in range(len(rows)):
+            if i != i0 and rows[i][col] != 0:
+                f = rows[i][col]
+                rows[i] = [a - f * bb for a, bb in zip(rows[i], rows[i0], strict=True)]
+        pivots.append((i0, col))
+        i0 += 1
+    if any(row[k] != 0 for row in rows[i0:]):
+        return None
+    x = list(default)
+    pivot_cols = {col for _, col in pivots}
+    for i, col in pivots:
+        x[col] = rows[i][k] - sum((rows[i][j] * x[j] for j in range(k)
+                                   if j not in pivot_cols and rows[i][j] != 0), Fraction(0))
+    return x
 
 
 #: Largest number of independent generators whose 2^m sign combinations
