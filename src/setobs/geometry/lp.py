@@ -89,6 +89,8 @@ _INF = math.inf  # HiGHS's kHighsInf
 
 # HiGHS loads on the first LP, not on ``import setobs``.
 highspy = lazy_module("highspy")
+# the compiled simplex (numba): compiles or loads on the first compiled query
+_simplex = lazy_module("setobs.geometry._simplex")
 
 
 @dataclass(frozen=True)
@@ -393,9 +395,11 @@ class FactorPolytope:
         self.b = b
         self.h = h
         self.unbounded_radius = unbounded_radius
-        self.b_err = None if b_err is None or not np.any(b_err) else b_err
+        # (count_nonzero: ~0.3 us against ~1.4 for np.any, on every set's first query)
+        self.b_err = None if b_err is None or not np.count_nonzero(b_err) else b_err
         self.n_c, self.n_g = A.shape
         self._unb = np.isinf(h)
+        self._any_unb = bool(np.count_nonzero(self._unb))
         self._unb_pinv: NDArray[np.float64] | None = None
         self._pivot: tuple | None = None  # (see _free_pivot)
         self._model: highspy.Highs | None = None
@@ -594,7 +598,7 @@ class FactorPolytope:
                  ) -> tuple[float, NDArray[np.float64]]:
         return lagrangian_lower_bound(
             w, self.A, self.b, self.h, y, w_err=w_err, unbounded_radius=self.unbounded_radius,
-            unbounded_pinv=self._pinv() if self._unb.any() else None, w_pair=w_pair,
+            unbounded_pinv=self._pinv() if self._any_unb else None, w_pair=w_pair,
             exact_residual=exact_residual,
             b_err=self.b_err,
         )
@@ -809,7 +813,7 @@ class FactorPolytope:
             emptiness).
         """
         n_lp = W.shape[0]
-        if self.n_c == 0 or self.n_c > COMPILED_MAX_ROWS or self._unb.any() or not n_lp:
+        if self.n_c == 0 or self.n_c > COMPILED_MAX_ROWS or self._any_unb or not n_lp:
             return np.full(n_lp, -np.inf), np.zeros(n_lp, dtype=bool)
         from .fastlp import FixedStructureLP
 
@@ -858,7 +862,7 @@ class FactorPolytope:
         be = self.b_err
         if be is None or not np.any(be):
             return None
-        if self._unb.any() and self.A[:, self._unb].any():
+        if self._any_unb and self.A[:, self._unb].any():
             out = self._within_b_err_reduced(w, w_err, w_pair)
             if out is not None:
                 return out
@@ -1201,10 +1205,8 @@ class FactorPolytope:
     def _phase1(self, tol: float) -> EmptinessReport:
         if self.n_c == 0:
             return EmptinessReport(False, 0.0, 0.0, tol, np.zeros(self.n_g))
-        if not self._unb.any() and self.n_c <= COMPILED_MAX_ROWS:
+        if not self._any_unb and self.n_c <= COMPILED_MAX_ROWS:
             # every bound finite: the compiled phase 1, scaled and certified in one call
-            from .fastlp import _simplex
-
             code, lower_inf, found, xc = _simplex.emptiness(
                 self.A, self.b, self.h, np.zeros(self.n_c) if self.b_err is None else self.b_err,
                 self.unbounded_radius, 50 * (self.n_c + self.n_g))
