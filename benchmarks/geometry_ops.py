@@ -152,8 +152,11 @@ def peer_section(repeats: int) -> dict:
         "python_floor_of_a_sum": floor,
         "elimination": elim,
         "targets": {
+            # by dimension (the median over the set shapes) and on every single set
             "every_operation_ratio_at_most_1": {
-                op: {"worst": max(by_n.values()), "met": max(by_n.values()) <= 1.0}
+                op: {"worst": max(by_n.values()),
+                     "worst_set": max(r[op]["ratio"] for r in rows),
+                     "met": max(r[op]["ratio"] for r in rows) <= 1.0}
                 for op, by_n in ratios.items()},
             "elimination_at_most_10_linprogs_per_constraint": {
                 "worst": max(r["fast_linprogs_per_constraint"] for r in elim["rows"]),
