@@ -138,3 +138,43 @@ def test_1d_ends_with_a_carried_rounding_bound_stay_outward():
     lo, hi = exact_ends(so.ConstrainedZonotope(Z.G, Z.c, Z.A, Z.b, Z.h))
     V = Z.vertices().ravel()
     assert Fraction(float(V[0])) < lo and Fraction(float(V[-1])) > hi
+
+
+def test_a_box_cut_out_by_constraints_has_its_float_corners():
+    """[0, 2] x [1, 3] cut by [-1, 1] x [0, 2] is [0, 1] x [1, 2] (its corners were
+    3e-16 off); a box with a forced-zero factor likewise."""
+    P = so.ConstrainedZonotope.from_box([0.0, 1.0], [2.0, 3.0]).intersect(
+        so.ConstrainedZonotope.from_box([-1.0, 0.0], [1.0, 2.0]))
+    assert _rows(P.vertices()) == [(0.0, 1.0), (0.0, 2.0), (1.0, 1.0), (1.0, 2.0)]
+    Z = so.ConstrainedZonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 0.0]], [1.0, 2.0],
+                               A=[[0.0, 0.0, 1.0]], b=[0.0])
+    assert _rows(Z.vertices()) == [(0.0, 1.0), (0.0, 3.0), (2.0, 1.0), (2.0, 3.0)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_constrained_vertices_are_the_nearest_floats_to_exact_vertices(seed):
+    """Every vertex returned is the rounding of the image of an exact factor vertex, and
+    they are as many as the extreme points (Qhull) of those images."""
+    rng = np.random.default_rng(40 + seed)
+    n, n_g = 2 + seed % 2, 5
+    n_c = 1 + seed % 2
+    A = rng.normal(size=(n_c, n_g))
+    Z = so.ConstrainedZonotope(rng.normal(size=(n, n_g)), rng.normal(size=n), A=A,
+                               b=A @ rng.uniform(-0.6, 0.6, n_g), h=rng.uniform(0.5, 2.0, n_g))
+    c = [Fraction(float(v)) for v in Z.c]
+    images = {tuple(float(ci + sum((Fraction(float(g)) * x for g, x in zip(Gi, xi, strict=True)),
+                                   Fraction(0)))
+                    for ci, Gi in zip(c, Z.G, strict=True))
+              for xi in exact_factor_vertices(Z.A, Z.b, Z.h)}
+    V = Z.vertices()
+    assert set(_rows(V)) <= images
+    pts = np.array(sorted(images))
+    assert len(V) == len(ConvexHull(pts).vertices)
+
+
+def test_a_bounded_set_with_a_free_factor():
+    """A factor without bound (``h = inf``) pinned by a constraint: the verified points
+    (no exact rationals of an infinite bound)."""
+    Z = so.ConstrainedZonotope([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], [0.0, 0.0],
+                               A=[[1.0, 0.0, -1.0]], b=[0.0], h=[1.0, 1.0, np.inf])
+    assert _rows(Z.vertices()) == [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]

@@ -24,6 +24,7 @@ from .box import box_center_radius
 from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
+    support_point_factors,
     support_unwarned,
     trusted_cz,
     unit_scaled,
@@ -65,10 +66,11 @@ class HRep:
 
 
 def _support_pair(Z: ConstrainedZonotope, d: NDArray[np.float64]
-                  ) -> tuple[float, NDArray[np.float64]]:
-    """Certified support value and a maximiser (the LP's point) in direction ``d``."""
+                  ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+    """Certified support value, a maximiser (the LP's point) in direction ``d`` and its
+    factors."""
     val = support_unwarned(Z, d)
-    return val, Z.support_point(d)
+    return (val, *support_point_factors(Z, d))
 
 
 #: ``SolverError.status`` of a vertex enumeration stopped at its budget of LPs or
@@ -107,10 +109,13 @@ class _VerifiedHull:
         self.max_lps = max_lps
         self.max_facets = max_facets
         self.rng = np.random.default_rng(0)
+        self.last_factors: NDArray[np.float64] | None = None
+        self.vertex_rows: NDArray[np.intp] | None = None  # rows of the points (run())
         # --- affine hull
         _, p0 = self._query(np.eye(n)[0])
         self.p0 = p0
         pts = [p0]
+        self.factors = [self.last_factors]  # the factors of each point found (rows of Y)
         basis = np.zeros((n, 0))
         flat: list[NDArray[np.float64]] = []
         while basis.shape[1] + len(flat) < n:
@@ -118,6 +123,7 @@ class _VerifiedHull:
                             else basis, n)
             u = Q[:, 0]
             s_plus, q_plus = self._query(u)
+            xi_plus = self.last_factors
             s_minus, q_minus = self._query(-u)
             if s_plus + s_minus <= self.tol:
                 flat.append(u)
@@ -129,6 +135,7 @@ class _VerifiedHull:
                                   "(width certified but no point found)")
             basis = np.hstack([basis, (v / np.linalg.norm(v))[:, None]])
             pts.append(q)
+            self.factors.append(xi_plus if q is q_plus else self.last_factors)
         self.basis = basis
         self.flat = np.array(flat).reshape(-1, n)
         self.points = np.array(pts)
@@ -138,7 +145,8 @@ class _VerifiedHull:
         if self.lps > self.max_lps:
             raise SolverError(f"vertex enumeration did not converge within {self.max_lps} "
                               "LPs", BUDGET_STATUS)
-        return _support_pair(self.Z, d)
+        s, q, self.last_factors = _support_pair(self.Z, d)
+        return s, q
 
     def run(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(vertices, normals, offsets)``: the vertices and the confirmed facets
@@ -190,10 +198,12 @@ class _VerifiedHull:
                     raise SolverError("vertex enumeration: a support point beyond a facet "
                                       "repeats a known point (LP accuracy)")
                 Y = np.vstack([Y, yq])
+                self.factors.append(self.last_factors)
                 added = True
                 break
             if not added:
                 break
+        self.vertex_rows = hull.vertices
         verts = p0 + Y[hull.vertices] @ B.T
         # the final hull's facets, each confirmed (merged when Qhull split one)
         final = {self._key(eq) for eq in hull.equations}
@@ -252,7 +262,10 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
     :class:`~setobs.SolverError` is raised. In dimension 1 the vertices are
     the ends of the set, each the float nearest to the exact end where exact rational
     arithmetic verifies the LP's optimum (:func:`_exact_ends_1d`), otherwise the
-    certified (outward-rounded) interval-hull ends.
+    certified (outward-rounded) interval-hull ends. In higher dimensions each vertex is
+    the nearest floats to an exact point of the set found from the solver's (a box cut
+    out by constraints gets its float corners), up to :data:`MAX_EXACT_VERTICES`
+    vertices; points, boxes and parallelotopes without constraints in closed form.
 
     Parameters
     ----------
@@ -283,13 +296,54 @@ def vertices(Z: ConstrainedZonotope) -> NDArray[np.float64]:
         if ends is None:
             ends = np.array([box.lo[0], box.hi[0]])
         return np.unique(ends).reshape(-1, 1)
-    V, _, _ = _VerifiedHull(Z).run()
-    return V
+    vh = _VerifiedHull(Z)
+    V, _, _ = vh.run()
+    return _exact_vertices(Z, V, vh)
 
 
-#: Largest ``n_gen * max(n_con, 1)`` of a 1-D set whose ends :func:`vertices` verifies in
-#: exact rational arithmetic (above it, the certified outward ends are returned).
+def _exact_vertices(Z: ConstrainedZonotope, V: NDArray[np.float64], vh: _VerifiedHull
+                    ) -> NDArray[np.float64]:
+    """``V`` with each vertex replaced by the nearest floats to an exact point of the set
+    where one is found: the solver's factors made exactly feasible in rational
+    arithmetic (:func:`_exact_feasible`), ``c + G xi`` summed exactly and rounded once,
+    kept only within the construction's tolerance of the vertex. A box cut out by
+    constraints gets its float corners (they were off by a few 1e-16). With a carried
+    rounding bound (``c_err``, ``b_err``) these are the vertices of the set as stored,
+    which the construction's tolerance covers as it covers the solver's points. Skipped
+    for sets with unbounded factors, larger than :data:`MAX_EXACT_END_SIZE` or with more
+    than :data:`MAX_EXACT_VERTICES` vertices (about 1 ms of rational arithmetic per vertex
+    at 20 generators and 5 constraints)."""
+    if (vh.vertex_rows is None or Z.n_gen * max(Z.n_con, 1) > MAX_EXACT_END_SIZE
+            or len(vh.vertex_rows) > MAX_EXACT_VERTICES or not np.isfinite(Z.h).all()):
+        return V
+    from fractions import Fraction
+
+    A = [[Fraction(float(v)) for v in row] for row in Z.A]
+    b = [Fraction(float(v)) for v in Z.b]
+    h = [Fraction(float(v)) for v in Z.h]
+    G = [[Fraction(float(v)) for v in row] for row in Z.G]
+    c = [Fraction(float(v)) for v in Z.c]
+    out = V.copy()
+    for k, row in enumerate(vh.vertex_rows):
+        xi = _exact_feasible(A, b, h, vh.factors[row])
+        if xi is None:
+            continue
+        x = np.array([float(ci + sum((g * v for g, v in zip(Gi, xi, strict=True)), Fraction(0)))
+                      for ci, Gi in zip(c, G, strict=True)])
+        if np.abs(x - V[k]).max() <= vh.tol:
+            out[k] = x
+    return out
+
+
+#: Largest ``n_gen * max(n_con, 1)`` of a set whose vertices :func:`vertices` makes exact
+#: in rational arithmetic (1-D: verifies its ends; above it, the certified outward ends
+#: are returned, and in higher dimensions the verified construction's points).
 MAX_EXACT_END_SIZE = 400
+
+#: Most vertices a set may have for :func:`vertices` to make each one exact (the floats
+#: nearest to an exact point of the set); above it the verified construction's points
+#: are returned.
+MAX_EXACT_VERTICES = 64
 
 
 def _exact_ends_1d(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
@@ -339,27 +393,11 @@ def _exact_lp_minimum(A, b, h, w, xi_hat) -> object | None:
     the solver's minimiser ``xi_hat``, or ``None`` (see :func:`_exact_ends_1d`)."""
     from fractions import Fraction
 
-    n_g = len(h)
-    xi: list = [None] * n_g
-    free = []
-    for j in range(n_g):
-        x = float(xi_hat[j])
-        hj = float(h[j])
-        if hj == 0.0 or abs(x) >= hj * (1.0 - 1e-9):
-            xi[j] = h[j] if x > 0 else -h[j]
-        else:
-            free.append(j)
-    m = len(b)
-    rhs = [b[i] - sum((A[i][j] * xi[j] for j in range(n_g) if xi[j] is not None),
-                      Fraction(0)) for i in range(m)]
-    sol = _rational_solve([[A[i][j] for j in free] for i in range(m)], rhs,
-                          [Fraction(float(xi_hat[j])) for j in free])
-    if sol is None:
+    n_g, m = len(h), len(b)
+    xi = _exact_feasible(A, b, h, xi_hat)
+    if xi is None:
         return None
-    for j, v in zip(free, sol, strict=True):
-        if abs(v) > h[j]:
-            return None
-        xi[j] = v
+    free = [j for j in range(n_g) if abs(xi[j]) != h[j]]
     primal = sum((w[j] * xi[j] for j in range(n_g)), Fraction(0))
     tight = set(free)
     y_hat = np.zeros(m)
@@ -389,6 +427,36 @@ def _exact_lp_minimum(A, b, h, w, xi_hat) -> object | None:
         if dual == primal:
             return primal
     return None
+
+
+def _exact_feasible(A, b, h, xi_hat) -> list | None:
+    """A point of ``{A xi = b, |xi| <= h}`` (rationals) near the solver's ``xi_hat``: its
+    entries within ``1e-9`` (relative) of a bound put at the bound, the others solved
+    from ``A xi = b`` (those without a pivot keep the solver's values); ``None`` if
+    that system is inconsistent or its solution leaves the bounds."""
+    from fractions import Fraction
+
+    n_g = len(h)
+    xi: list = [None] * n_g
+    free = []
+    for j in range(n_g):
+        x = float(xi_hat[j])
+        hj = float(h[j])
+        if hj == 0.0 or abs(x) >= hj * (1.0 - 1e-9):
+            xi[j] = h[j] if x > 0 else -h[j]
+        else:
+            free.append(j)
+    rhs = [b[i] - sum((A[i][j] * xi[j] for j in range(n_g) if xi[j] is not None),
+                      Fraction(0)) for i in range(len(b))]
+    sol = _rational_solve([[A[i][j] for j in free] for i in range(len(b))], rhs,
+                          [Fraction(float(xi_hat[j])) for j in free])
+    if sol is None:
+        return None
+    for j, v in zip(free, sol, strict=True):
+        if abs(v) > h[j]:
+            return None
+        xi[j] = v
+    return xi
 
 
 def _rational_solve(M: list, r: list, default: list) -> list | None:

@@ -872,12 +872,7 @@ class ConstrainedZonotope:
             If no solver setting produced a point.
         """
         d = as_vector("direction", direction, size=self.dim)
-        out = self._lp().minimize(-(self._G.T @ d))
-        if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
-            raise SolverError("no LP solver setting produced a maximiser", status=out.status)
-        if out.point is None or not np.isfinite(out.bound):
-            raise UnboundedSetError("the set is unbounded in this direction")
-        return self._G @ out.point + self._c
+        return support_point_factors(self, d)[0]
 
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness report with a witness (see :meth:`FactorPolytope.emptiness`).
@@ -1336,6 +1331,18 @@ def factor_polytope(Z: ConstrainedZonotope) -> FactorPolytope:
 def hull_with_status(Z: ConstrainedZonotope) -> tuple[Box, bool]:
     """:meth:`ConstrainedZonotope.interval_hull` without the warning: ``(box, any_fallback)``."""
     return Z._interval_hull()
+
+
+def support_point_factors(Z: ConstrainedZonotope, d: NDArray[np.float64]
+                          ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(G xi + c, xi)`` for the LP's maximiser ``xi`` of ``d^T (G xi + c)`` (a validated
+    direction); the errors of :meth:`ConstrainedZonotope.support_point`."""
+    out = Z._lp().minimize(-(Z._G.T @ d))
+    if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
+        raise SolverError("no LP solver setting produced a maximiser", status=out.status)
+    if out.point is None or not np.isfinite(out.bound):
+        raise UnboundedSetError("the set is unbounded in this direction")
+    return Z._G @ out.point + Z._c, out.point
 
 
 def support_unwarned(Z: ConstrainedZonotope, d: NDArray[np.float64]) -> float:
