@@ -25,7 +25,6 @@ from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
     support_point_factors,
-    support_unwarned,
     trusted_cz,
     unit_scaled,
 )
@@ -68,9 +67,8 @@ class HRep:
 def _support_pair(Z: ConstrainedZonotope, d: NDArray[np.float64]
                   ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """Certified support value, a maximiser (the LP's point) in direction ``d`` and its
-    factors."""
-    val = support_unwarned(Z, d)
-    return (val, *support_point_factors(Z, d))
+    factors, from one LP."""
+    return support_point_factors(Z, d)
 
 
 #: ``SolverError.status`` of a vertex enumeration stopped at its budget of LPs or

@@ -22,7 +22,7 @@ from ..exceptions import (
 )
 from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
 from .box import Box, box_center_radius
-from .lp import EmptinessReport, FactorPolytope
+from .lp import EmptinessReport, FactorPolytope, LPResult
 
 try:  # the optional compiled construction of +, @ and intersect (setup.py)
     from . import _setops as compiled_ops
@@ -844,17 +844,22 @@ class ConstrainedZonotope:
         return self._support_value(d)[0]
 
     def _support_value(self, d: NDArray[np.float64]) -> tuple[float, bool]:
+        s, out = self._support_lp(d)
+        return s, out.status == "fallback"
+
+    def _support_lp(self, d: NDArray[np.float64]) -> tuple[float, LPResult]:
+        """The certified support value in direction ``d`` and the LP's result."""
         w = self._G.T @ d
         w_err = 2.0 * gamma(self.dim + 1) * (np.abs(self._G).T @ np.abs(d))
         out = self._lp().minimize(-w, w_err=w_err, w_pair=(self._G, -d))
         if not np.isfinite(out.bound):
-            return np.inf, out.status == "fallback"
+            return np.inf, out
         dc = float(d @ self._c)
         err = 2.0 * gamma(self.dim + 1) * float(np.abs(d) @ np.abs(self._c))
         if self._cerr is not None:
             err += float(np.abs(d) @ self._cerr) * (1.0 + gamma(self.dim + 1))
         s = -out.bound + dc
-        return round_up(s + err + UNIT_ROUNDOFF * abs(s)), out.status == "fallback"
+        return round_up(s + err + UNIT_ROUNDOFF * abs(s)), out
 
     def support_point(self, direction: ArrayLike) -> NDArray[np.float64]:
         """A maximiser of ``d^T z`` over the set (the solver's point; not certified).
@@ -872,7 +877,7 @@ class ConstrainedZonotope:
             If no solver setting produced a point.
         """
         d = as_vector("direction", direction, size=self.dim)
-        return support_point_factors(self, d)[0]
+        return support_point_factors(self, d)[1]
 
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness report with a witness (see :meth:`FactorPolytope.emptiness`).
@@ -1334,15 +1339,17 @@ def hull_with_status(Z: ConstrainedZonotope) -> tuple[Box, bool]:
 
 
 def support_point_factors(Z: ConstrainedZonotope, d: NDArray[np.float64]
-                          ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(G xi + c, xi)`` for the LP's maximiser ``xi`` of ``d^T (G xi + c)`` (a validated
-    direction); the errors of :meth:`ConstrainedZonotope.support_point`."""
-    out = Z._lp().minimize(-(Z._G.T @ d))
+                          ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+    """``(s, G xi + c, xi)`` from one LP in a validated direction ``d``: the certified
+    support value ``s`` (as :meth:`ConstrainedZonotope.support`, unwarned) and the LP's
+    maximiser ``xi`` of ``d^T (G xi + c)``; the errors of
+    :meth:`ConstrainedZonotope.support_point`."""
+    s, out = Z._support_lp(d)
     if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
         raise SolverError("no LP solver setting produced a maximiser", status=out.status)
     if out.point is None or not np.isfinite(out.bound):
         raise UnboundedSetError("the set is unbounded in this direction")
-    return Z._G @ out.point + Z._c, out.point
+    return s, Z._G @ out.point + Z._c, out.point
 
 
 def support_unwarned(Z: ConstrainedZonotope, d: NDArray[np.float64]) -> float:
