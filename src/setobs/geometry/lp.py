@@ -1232,7 +1232,7 @@ class FactorPolytope:
         # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
         lower, y = lagrangian_lower_bound(
             np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
-            unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._unb.any() else None,
+            unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._any_unb else None,
             b_err=None if self.b_err is None else self.b_err / scale,
         )
         norm1 = float(np.abs(y).sum()) * (1.0 + 2.0 * gamma(n_c + 1))

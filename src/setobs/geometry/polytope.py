@@ -64,13 +64,6 @@ class HRep:
                     (np.abs(self.E @ xv - self.f) <= tol).all())
 
 
-def _support_pair(Z: ConstrainedZonotope, d: NDArray[np.float64]
-                  ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
-    """Certified support value, a maximiser (the LP's point) in direction ``d`` and its
-    factors, from one LP."""
-    return support_point_factors(Z, d)
-
-
 #: ``SolverError.status`` of a vertex enumeration stopped at its budget of LPs or
 #: facets (the set is more complex than the caller asked for; its accuracy is not
 #: in question).
@@ -107,22 +100,20 @@ class _VerifiedHull:
         self.max_lps = max_lps
         self.max_facets = max_facets
         self.rng = np.random.default_rng(0)
-        self.last_factors: NDArray[np.float64] | None = None
         self.vertex_rows: NDArray[np.intp] | None = None  # rows of the points (run())
         # --- affine hull
-        _, p0 = self._query(np.eye(n)[0])
+        _, p0, xi0 = self._query(np.eye(n)[0])
         self.p0 = p0
         pts = [p0]
-        self.factors = [self.last_factors]  # the factors of each point found (rows of Y)
+        self.factors = [xi0]  # the factors of each point found (rows of Y)
         basis = np.zeros((n, 0))
         flat: list[NDArray[np.float64]] = []
         while basis.shape[1] + len(flat) < n:
             Q = _complement(np.hstack([basis, *(f[:, None] for f in flat)]) if flat
                             else basis, n)
             u = Q[:, 0]
-            s_plus, q_plus = self._query(u)
-            xi_plus = self.last_factors
-            s_minus, q_minus = self._query(-u)
+            s_plus, q_plus, xi_plus = self._query(u)
+            s_minus, q_minus, xi_minus = self._query(-u)
             if s_plus + s_minus <= self.tol:
                 flat.append(u)
                 continue
@@ -133,18 +124,19 @@ class _VerifiedHull:
                                   "(width certified but no point found)")
             basis = np.hstack([basis, (v / np.linalg.norm(v))[:, None]])
             pts.append(q)
-            self.factors.append(xi_plus if q is q_plus else self.last_factors)
+            self.factors.append(xi_plus if q is q_plus else xi_minus)
         self.basis = basis
         self.flat = np.array(flat).reshape(-1, n)
         self.points = np.array(pts)
 
-    def _query(self, d: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
+    def _query(self, d: NDArray[np.float64]
+               ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+        """Certified support value, the LP's maximiser and its factors (one LP)."""
         self.lps += 1
         if self.lps > self.max_lps:
             raise SolverError(f"vertex enumeration did not converge within {self.max_lps} "
                               "LPs", BUDGET_STATUS)
-        s, q, self.last_factors = _support_pair(self.Z, d)
-        return s, q
+        return support_point_factors(self.Z, d)
 
     def run(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(vertices, normals, offsets)``: the vertices and the confirmed facets
@@ -155,8 +147,8 @@ class _VerifiedHull:
             return self.p0[None, :], np.zeros((0, p0.size)), np.zeros(0)
         if d == 1:
             u = B[:, 0]
-            s1, a = self._query(u)
-            s2, b = self._query(-u)
+            s1, a, _ = self._query(u)
+            s2, b, _ = self._query(-u)
             return np.array([b, a]), np.array([u, -u]), np.array([s1, s2])
         from scipy.spatial import ConvexHull, QhullError
 
@@ -179,7 +171,7 @@ class _VerifiedHull:
                     continue
                 g = B @ a_loc
                 beta = off + g @ p0
-                s, _ = self._query(g)
+                s, _, _ = self._query(g)
                 if s <= beta + self.tol:
                     confirmed[key] = (g, s)
                     continue
@@ -188,15 +180,15 @@ class _VerifiedHull:
                 e -= g * (g @ e)
                 e -= self.flat.T @ (self.flat @ e) if self.flat.size else 0.0
                 e = e / max(np.linalg.norm(e), 1e-300)
-                _, q = self._query(g + 1e-6 * e)
+                _, q, xi = self._query(g + 1e-6 * e)
                 if g @ q <= beta + 0.5 * self.tol:
-                    _, q = self._query(g)
+                    _, q, xi = self._query(g)
                 yq = (q - p0) @ B
                 if np.min(np.linalg.norm(Y - yq, axis=1)) <= self.tol:
                     raise SolverError("vertex enumeration: a support point beyond a facet "
                                       "repeats a known point (LP accuracy)")
                 Y = np.vstack([Y, yq])
-                self.factors.append(self.last_factors)
+                self.factors.append(xi)
                 added = True
                 break
             if not added:
@@ -316,9 +308,7 @@ def _exact_vertices(Z: ConstrainedZonotope, V: NDArray[np.float64], vh: _Verifie
         return V
     from fractions import Fraction
 
-    A = [[Fraction(float(v)) for v in row] for row in Z.A]
-    b = [Fraction(float(v)) for v in Z.b]
-    h = [Fraction(float(v)) for v in Z.h]
+    A, b, h = _rational_factor_data(Z)
     G = [[Fraction(float(v)) for v in row] for row in Z.G]
     c = [Fraction(float(v)) for v in Z.c]
     out = V.copy()
@@ -356,9 +346,9 @@ def _exact_ends_1d(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
     Then ``w^T xi`` is at least the minimum and the Lagrangian bound
     ``b^T y - sum_j h_j |w_j - a_j^T y|`` at most (weak duality): where the two are
     equal, both are the exact minimum, and ``c + g^T xi`` rounded once is the nearest
-    float to the end. ``None`` when a rounding bound is carried (``c_err``, ``b_err``: the set is
-    then not exactly known), the set is larger than :data:`MAX_EXACT_END_SIZE`, or the
-    two values differ.
+    float to the end. ``None`` when a rounding bound is carried (``c_err``, ``b_err``:
+    the set is then not exactly known), the set is larger than
+    :data:`MAX_EXACT_END_SIZE`, or the two values differ.
     """
     if (np.any(Z.c_err != 0.0) or np.any(Z.b_err != 0.0) or not np.isfinite(Z.h).all()
             or Z.n_gen * max(Z.n_con, 1) > MAX_EXACT_END_SIZE):
@@ -367,9 +357,7 @@ def _exact_ends_1d(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
 
     from .zonotope import factor_polytope
 
-    A = [[Fraction(float(v)) for v in row] for row in Z.A]
-    b = [Fraction(float(v)) for v in Z.b]
-    h = [Fraction(float(v)) for v in Z.h]
+    A, b, h = _rational_factor_data(Z)
     c = Fraction(float(Z.c[0]))
     fp = factor_polytope(Z)
     ends = []
@@ -378,20 +366,29 @@ def _exact_ends_1d(Z: ConstrainedZonotope) -> NDArray[np.float64] | None:
         res = fp.minimize(w)
         if res.status != "optimal" or res.point is None:
             return None
-        value = _exact_lp_minimum(A, b, h, [Fraction(float(v)) for v in w],
-                                  np.asarray(res.point, dtype=np.float64))
+        value = _exact_lp_minimum(Z, A, b, h, w, np.asarray(res.point, dtype=np.float64))
         if value is None:
             return None
         ends.append(float(c + sign * value))  # int / int: correctly rounded
     return np.array([ends[0], ends[1]])
 
 
-def _exact_lp_minimum(A, b, h, w, xi_hat) -> object | None:
-    """The exact ``min w^T xi`` over ``{A xi = b, |xi| <= h}`` (rationals) verified from
-    the solver's minimiser ``xi_hat``, or ``None`` (see :func:`_exact_ends_1d`)."""
+def _rational_factor_data(Z: ConstrainedZonotope) -> tuple[list, list, list]:
+    """``A``, ``b`` and ``h`` of a set with finite factor bounds, as exact rationals."""
+    from fractions import Fraction
+
+    return ([[Fraction(float(v)) for v in row] for row in Z.A],
+            [Fraction(float(v)) for v in Z.b], [Fraction(float(v)) for v in Z.h])
+
+
+def _exact_lp_minimum(Z: ConstrainedZonotope, A, b, h, w_float, xi_hat) -> object | None:
+    """The exact ``min w^T xi`` over ``{A xi = b, |xi| <= h}`` verified from the solver's
+    minimiser ``xi_hat``, or ``None`` (see :func:`_exact_ends_1d`); ``A``, ``b``, ``h``:
+    ``Z``'s data as rationals, ``w_float``: the objective."""
     from fractions import Fraction
 
     n_g, m = len(h), len(b)
+    w = [Fraction(float(v)) for v in w_float]
     xi = _exact_feasible(A, b, h, xi_hat)
     if xi is None:
         return None
@@ -402,11 +399,9 @@ def _exact_lp_minimum(A, b, h, w, xi_hat) -> object | None:
     if m:  # the dual LP in floats: its zero reduced costs say which equations y solves
         from scipy.optimize import linprog
 
-        Af = np.array([[float(v) for v in row] for row in A])
-        wf = np.array([float(v) for v in w])
-        hf = np.array([float(v) for v in h])
+        Af, wf = Z.A, w_float
         eye = np.eye(n_g)
-        dual_lp = linprog(np.concatenate([-np.array([float(v) for v in b]), hf]),
+        dual_lp = linprog(np.concatenate([-Z.b, Z.h]),
                           A_ub=np.block([[-Af.T, -eye], [Af.T, -eye]]),
                           b_ub=np.concatenate([-wf, wf]),
                           bounds=[(None, None)] * m + [(0, None)] * n_g, method="highs")

@@ -541,10 +541,6 @@ class ConstrainedZonotope:
         )
 
     def __add__(self, other: Any) -> ConstrainedZonotope:
-        if compiled_ops is not None and type(other) is ConstrainedZonotope:
-            out = compiled_ops.minkowski_sum(self, other)
-            if out is not None:
-                return out
         if isinstance(other, ConstrainedZonotope) or np.ndim(other) == 1:
             return self.minkowski_sum(other)
         return NotImplemented
@@ -594,12 +590,7 @@ class ConstrainedZonotope:
             out._cache["lp"] = self._cache["lp"]
         return out
 
-    def __rmatmul__(self, M: Any) -> ConstrainedZonotope:
-        if compiled_ops is not None:
-            out = compiled_ops.linear_map(self, M)
-            if out is not None:
-                return out
-        return self.linear_map(M)
+    __rmatmul__ = linear_map
 
     def __matmul__(self, other: Any) -> ConstrainedZonotope:
         return NotImplemented
@@ -877,7 +868,16 @@ class ConstrainedZonotope:
             If no solver setting produced a point.
         """
         d = as_vector("direction", direction, size=self.dim)
-        return support_point_factors(self, d)[1]
+        return self._maximiser(self._lp().minimize(-(self._G.T @ d)))[0]
+
+    def _maximiser(self, out: LPResult) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(G xi + c, xi)`` for the point ``xi`` of a support LP's result, or the errors
+        of :meth:`support_point`."""
+        if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
+            raise SolverError("no LP solver setting produced a maximiser", status=out.status)
+        if out.point is None or not np.isfinite(out.bound):
+            raise UnboundedSetError("the set is unbounded in this direction")
+        return self._G @ out.point + self._c, out.point
 
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness report with a witness (see :meth:`FactorPolytope.emptiness`).
@@ -1345,11 +1345,7 @@ def support_point_factors(Z: ConstrainedZonotope, d: NDArray[np.float64]
     maximiser ``xi`` of ``d^T (G xi + c)``; the errors of
     :meth:`ConstrainedZonotope.support_point`."""
     s, out = Z._support_lp(d)
-    if out.status == "fallback" or (out.point is None and np.isfinite(out.bound)):
-        raise SolverError("no LP solver setting produced a maximiser", status=out.status)
-    if out.point is None or not np.isfinite(out.bound):
-        raise UnboundedSetError("the set is unbounded in this direction")
-    return s, Z._G @ out.point + Z._c, out.point
+    return (s, *Z._maximiser(out))
 
 
 def support_unwarned(Z: ConstrainedZonotope, d: NDArray[np.float64]) -> float:
