@@ -173,7 +173,8 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
              out: str | None = None, plot: bool = True, progress: bool | None = None,
              on_inconsistent: str = "raise", unit: str | None = None,
              states: bool = False, process_noise: str | None = None,
-             restart: str = "auto") -> int:
+             restart: str = "auto", per_channel: bool = False,
+             time_limit: float = 120.0) -> int:
     """Certified disturbance bounds from a measured record (CSV + plot + summary);
     with ``states``, the certified state bounds too (``<state>_lo``/``_hi`` columns).
     A model without disturbances (``disturbance_inputs: []``) is a state estimation:
@@ -185,6 +186,11 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     ``on_inconsistent="raise"`` (the default) the first sample the model cannot
     explain stops the run: one message on stderr with the step, its time and what
     to do, exit code 1 (:data:`EXIT_INCONSISTENT`).
+
+    ``calibrate`` runs :func:`setobs.calibrate_noise` with the options the run itself
+    uses (the increment, the process noise, the noise shape) and its own
+    (``per_channel``, ``time_limit``): the calibrated bound is the one that makes the
+    record consistent *for this run's model*.
     """
     import time as _time
 
@@ -222,6 +228,8 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         inc = _per_channel("--increment", _numbers("--increment", increment), sys_.q)
     w = None if process_noise is None else _per_channel(
         "--process-noise", _numbers("--process-noise", process_noise), sys_.n)
+    if (per_channel or time_limit != 120.0) and not calibrate:
+        raise CLIError("--per-channel and --time-limit apply to --calibrate only")
     if calibrate and noise is not None:
         shape = _per_channel("--noise (shape for --calibrate)", _numbers("--noise", noise),
                              sys_.l)
@@ -229,7 +237,9 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         shape = None
     t0 = _time.perf_counter()
     if calibrate:
-        cal = calibrate_noise(sys_, rec.Y, rec.U, increment=inc, shape=shape)
+        cal = calibrate_noise(sys_, rec.Y, rec.U, increment=inc, shape=shape,
+                              per_channel=per_channel, process_noise=w,
+                              time_limit=time_limit)
         v = cal.radii
         pairs = ", ".join(f"{n} {r:.6g}" for n, r in zip(sys_.output_names, v, strict=True))
         print(f"calibrated noise: {pairs} (LP over {cal.samples} samples)")
@@ -284,7 +294,11 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
                "increment": inc.tolist(),
                "process_noise": None if w is None else np.asarray(w).tolist(),
                "noise": None if v is None else np.asarray(v).tolist(),
-               "calibrated": bool(calibrate), "statuses": statuses,
+               "calibrated": bool(calibrate),
+               "calibration": None if not calibrate else {
+                   "minimal": cal.minimal.tolist(), "radii": cal.radii.tolist(),
+                   "scale": cal.scale, "status": cal.status, "per_channel": per_channel},
+               "statuses": statuses,
                "first_inconsistent_step": first,
                "first_inconsistent_time": (None if first is None or not times_known
                                            else round_time(float(rec.t[first]))),
@@ -437,7 +451,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     pe.add_argument("--noise", help="measurement-noise radii (one or l numbers); with "
                                     "--calibrate: the shape to scale")
     pe.add_argument("--calibrate", action="store_true",
-                    help="use the smallest noise bound that makes the record consistent")
+                    help="use the smallest noise bound that makes the record consistent "
+                         "(with this run's --increment, --process-noise and --noise shape)")
+    pe.add_argument("--per-channel", action="store_true",
+                    help="with --calibrate: per-channel radii instead of one scale of the "
+                         "--noise shape (calibrate_noise(per_channel=True))")
+    pe.add_argument("--time-limit", type=float, default=120.0,
+                    help="with --calibrate: seconds each LP solver may take (default 120)")
     pe.add_argument("--window", default="10", help="SMFDO window (the paper's delta), or 'exact'")
     pe.add_argument("--on-inconsistent", choices=["raise", "skip", "reset"], default="raise",
                     help="what to do with a sample the model cannot explain: 'raise' "
@@ -484,7 +504,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                             out=args.out, plot=not args.no_plot, progress=args.progress,
                             on_inconsistent=args.on_inconsistent, unit=args.unit,
                             states=args.states, process_noise=args.process_noise,
-                            restart=args.restart)
+                            restart=args.restart, per_channel=args.per_channel,
+                            time_limit=args.time_limit)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

@@ -18,6 +18,8 @@ __all__ = [
     "DimensionError",
     "EmptySetError",
     "ExistenceError",
+    "MagnitudeError",
+    "MissingDataWarning",
     "ModelFileError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
@@ -34,6 +36,15 @@ class SetobsError(Exception):
 
 class DimensionError(SetobsError, ValueError):
     """An array has the wrong shape, or holds NaN/inf where it must not."""
+
+
+class MagnitudeError(SetobsError, OverflowError):
+    """An operation would build a set whose data (``G``, ``c``, ``A``, ``b``, their
+    rounding bounds ``c_err``, ``b_err``, or a finite ``h``) hold NaN, inf, or entries
+    above :data:`setobs.tolerances.MAX_MAGNITUDE` in magnitude, where the products of the
+    next operation or LP would overflow double precision. The message names the
+    operation, the array and the entry; rescale the units (or the matrix) instead.
+    """
 
 
 class EmptySetError(SetobsError, ValueError):
@@ -118,26 +129,40 @@ class ModelInvalidatedError(SetobsError, RuntimeError):
         The time step ``k`` at which the measurement could not be explained.
     """
 
-    #: What a user can do about it, appended to every message.
+    #: What a user can do about it, appended to every message (a model with disturbances).
     HINT = ("what to do: if the sample is an outlier or a fault, it is found; if the model "
             "and the record are right, the bounds are too small: calibrate the noise bound "
             "(setobs.calibrate_noise, or `setobs estimate --calibrate`), use a larger "
             "measurement_noise / increment_set, or pass on_inconsistent='skip' (drop such "
             "samples) or 'reset' (restart, losing the guarantee at that step)")
+    #: The same for a model without disturbances (state estimation: no increment set).
+    HINT_STATE = ("what to do: if the sample is an outlier or a fault, it is found; if the "
+                  "model and the record are right, the bounds are too small: calibrate the "
+                  "noise bound (setobs.calibrate_noise(..., process_noise=...), or `setobs "
+                  "estimate --calibrate --process-noise ...`), use a larger "
+                  "measurement_noise / process_noise, or pass on_inconsistent='skip' (drop "
+                  "such samples) or 'reset' (restart, losing the guarantee at that step)")
 
-    def __init__(self, message: str, step: int) -> None:
-        if self.HINT not in message:
-            message = f"{message}; {self.HINT}"
+    def __init__(self, message: str, step: int, hint: str | None = None) -> None:
+        hint = self.HINT if hint is None else hint
+        if hint not in message:
+            message = f"{message}; {hint}"
         super().__init__(message)
         self.step = step
+        self.hint = hint
 
     def __reduce__(self):
-        return (type(self), (str(self), self.step))
+        return (type(self), (str(self), self.step, self.hint))
 
 
 class ModelInvalidatedWarning(RuntimeWarning):
     """Measurements were inconsistent with the model and were skipped, or the
     filter was reset (``on_inconsistent="skip"`` or ``"reset"``)."""
+
+
+class MissingDataWarning(UserWarning):
+    """Most of a record's samples are missing (NaN): the estimator ran, but its bands
+    are mostly predictions (:data:`setobs.tolerances.MISSING_WARN_FRACTION`)."""
 
 
 class ModelFileError(SetobsError, ValueError):

@@ -54,6 +54,7 @@ __all__ = [
     "KALMAN_MEASUREMENT_FLOOR",
     "LP_REFINE_GAP",
     "MAX_MAGNITUDE",
+    "MISSING_WARN_FRACTION",
     "NEAR_RESONANCE_RTOL",
     "NEWTON_RTOL",
     "PONTRYAGIN_MATCH_RTOL",
@@ -220,6 +221,10 @@ HREP_CONVERT_RTOL: float = 1e-12
 #: ``rho(|A|)^k`` (1e-3 of the width after 30 steps of a non-normal ``A``, issue 32);
 #: mapped as generators it follows ``A^k``.
 CENTER_ERROR_ABSORB_RTOL: float = 1e-13
+#: :meth:`SMFDO.run <setobs.SMFDO.run>` warns (``MissingDataWarning``) when more than
+#: this fraction of a record's output samples (entries of ``Y``) are missing (NaN): its
+#: bands are then mostly predictions. A record with no measured sample is refused.
+MISSING_WARN_FRACTION: float = 0.5
 
 # ---- exact reduction (setobs.geometry.reduction)
 #: Relative margin by which a factor's certified interval must lie inside its

@@ -70,7 +70,7 @@ def test_support_nan_direction(Z):
 
 
 def test_linear_map_wrong_columns(Z):
-    with pytest.raises(DimensionError, match=r"M must have 2 columns, got 3"):
+    with pytest.raises(DimensionError, match=r"M \(linear map\) must have 2 columns, got 3"):
         np.ones((2, 3)) @ Z
 
 
@@ -95,7 +95,8 @@ def test_intersect_affine_wrong_C(Z):
 
 
 def test_generalized_intersection_wrong_R(Z):
-    with pytest.raises(DimensionError, match=r"R must have 3 rows, got 2"):
+    with pytest.raises(DimensionError,
+                       match=r"R \(generalised intersection\) must have 3 rows, got 2"):
         Z.intersect(ConstrainedZonotope.full_space(3), np.eye(2))
 
 

@@ -1,13 +1,18 @@
 /*
  * Compiled construction of the exact set operations of setobs.ConstrainedZonotope:
  * Minkowski sum (Scott et al. 2016, eq. (12)), linear map (eq. (11)) and generalised
- * intersection (eq. (13)), with the same rounding bounds on the centre and on the
- * constraints' right-hand side as the NumPy code in zonotope.py (_sum_err, _map_err,
- * _diff_err), which stays the reference and the fallback.
+ * intersection (eq. (13)): the same sets as the NumPy code in zonotope.py up to rounding
+ * (bit for bit for the sum and the plain intersection; the products of the maps and of R
+ * may be summed in another order than by the BLAS), with the same error bounds on the
+ * centre and on the constraints' right-hand side (_sum_err, _map_err, _diff_err), which
+ * cover either rounding. The NumPy code stays the reference and the fallback.
  *
  * Each function returns a new ConstrainedZonotope, or None when its fast path does not
- * apply (another type, dtype, byte order, shape or a non-finite matrix entry): the
- * caller then runs the NumPy code, which validates and raises the user-facing errors.
+ * apply (another type, dtype, byte order, shape, a matrix entry that is not finite or
+ * above MAX_MAGNITUDE in magnitude, or a result whose data would be): the caller then
+ * runs the NumPy code, which validates and raises the user-facing errors. So no set with
+ * non-finite data, or data above MAX_MAGNITUDE, is ever built here (check_data is the
+ * same guard for the sets the Python code builds).
  *
  * Why C: these operations are array bookkeeping on small arrays, where NumPy's per-call
  * cost (about 1 us a call, a dozen calls an operation) made them 2-6x slower than
@@ -27,6 +32,8 @@ static const char *slot_names[NSLOTS] = {"_A", "_G", "_b", "_berr", "_c",
                                          "_cache", "_cerr", "_h", "unbounded_radius"};
 static Py_ssize_t offsets[NSLOTS];
 static PyTypeObject *cz_type = NULL;
+/* setobs.tolerances.MAX_MAGNITUDE, set by bind(): the largest magnitude of a set's data. */
+static double max_mag = 1e150;
 static PyObject *lp_key = NULL;
 
 #define SLOT(o, i) (*(PyObject **)((char *)(o) + offsets[i]))
@@ -147,13 +154,80 @@ static int read_set(PyObject *o, Set *s) {
     return err_view(s->cerr, s->n, &s->vcerr) && err_view(s->berr, s->nc, &s->vberr);
 }
 
-/* A user's matrix: float64 (native, aligned), rows x cols, all entries finite. */
+/* A user's matrix: float64 (native, aligned), rows x cols, all entries finite and at
+   most max_mag in magnitude (what as_matrix accepts; otherwise as_matrix raises). */
 static int read_matrix(PyObject *o, npy_intp rows, npy_intp cols, Mat *m) {
     if (!mat_view(o, m) || m->c != cols || m->r < 1 || (rows >= 0 && m->r != rows)) return 0;
     for (npy_intp i = 0; i < m->r; i++)
         for (npy_intp j = 0; j < m->c; j++)
-            if (!isfinite(AT(*m, i, j))) return 0;
+            if (!(fabs(AT(*m, i, j)) <= max_mag)) return 0;
     return 1;
+}
+
+/* ------------------------------------------------------------------ the data guard */
+/* Index of the first entry of a float64 array (any strides, 1-D or 2-D) that is NaN or
+   above max_mag in magnitude (+inf allowed where allow_inf), -1 if none, -2 if the array
+   is not a native aligned float64 array of 1 or 2 dimensions. */
+static npy_intp first_bad(PyObject *o, int allow_inf) {
+    if (!PyArray_Check(o)) return -2;
+    PyArrayObject *a = (PyArrayObject *)o;
+    int nd = PyArray_NDIM(a);
+    if (PyArray_TYPE(a) != NPY_DOUBLE || (nd != 1 && nd != 2) || !PyArray_ISNOTSWAPPED(a) ||
+        !PyArray_ISALIGNED(a))
+        return -2;
+    npy_intp r = PyArray_DIM(a, 0), c = nd == 2 ? PyArray_DIM(a, 1) : 1;
+    npy_intp s0 = PyArray_STRIDE(a, 0), s1 = nd == 2 ? PyArray_STRIDE(a, 1) : 0;
+    const char *p = PyArray_BYTES(a);
+    for (npy_intp i = 0; i < r; i++)
+        for (npy_intp j = 0; j < c; j++) {
+            double x = *(const double *)(p + i * s0 + j * s1);
+            if (!(fabs(x) <= max_mag) && !(allow_inf && x == HUGE_VAL)) return i * c + j;
+        }
+    return -1;
+}
+
+/* check_data(G, c, A, b, h, cerr, berr): None if every entry is finite and at most
+   MAX_MAGNITUDE in magnitude (h: or +inf; cerr, berr: or None), else (k, i, value) for
+   the first bad entry (k: the argument's position, i: its flat index); NotImplemented
+   for an argument that is not a float64 array (the caller checks in NumPy). */
+static PyObject *check_data(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 7) {
+        PyErr_SetString(PyExc_TypeError, "check_data(G, c, A, b, h, cerr, berr)");
+        return NULL;
+    }
+    for (Py_ssize_t k = 0; k < nargs; k++) {
+        if (k >= 5 && args[k] == Py_None) continue;
+        npy_intp i = first_bad(args[k], k == 4);
+        if (i == -2) Py_RETURN_NOTIMPLEMENTED;
+        if (i >= 0) {
+            PyArrayObject *a = (PyArrayObject *)args[k];
+            npy_intp c = PyArray_NDIM(a) == 2 ? PyArray_DIM(a, 1) : 1;
+            npy_intp r = i / c, j = i % c;
+            double x = *(const double *)(PyArray_BYTES(a) + r * PyArray_STRIDE(a, 0) +
+                                         (PyArray_NDIM(a) == 2 ? j * PyArray_STRIDE(a, 1) : 0));
+            return Py_BuildValue("(nnd)", k, i, x);
+        }
+    }
+    Py_RETURN_NONE;
+}
+
+/* 1 if the set's data pass the guard (the object is a set built by make()). */
+static int data_ok(PyObject *o) {
+    PyObject *e[7] = {SLOT(o, S_G), SLOT(o, S_C), SLOT(o, S_A), SLOT(o, S_B), SLOT(o, S_H),
+                      SLOT(o, S_CERR), SLOT(o, S_BERR)};
+    for (int k = 0; k < 7; k++) {
+        if (k >= 5 && e[k] == Py_None) continue;
+        if (first_bad(e[k], k == 4) != -1) return 0;
+    }
+    return 1;
+}
+
+/* The set o if its data pass the guard; else None (the NumPy code then builds the same
+   set and raises the error that names the operation). Steals the reference. */
+static PyObject *guarded(PyObject *o) {
+    if (o == NULL || data_ok(o)) return o;
+    Py_DECREF(o);
+    Py_RETURN_NONE;
 }
 
 static int all_zero(const double *x, npy_intp n) {
@@ -291,8 +365,8 @@ static PyObject *minkowski_sum(PyObject *mod, PyObject *const *args, Py_ssize_t 
     FAIL_IF(cerr == NULL);
     berr = cat_err(&s.vberr, &t.vberr);
     FAIL_IF(berr == NULL);
-    return make(freeze(G), freeze(c), freeze(A), freeze(b), freeze(h), min_radius(&s, &t),
-                cerr, berr);
+    return guarded(make(freeze(G), freeze(c), freeze(A), freeze(b), freeze(h),
+                        min_radius(&s, &t), cerr, berr));
 fail:
     Py_XDECREF(G);
     Py_XDECREF(c);
@@ -365,7 +439,7 @@ static PyObject *linear_map(PyObject *mod, PyObject *const *args, Py_ssize_t nar
         Py_DECREF(out);
         return NULL;
     }
-    return out;
+    return guarded(out);
 fail:
     Py_XDECREF(G);
     Py_XDECREF(c);
@@ -449,8 +523,8 @@ static PyObject *intersect(PyObject *mod, PyObject *const *args, Py_ssize_t narg
     FAIL_IF(berr == NULL);
     Py_DECREF(e);
     e = NULL;
-    return make(freeze(G), new_ref(s.c), freeze(A), freeze(b), freeze(h),
-                min_radius(&s, &t), new_ref(s.cerr), berr);
+    return guarded(make(freeze(G), new_ref(s.c), freeze(A), freeze(b), freeze(h),
+                        min_radius(&s, &t), new_ref(s.cerr), berr));
 fail:
     Py_XDECREF(G);
     Py_XDECREF(A);
@@ -462,11 +536,14 @@ fail:
 }
 
 /* ------------------------------------------------------------------ binding */
-static PyObject *bind(PyObject *mod, PyObject *cls) {
-    if (!PyType_Check(cls)) {
-        PyErr_SetString(PyExc_TypeError, "bind expects the ConstrainedZonotope class");
+static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
+    PyObject *cls = nargs == 2 ? args[0] : NULL;
+    if (cls == NULL || !PyType_Check(cls) || !PyFloat_Check(args[1])) {
+        PyErr_SetString(PyExc_TypeError,
+                        "bind(ConstrainedZonotope, MAX_MAGNITUDE) expects the class and a float");
         return NULL;
     }
+    max_mag = PyFloat_AS_DOUBLE(args[1]);
     for (int i = 0; i < NSLOTS; i++) {
         PyObject *d = PyObject_GetAttrString(cls, slot_names[i]);
         if (d == NULL) return NULL;
@@ -484,7 +561,11 @@ static PyObject *bind(PyObject *mod, PyObject *cls) {
 }
 
 static PyMethodDef methods[] = {
-    {"bind", (PyCFunction)bind, METH_O, "Bind the slots of the ConstrainedZonotope class."},
+    {"bind", (PyCFunction)(void (*)(void))bind, METH_FASTCALL,
+     "Bind the slots of the ConstrainedZonotope class and the largest data magnitude."},
+    {"check_data", (PyCFunction)(void (*)(void))check_data, METH_FASTCALL,
+     "None if a set's data are finite and within MAX_MAGNITUDE, else (argument, flat "
+     "index, value) of the first bad entry."},
     {"minkowski_sum", (PyCFunction)(void (*)(void))minkowski_sum, METH_FASTCALL,
      "Z + W (Scott et al. 2016, eq. (12)); None if the fast path does not apply."},
     {"linear_map", (PyCFunction)(void (*)(void))linear_map, METH_FASTCALL,

@@ -176,6 +176,14 @@ class FixedStructureLP:
         self.usable = True
         self.reason = ""
         f = self.fidx.size
+        # (overflow on data of extreme dynamic range is checked: the reduction is then
+        # declined, below)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            self._reduce(f, m)
+
+    def _reduce(self, f: int, m: int) -> None:
+        """The equilibrated working copy and the reduction of the unbounded factors
+        (the body of ``__init__``)."""
         # Equilibration by powers of two (exact): unit column norms, then unit
         # row norms. Working copy A' = R A S, W' = W S, factor bounds h / S; the
         # multiplier of the working LP maps back as y = R y'.
@@ -217,6 +225,12 @@ class FixedStructureLP:
             self.dirstat[rel > FASTLP_BOUNDED_CLEAR] = 2
             self.dirstat[rel > FASTLP_UNBOUNDED_CLEAR] = 1
         self.Wred = np.ascontiguousarray(Ws[:, self.bidx] - yU @ A_B)
+        if not (np.isfinite(self.pinvU).all() and np.isfinite(yU).all()
+                and np.isfinite(self.Wred).all()):
+            # (data of extreme dynamic range: a pseudo-inverse beyond double precision)
+            self._unusable("non-finite reduction of the unbounded factors")
+            self.Wred = np.zeros_like(self.Wred)
+            self.yU = np.zeros_like(self.yU)
         # Redundant rows (more measurements than new factors, e.g. l > q in the
         # SMFDO): keep an orthonormal basis U1 of the row space of Q2^T A_B; the
         # data must then satisfy the left-null-space equations Q0^T b = 0 up to

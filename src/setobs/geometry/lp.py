@@ -74,8 +74,10 @@ from .._lazy import lazy_module
 from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, two_prod
 from ..exceptions import EmptySetError
 from ..tolerances import (
+    FASTLP_GAP_RTOL,
     FEASIBILITY_TOL,
     LP_REFINE_GAP,
+    MAX_MAGNITUDE,
     PRIMAL_RESIDUAL_RTOL,
     RELAXED_EXACT_GAP,
     UNBOUNDED_RADIUS,
@@ -185,10 +187,14 @@ def _exact_residual(
             terms.extend(block[:, j].tolist())
         for block in neg:
             terms.extend((-block[:, j]).tolist())
-        out[j] = math.fsum(terms)
+        try:
+            out[j] = math.fsum(terms)
+        except (ValueError, OverflowError):  # (inf - inf: beyond double precision)
+            out[j] = np.nan  # (the callers then certify nothing: -inf)
     return out
 
 
+@np.errstate(over="ignore", invalid="ignore")  # (an overflow gives -inf or NaN: see the end)
 def lagrangian_lower_bound(
     w: NDArray[np.float64],
     A: NDArray[np.float64],
@@ -262,13 +268,21 @@ def lagrangian_lower_bound(
             unbounded_pinv = np.linalg.pinv(A[:, unb].T)
         Au, wu = A[:, unb], w[unb]
         pair = (w_pair[0][:, unb], w_pair[1]) if w_pair is not None else None
-        for _ in range(2):
-            y1 = y1 + unbounded_pinv @ (wu - Au.T @ y1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            for _ in range(2):
+                y1 = y1 + unbounded_pinv @ (wu - Au.T @ y1)
+        if not np.isfinite(y1).all():
+            # (a pseudo-inverse beyond double precision: data of extreme dynamic
+            # range) no refinement, no bound: -inf is certified
+            return -np.inf, np.array(y, dtype=np.float64)
         ru = _exact_residual(wu, Au, [y1, y2], pair)
         for _ in range(2):
             if not ru.any():
                 break
-            y2 = y2 + unbounded_pinv @ ru
+            with np.errstate(over="ignore", invalid="ignore"):
+                y2 = y2 + unbounded_pinv @ ru
+            if not np.isfinite(y2).all():
+                return -np.inf, y1
             ru = _exact_residual(wu, Au, [y1, y2], pair)
     elif unb.any():
         ru = w[unb] if w_pair is None else _exact_residual(
@@ -303,7 +317,10 @@ def lagrangian_lower_bound(
     fin = ~unb
     t2 += float(h[fin] @ bound_r[fin])
     # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
-    t1 = exact_dot([y1, y2], b) if n_c else 0.0
+    try:
+        t1 = exact_dot([y1, y2], b) if n_c else 0.0
+    except (ValueError, OverflowError):  # (inf - inf: products beyond double precision)
+        return -np.inf, y1 + y2
     tb = 0.0
     if b_err is not None and n_c:
         tb = float(abs_y @ b_err) * (1.0 + gamma(n_c + 2))
@@ -312,7 +329,27 @@ def lagrangian_lower_bound(
         + UNIT_ROUNDOFF * (abs(t1) + t2 + tb)
         + 4.0 * (2 * n_c + 1) * _TINY
     )
-    return round_down(t1 - t2 - tb - err), y1 + y2
+    bound = round_down(t1 - t2 - tb - err)
+    if np.isnan(bound):  # (inf - inf of data beyond double precision: nothing certified)
+        bound = -np.inf
+    return bound, y1 + y2
+
+
+#: The LP queries on sets whose data span double precision's range (entries from 1e-300
+#: to 1e150 in one set) overflow in pseudo-inverses and multiplier products; every such
+#: result is guarded (a non-finite model never reaches HiGHS, a NaN certificate is
+#: -inf, a non-finite reduction declines the compiled path), so the queries answer with
+#: a certified, wider bound, without numpy's overflow warnings.
+def _quiet_overflow(func):
+    import functools
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        # (a fresh errstate per call: one instance cannot be entered twice, nor
+        # shared by threads)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return func(*args, **kwargs)
+    return wrapper
 
 
 def _simplex_limit(n_rows: int, n_cols: int) -> int:
@@ -346,6 +383,41 @@ def _polytope_size(fp: FactorPolytope) -> int:
 
 
 _blas_unless_small = with_single_threaded_blas_unless_small(_polytope_size)
+
+
+def equilibration(A: NDArray[np.float64], b: NDArray[np.float64],
+                  b_err: NDArray[np.float64] | None = None) -> NDArray[np.float64] | None:
+    """Power-of-two row scales ``s`` that bring each row of ``A`` to an infinity norm in
+    ``[1/2, 1)`` (``A / s``, ``b / s`` are exact; ``b`` does not set the scale: its size
+    is the solution's, e.g. states of ``1e8`` carried by unbounded factors, and rows
+    scaled down by it fell back), or ``None`` when the rows'
+    sizes are within a factor of ``2^10`` of each other and of ``2^+-20`` of unit size:
+    HiGHS's own scaling and the compiled simplex's equilibration of the working copy
+    handle those (and a thin set of the soundness campaign, rows of 190 to 8000, came
+    out 2e-5 looser re-scaled: ``window_open_gap_set.npz``). A row whose ``b`` or
+    ``b_err`` would exceed ``MAX_MAGNITUDE`` once scaled keeps its scale (no overflow).
+
+    Parameters
+    ----------
+    A : ndarray, shape (m, n)
+        Constraint matrix.
+    b : ndarray, shape (m,)
+        Right-hand side.
+    b_err : ndarray, shape (m,), optional
+        Bound on the rounding error of ``b``.
+    """
+    r = np.abs(A).max(axis=1, initial=0.0)
+    r = r[r > 0.0]
+    if r.size == 0:
+        return None
+    top, low = float(r.max()), float(r.min())
+    if top <= 2.0 ** 20 and low >= 2.0 ** -20 and top <= 1024.0 * low:
+        return None
+    r = np.abs(A).max(axis=1, initial=0.0)
+    e = np.frexp(np.where(r > 0.0, r, 1.0))[1]
+    s = np.where(r > 0.0, np.ldexp(1.0, e), 1.0)
+    big = np.abs(b) if b_err is None else np.maximum(np.abs(b), b_err)
+    return np.where(big > MAX_MAGNITUDE * np.minimum(s, 1.0), 1.0, s)
 
 
 class FactorPolytope:
@@ -391,12 +463,23 @@ class FactorPolytope:
         unbounded_radius: float = UNBOUNDED_RADIUS,
         b_err: NDArray[np.float64] | None = None,
     ) -> None:
+        # (count_nonzero: ~0.3 us against ~1.4 for np.any, on every set's first query)
+        b_err = None if b_err is None or not np.count_nonzero(b_err) else b_err
+        if A.shape[0]:
+            # Rows equilibrated by powers of two (exact: the same polytope, the same
+            # rounding bounds): every LP below, compiled or HiGHS, sees rows of unit
+            # size. Rows of [A, b] scaled by 2^+-30 had made 2 of 250 hull LPs fall
+            # back to wide bounds and left others up to 1.5 (relative) loose, unwarned.
+            s = equilibration(A, b, b_err)
+            if s is not None:
+                A, b = A / s[:, None], b / s
+                if b_err is not None:
+                    b_err = b_err / s
         self.A = A
         self.b = b
         self.h = h
         self.unbounded_radius = unbounded_radius
-        # (count_nonzero: ~0.3 us against ~1.4 for np.any, on every set's first query)
-        self.b_err = None if b_err is None or not np.count_nonzero(b_err) else b_err
+        self.b_err = b_err
         self.n_c, self.n_g = A.shape
         self._unb = np.isinf(h)
         self._any_unb = bool(np.count_nonzero(self._unb))
@@ -462,6 +545,13 @@ class FactorPolytope:
         cost : ndarray, shape (n,)
             Objective.
         """
+        # Never NaN (or an infinite cost) into HiGHS: it looped for minutes on such a
+        # model, past its own time limit (a NaN objective from a pseudo-inverse of
+        # data of extreme dynamic range). The model is refused: the caller's retries
+        # and certified fallback take over.
+        if not (np.isfinite(A).all() and np.isfinite(cost).all()) or any(
+                np.isnan(v).any() for v in (lo_c, up_c, lo_r, up_r)):
+            return False
         lp = highspy.HighsLp()
         n_r, n_col = A.shape
         lp.num_col_ = n_col
@@ -667,6 +757,7 @@ class FactorPolytope:
         with self._lock:
             return self.minimize_under_lock(w, w_err, w_pair)
 
+    @_quiet_overflow
     def minimize_under_lock(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
                             w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
                             ) -> LPResult:
@@ -790,6 +881,7 @@ class FactorPolytope:
         self.fallbacks += 1
         return LPResult(best, np.nan, None, "fallback")
 
+    @_quiet_overflow
     def minimize_many(self, W: NDArray[np.float64]
                       ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i`` by the compiled
@@ -819,8 +911,18 @@ class FactorPolytope:
 
         with self._lock:
             lp = FixedStructureLP.bounded(self.A, W)
-            return lp.minimize_all(self.b, np.concatenate([self.h, np.zeros(self.n_c)]),
-                                   b_err=self.b_err)
+            if self.b_err is None:
+                return lp.minimize_all(self.b, np.concatenate([self.h, np.zeros(self.n_c)]))
+            bounds, ok, ys, objs = lp.minimize_all(
+                self.b, np.concatenate([self.h, np.zeros(self.n_c)]), b_err=self.b_err,
+                return_duals=True)
+            # The exact rows' multiplier pays |y|^T b_err for the rows' uncertainty; where
+            # that is more than the fast path's gap, the interval-row LP of minimize may
+            # be tighter (a thin set of the soundness campaign: 2e-5 of a 0.33 width).
+            if ok.any():  # (the multipliers of unsolved LPs are the buffer's leftovers)
+                cost = np.abs(ys[ok, :self.n_c]) @ self.b_err
+                ok[ok] = cost <= FASTLP_GAP_RTOL * (1.0 + np.abs(objs[ok]))
+            return bounds, ok
 
     def _nearly_feasible(self, w, w_err, w_pair, hs, y, x, bound) -> LPResult | None:
         """An "optimal" answer at a point slightly off the rows, accepted as exact when
@@ -915,7 +1017,10 @@ class FactorPolytope:
         Au, Ab = self.A[:, unb], self.A[:, ~unb]
         Ur, Sr, Vr, N, xi0, r0, A2, b2, pos = self._free_pivot()
         wu = w[unb]
-        M = Ur @ ((Vr.T @ wu) / Sr)
+        with np.errstate(over="ignore", invalid="ignore"):
+            M = Ur @ ((Vr.T @ wu) / Sr)
+        if not np.isfinite(M).all():  # (singular values beyond double precision)
+            return None
         # w_u outside the row space of A_u: unbounded below (the other paths decide)
         if np.abs(Au.T @ M - wu).max(initial=0.0) > 1e3 * np.finfo(np.float64).eps * float(
                 (np.abs(wu) + np.abs(Au).T @ np.abs(M)).max(initial=0.0)):
@@ -1087,6 +1192,7 @@ class FactorPolytope:
         return y
 
     @_blas_unless_small
+    @_quiet_overflow
     def minimize_relaxed(
         self,
         w: NDArray[np.float64],
@@ -1146,12 +1252,18 @@ class FactorPolytope:
             return LPResult(round_down(bound - relax), obj, x, status)
 
     def _row_scale(self) -> NDArray[np.float64]:
-        """Power-of-two row scales (so that scaling is exact in floating point)."""
+        """Power-of-two row scales (so that scaling is exact in floating point); 1 for a
+        row whose ``b_err`` would exceed ``MAX_MAGNITUDE`` once scaled (see
+        :func:`equilibration`)."""
         s = np.maximum(np.abs(self.A).max(axis=1, initial=0.0), np.abs(self.b))
         m, e = np.frexp(np.where(s > 0.0, s, 1.0))
-        return np.ldexp(1.0, np.where(m == 0.5, e - 1, e))
+        s = np.ldexp(1.0, np.where(m == 0.5, e - 1, e))
+        if self.b_err is not None:
+            s = np.where(self.b_err > MAX_MAGNITUDE * np.minimum(s, 1.0), 1.0, s)
+        return s
 
     @_blas_unless_small
+    @_quiet_overflow
     def emptiness(self, tol: float = FEASIBILITY_TOL) -> EmptinessReport:
         """Certified emptiness test with a phase-1 LP.
 

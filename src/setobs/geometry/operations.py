@@ -90,12 +90,15 @@ def _lower_support(Z: ConstrainedZonotope, a: NDArray[np.float64]) -> float:
     """
     lp = -support_unwarned(Z, -a)
     if np.isfinite(Z.h).all():
-        w = Z.G.T @ a
-        k = Z.n_gen + Z.dim + 2
-        box = float(a @ Z.c) - float(np.abs(w) @ Z.h)
-        err = gamma(k) * (float(np.abs(a) @ np.abs(Z.c)) + 2.0 * float(
-            (np.abs(Z.G).T @ np.abs(a)) @ Z.h)) + float(np.abs(a) @ Z.c_err)
-        lp = max(lp, float(round_down(box - err * (1.0 + gamma(k)))))
+        with np.errstate(over="ignore", invalid="ignore"):  # (beyond double: no bound)
+            w = Z.G.T @ a
+            k = Z.n_gen + Z.dim + 2
+            box = float(a @ Z.c) - float(np.abs(w) @ Z.h)
+            err = gamma(k) * (float(np.abs(a) @ np.abs(Z.c)) + 2.0 * float(
+                (np.abs(Z.G).T @ np.abs(a)) @ Z.h)) + float(np.abs(a) @ Z.c_err)
+            low = float(round_down(box - err * (1.0 + gamma(k))))
+        if np.isfinite(low):
+            lp = max(lp, low)
     return lp
 
 
@@ -625,6 +628,14 @@ def quad_map(Z: ConstrainedZonotope, Q: ArrayLike) -> ConstrainedZonotope:
         E[e, np.arange(e.size)] = Z.c_err[e]
         G, h = np.hstack([G, E]), np.concatenate([h, np.ones(e.size)])
     n, n_g = Z.dim, G.shape[1]
+    # (products of three data entries may overflow; the data guard of trusted_cz then
+    # refuses the result, naming quad_map, instead of a set with inf or NaN data)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _quad_map_data(Z, Qa, G, c, h, n, n_g)
+
+
+def _quad_map_data(Z, Qa, G, c, h, n, n_g) -> ConstrainedZonotope:
+    """The body of :func:`quad_map` (inputs validated)."""
     QG = np.einsum("ikl,lj->ikj", Qa, G)                      # Q_i G
     M = np.einsum("kj,ikl->ijl", G, QG)                        # G^T Q_i G
     Qc = np.einsum("ikl,l->ik", Qa, c)                         # Q_i c
@@ -652,4 +663,5 @@ def quad_map(Z: ConstrainedZonotope, Q: ArrayLike) -> ConstrainedZonotope:
     # (the centre-error factors, like the products, are unconstrained)
     A_out = np.hstack([Z.A, np.zeros((Z.n_con, G.shape[1] - Z.n_gen + n_new))])
     h_out = np.concatenate([h, np.ones(n_new)])
-    return trusted_cz(G_out, centre, A_out, Z.b, h_out, Z.unbounded_radius, err, Z.b_err)
+    return trusted_cz(G_out, centre, A_out, Z.b, h_out, Z.unbounded_radius, err, Z.b_err,
+                      op="quad_map")

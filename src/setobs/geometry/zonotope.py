@@ -16,12 +16,13 @@ from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
     DimensionError,
     EmptySetError,
+    MagnitudeError,
     SolverError,
     SolverWarning,
     UnboundedSetError,
 )
-from ..tolerances import FEASIBILITY_TOL, UNBOUNDED_RADIUS
-from .box import Box, box_center_radius
+from ..tolerances import FEASIBILITY_TOL, MAX_MAGNITUDE, UNBOUNDED_RADIUS
+from .box import Box, box_center_radius, trusted_box
 from .lp import EmptinessReport, FactorPolytope, LPResult
 
 try:  # the optional compiled construction of +, @ and intersect (setup.py)
@@ -116,9 +117,81 @@ def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
     return base
 
 
+# ---------------------------------------------------------------------- the data guard
+_DATA_NAMES = ("G", "c", "A", "b", "h", "c_err", "b_err")
+
+
+def _first_bad_numpy(arrays) -> tuple[int, int, float] | None:
+    """:func:`_setops.check_data` in NumPy (any array-likes; the fallback)."""
+    for k, a in enumerate(arrays):
+        if a is None:
+            continue
+        a = np.asarray(a, dtype=np.float64)
+        if not a.size:
+            continue
+        mag = np.abs(a)
+        if mag.max() <= MAX_MAGNITUDE:  # (a NaN makes the maximum NaN: not <=)
+            continue
+        with np.errstate(invalid="ignore"):
+            bad = ~(mag <= MAX_MAGNITUDE)
+        if k == 4:
+            bad &= ~np.isposinf(a)  # h: +inf is an unbounded factor
+        if bad.any():
+            i = int(np.flatnonzero(bad.reshape(-1))[0])
+            return k, i, float(a.reshape(-1)[i])
+    return None
+
+
+def check_set_data(op: str, G, c, A, b, h, cerr=None, berr=None) -> None:
+    """Refuse set data that are not finite or exceed :data:`MAX_MAGNITUDE` in magnitude.
+
+    The guard of every set-building path (the constructor's validation, :meth:`_owned`,
+    :meth:`_trusted` and the compiled operations, which fall back to the NumPy code on
+    such results so that this raises): a set's ``G``, ``c``, ``A``, ``b``, ``c_err`` and
+    ``b_err`` hold finite entries of at most ``MAX_MAGNITUDE`` in magnitude, and ``h``
+    such entries or ``+inf``. Within that bound no single operation or LP on the set
+    overflows double precision (products of two entries are at most ``1e300``), so no
+    set with inf or NaN data, whose queries would answer wrongly or not at all, is ever
+    built.
+
+    Parameters
+    ----------
+    op : str
+        The operation, named in the message.
+    G, c, A, b, h : ndarray
+        The set's data.
+    cerr, berr : ndarray or None
+        The rounding bounds of ``c`` and ``b`` (``None``: exact).
+
+    Raises
+    ------
+    MagnitudeError
+        Naming the operation, the array, the first bad entry and its value.
+    """
+    bad = None
+    if compiled_ops is not None:
+        bad = compiled_ops.check_data(G, c, A, b, h, cerr, berr)
+        if bad is NotImplemented:
+            bad = _first_bad_numpy((G, c, A, b, h, cerr, berr))
+    else:
+        bad = _first_bad_numpy((G, c, A, b, h, cerr, berr))
+    if bad is None:
+        return
+    k, i, v = bad
+    arr = np.asarray((G, c, A, b, h, cerr, berr)[k])
+    idx = tuple(int(j) for j in np.unravel_index(i, arr.shape)) if arr.ndim > 1 else (i,)
+    what = "NaN" if np.isnan(v) else f"an entry of {v:.3g}"
+    raise MagnitudeError(
+        f"{op}: the result's {_DATA_NAMES[k]} would hold {what} (first at index {idx}); a "
+        f"set's data must be finite and at most {MAX_MAGNITUDE:.0e} in magnitude "
+        "(setobs.tolerances.MAX_MAGNITUDE: products of larger numbers overflow double "
+        "precision): rescale the units, or the matrix of the operation")
+
+
 def _rebuild(G, c, A, b, h, unbounded_radius, cerr, berr) -> ConstrainedZonotope:
     """Unpickling helper of :class:`ConstrainedZonotope`."""
-    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr)
+    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr,
+                                        op="unpickling a set")
 
 
 class ConstrainedZonotope:
@@ -233,10 +306,13 @@ class ConstrainedZonotope:
         object.__setattr__(self, "_cache", {})
 
     @classmethod
-    def _owned(cls, G, c, A, b, h, unbounded_radius: float, cerr, berr) -> ConstrainedZonotope:
+    def _owned(cls, G, c, A, b, h, unbounded_radius: float, cerr, berr, op: str
+               ) -> ConstrainedZonotope:
         """Build from float64 arrays that are either fresh (made by the caller, no other
         reference) or already read-only arrays of a set: no copies (internal fast path of
-        the exact operations). ``cerr``, ``berr``: as in :meth:`_trusted`."""
+        the exact operations). ``cerr``, ``berr``: as in :meth:`_trusted`; ``op``: the
+        operation named by the data guard (:func:`check_set_data`)."""
+        check_set_data(op, G, c, A, b, h, cerr, berr)
         self = object.__new__(cls)
         setattr_ = object.__setattr__
         if cerr is not None and not np.count_nonzero(cerr):
@@ -254,11 +330,13 @@ class ConstrainedZonotope:
 
     @classmethod
     def _trusted(cls, G, c, A, b, h, unbounded_radius: float = UNBOUNDED_RADIUS, cerr=None,
-                 berr=None) -> ConstrainedZonotope:
+                 berr=None, op: str | None = "building a set") -> ConstrainedZonotope:
         """Build from arrays already validated (internal fast path).
 
         ``cerr``, ``berr``: elementwise bounds on the rounding errors of ``c``
-        and ``b`` (``None``: exact).
+        and ``b`` (``None``: exact). ``op``: the operation named by the data guard
+        (:func:`check_set_data`); ``None`` skips the guard, for exact power-of-two
+        rescalings of a guarded set only (:func:`scaled_by`).
         """
         self = object.__new__(cls)
         for name, val in (("_G", G), ("_c", c), ("_A", A), ("_b", b), ("_h", h)):
@@ -268,6 +346,9 @@ class ConstrainedZonotope:
             if val is not None and np.any(val):
                 arr = readonly(np.array(val, dtype=np.float64))
             object.__setattr__(self, name, arr)
+        if op is not None:
+            check_set_data(op, self._G, self._c, self._A, self._b, self._h, self._cerr,
+                           self._berr)
         object.__setattr__(self, "unbounded_radius", unbounded_radius)
         object.__setattr__(self, "_cache", {})
         return self
@@ -519,7 +600,7 @@ class ConstrainedZonotope:
                 if (e < 0).any():
                     raise DimensionError("err must be nonnegative")
                 cerr = _add(cerr, e)
-            return self._same_factors(self._G, c, cerr)
+            return self._same_factors(self._G, c, cerr, "Minkowski sum with a vector")
         if err is not None:
             raise TypeError("err applies to a vector summand only")
         if compiled_ops is not None:
@@ -538,6 +619,7 @@ class ConstrainedZonotope:
             _sum_err(c, _add(self._cerr, other._cerr)),
             None if self._berr is None and other._berr is None else
             _cat(self._berr, self.n_con, other._berr, other.n_con),
+            "Minkowski sum",
         )
 
     def __add__(self, other: Any) -> ConstrainedZonotope:
@@ -557,7 +639,7 @@ class ConstrainedZonotope:
 
     def __neg__(self) -> ConstrainedZonotope:
         """``-Z``: the reflection ``linear_map(-I)`` (exact: only signs change)."""
-        return self._same_factors(-self._G, -self._c, self._cerr)
+        return self._same_factors(-self._G, -self._c, self._cerr, "reflection -Z")
 
     def __and__(self, other: Any) -> ConstrainedZonotope:
         """``Z & W``: :meth:`intersect` (exact)."""
@@ -577,15 +659,15 @@ class ConstrainedZonotope:
             out = compiled_ops.linear_map(self, M)
             if out is not None:
                 return out
-        M_a = as_matrix("M", M, cols=self.dim)
+        M_a = as_matrix("M (linear map)", M, cols=self.dim)
         return self._same_factors(M_a @ self._G, M_a @ self._c,
-                                  _map_err(M_a, self._c, self._cerr))
+                                  _map_err(M_a, self._c, self._cerr), "linear map")
 
     def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64],
-                      cerr: NDArray[np.float64] | None) -> ConstrainedZonotope:
+                      cerr: NDArray[np.float64] | None, op: str) -> ConstrainedZonotope:
         """A set with the same factor polytope; shares its LP model (and emptiness cache)."""
         out = ConstrainedZonotope._owned(G, c, self._A, self._b, self._h, self.unbounded_radius,
-                                         cerr, self._berr)
+                                         cerr, self._berr, op)
         if "lp" in self._cache:
             out._cache["lp"] = self._cache["lp"]
         return out
@@ -614,6 +696,7 @@ class ConstrainedZonotope:
             min(self.unbounded_radius, other.unbounded_radius),
             _cat(self._cerr, self.dim, other._cerr, other.dim),
             _cat(self._berr, self.n_con, other._berr, other.n_con),
+            "Cartesian product",
         )
 
     def intersect_affine(self, C: ArrayLike, y: ArrayLike, *,
@@ -649,6 +732,7 @@ class ConstrainedZonotope:
             self._h, self.unbounded_radius, self._cerr,
             _cat(self._berr, self.n_con, _diff_err(y_a, C_a, self._c, self._cerr, ye),
                  C_a.shape[0]),
+            "intersection with an affine set",
         )
 
     def intersect(self, other: ConstrainedZonotope, R: ArrayLike | None = None
@@ -675,7 +759,7 @@ class ConstrainedZonotope:
             self._check_same_dim(other, "intersection")
             R_a = np.eye(self.dim)
         else:
-            R_a = as_matrix("R", R, rows=other.dim, cols=self.dim)
+            R_a = as_matrix("R (generalised intersection)", R, rows=other.dim, cols=self.dim)
         n_c1, n_c2 = self.n_con, other.n_con
         A = np.zeros((n_c1 + n_c2 + other.dim, self.n_gen + other.n_gen))
         A[:n_c1, : self.n_gen] = self._A
@@ -690,7 +774,7 @@ class ConstrainedZonotope:
         return ConstrainedZonotope._owned(
             G, self._c, A, b,
             np.concatenate([self._h, other._h]), min(self.unbounded_radius, other.unbounded_radius),
-            self._cerr, berr,
+            self._cerr, berr, "generalised intersection",
         )
 
     def project(self, dims: Sequence[int]) -> ConstrainedZonotope:
@@ -707,7 +791,7 @@ class ConstrainedZonotope:
                 f"dims must be indices in [0, {self.dim - 1}], got {list(np.atleast_1d(dims))}"
             )
         return self._same_factors(self._G[idx], self._c[idx],
-                                  None if self._cerr is None else self._cerr[idx])
+                                  None if self._cerr is None else self._cerr[idx], "projection")
 
     # ------------------------------------------------------------------ LP queries
     def _lp(self) -> FactorPolytope:
@@ -779,7 +863,8 @@ class ConstrainedZonotope:
                 up = -fp.minimize_relaxed(-g).bound
             low[i], upp[i] = lw, up
         lo, hi = outward_interval(self._c, self._cerr, low, upp, offset=~zero_rows)
-        out = (Box(lo, hi), fp.fallbacks > before)
+        # (trusted: an outer bound of a set with data up to MAX_MAGNITUDE may exceed it)
+        out = (trusted_box(lo, hi), fp.fallbacks > before)
         self._cache["hull"] = out
         return out
 
@@ -802,7 +887,7 @@ class ConstrainedZonotope:
             rad[absG[:, unb].any(axis=1)] = np.inf
         offset = rad > 0.0
         lo, hi = outward_interval(self._c, self._cerr, -rad, rad, offset=offset)
-        return Box(lo, hi)
+        return trusted_box(lo, hi)
 
     def support(self, direction: ArrayLike) -> float:
         """Certified support function ``max_{z in Z} d^T z`` (``+inf`` if unbounded).
@@ -1225,9 +1310,13 @@ def compiled_set_operations() -> bool:
     """Whether ``Z + W``, ``M @ Z`` and :meth:`ConstrainedZonotope.intersect` run compiled.
 
     The compiled construction (a C extension built at install, ``setup.py``) returns the
-    same sets as the NumPy code, with the same rounding bounds on the centre and the
-    right-hand side, 5-10x faster on small sets. Where it could not be built (no C
-    compiler), the NumPy code runs.
+    same sets as the NumPy code up to rounding (bit for bit for the sum and the plain
+    intersection; the products of the maps and of ``R`` may be summed in another order
+    than by the BLAS), with the same error bounds on the centre and the right-hand side,
+    which cover either rounding; 5-10x faster on small sets. Both refuse the same inputs
+    and never build a set whose data are not finite or exceed ``MAX_MAGNITUDE``
+    (:func:`check_set_data`). Where it could not be built (no C compiler), the NumPy
+    code runs.
 
     Returns
     -------
@@ -1238,7 +1327,7 @@ def compiled_set_operations() -> bool:
 
 
 if compiled_ops is not None:
-    compiled_ops.bind(ConstrainedZonotope)
+    compiled_ops.bind(ConstrainedZonotope, float(MAX_MAGNITUDE))
 
 
 # ---------------------------------------------------------------- package-internal access
@@ -1251,13 +1340,16 @@ if compiled_ops is not None:
 def trusted_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.float64],
                b: NDArray[np.float64], h: NDArray[np.float64],
                unbounded_radius: float = UNBOUNDED_RADIUS, cerr: NDArray[np.float64] | None = None,
-               berr: NDArray[np.float64] | None = None) -> ConstrainedZonotope:
-    """Build from arrays the caller has already validated (no checks, no copies of shape).
+               berr: NDArray[np.float64] | None = None, op: str = "building a set"
+               ) -> ConstrainedZonotope:
+    """Build from arrays the caller has already validated (no shape checks), refusing
+    data that are not finite or exceed ``MAX_MAGNITUDE`` (:func:`check_set_data`).
 
     ``cerr``, ``berr``: elementwise bounds on the rounding errors already in
-    ``c`` and ``b`` (``None``: exact); certified queries widen by them.
+    ``c`` and ``b`` (``None``: exact); certified queries widen by them. ``op``: the
+    operation the error message names.
     """
-    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr)
+    return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr, op=op)
 
 
 def magnitude(Z: ConstrainedZonotope) -> float:
@@ -1323,7 +1415,7 @@ def scaled_by(Z: ConstrainedZonotope, f: float) -> ConstrainedZonotope:
     cerr = None if Z._cerr is None else Z._cerr / f
     out = ConstrainedZonotope._trusted(Z.G * (col / f)[None, :], Z.c / f, Z.A * col[None, :],
                                        Z.b, np.where(fin, np.ldexp(h, -e), h),
-                                       Z.unbounded_radius, cerr, Z._berr)
+                                       Z.unbounded_radius, cerr, Z._berr, op=None)
     Z._cache[("scaled_by", f)] = out
     return out
 
@@ -1388,4 +1480,5 @@ def absorb_center_error(Z: ConstrainedZonotope, rtol: float) -> ConstrainedZonot
     E[j, np.arange(j.size)] = cerr[j]
     return ConstrainedZonotope._trusted(
         np.hstack([Z._G, E]), Z._c, np.hstack([Z._A, np.zeros((Z.n_con, j.size))]), Z._b,
-        np.concatenate([Z._h, np.ones(j.size)]), Z.unbounded_radius, None, Z._berr)
+        np.concatenate([Z._h, np.ones(j.size)]), Z.unbounded_radius, None, Z._berr,
+        op="absorbing the centre's rounding bound")

@@ -37,26 +37,29 @@ class SetRecursion:
     flag, and the committed step's reported bounds."""
 
     # ------------------------------------------------------------------ recursion
-    def _prior(self, Z: ConstrainedZonotope, e: Entry) -> ConstrainedZonotope:
-        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``.
+    def _prior(self, Z: ConstrainedZonotope, e: Entry, model=None) -> ConstrainedZonotope:
+        """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``
+        (``model``: the start-up's joint model instead, :class:`._unobservable.StartupModel`).
 
         The centre's rounding bound goes through ``A_o`` as factors once it is
         above rounding level (:func:`~setobs.geometry.zonotope.absorb_center_error`).
         """
+        A, B, E, Gam = ((self.A_o, self.B_o, self._E_o, self.Gamma_o) if model is None
+                        else (model.A, model.B, model.E, model.Gamma))
         Z = absorb_center_error(Z, CENTER_ERROR_ABSORB_RTOL)
-        Zp = self.A_o @ Z + self.B_o @ e.dd
+        Zp = A @ Z + B @ e.dd
         if e.w is not None:
-            Zp = Zp + self._E_o @ e.w
+            Zp = Zp + E @ e.w
         u = e.u
         if u is not None and self.sys.p:
-            v = self.Gamma_o @ u
-            err = self.data_rtol * (np.abs(self.Gamma_o) @ np.abs(u)) if self.data_rtol \
+            v = Gam @ u
+            err = self.data_rtol * (np.abs(Gam) @ np.abs(u)) if self.data_rtol \
                 else None
             Zp = Zp.minkowski_sum(v, err=err)
         return Zp
 
     def _posterior(self, Zp: ConstrainedZonotope, e: Entry,
-                   depth: int) -> ConstrainedZonotope:
+                   depth: int, C_full=None) -> ConstrainedZonotope:
         """Eq. (21): ``Zp ∩ {z : C_o z in y - F_b V}`` on the measured rows of ``y``
         (balanced units); with no noise set, ``{z : C_o z = y}``; with nothing
         measured, ``Zp`` (a prediction step).
@@ -71,12 +74,13 @@ class SetRecursion:
             return Zp
         nD = self._inc_fixed.n_gen if self._inc_fixed is not None else self.sys.q
         nV = 0 if e.v is None else e.v.n_gen
-        rtol = self.data_rtol + model_rtol(depth, self.A_o.shape[0], self.sys.p, nD + nV)
+        Cf = self.C_o if C_full is None else C_full
+        rtol = self.data_rtol + model_rtol(depth, Cf.shape[1], self.sys.p, nD + nV)
         ym = y[m]
         y_err = rtol * np.abs(ym)
         if e.yerr is not None:
             y_err = y_err + e.yerr[m]
-        C = self.C_o if m.all() else self.C_o[m]
+        C = Cf if m.all() else Cf[m]
         if e.v is None:
             return Zp.intersect_affine(C, ym, y_err=y_err)
         V = e.v
@@ -117,7 +121,7 @@ class SetRecursion:
             msg = (f"the measurement at step k={k} is inconsistent with the model and the "
                    "uncertainty sets (empty posterior)")
             if self.on_inconsistent == "raise":
-                raise ModelInvalidatedError(msg, k) from None
+                raise self._invalidated(msg, k) from None
             # One-step prior from the last valid posterior (the windowed re-run may
             # pass through the same inconsistency again).
             Zp1 = self._Z0_prior if k == 0 else self._prior(self._Z, e)
@@ -201,8 +205,24 @@ class SetRecursion:
         ``x_hi`` on those rows) plus the tracked range of ``Mx_bar zbar_k``
         (:mod:`setobs.setmembership._unobservable`); advances the tracker."""
         T = self._ubar
+        f = self._x_free
+        joint = None
         if k == 0:
             T.reset()
+            self._startup_Z = None
+            self._startup_steps = 0
+            if not self._hull_feeds_tracker(box_o):
+                joint = self._startup_step(e, None)
+        elif self._startup_Z is not None:
+            # the start-up: the joint set of (z_o, zbar) over the whole history so far
+            joint = self._startup_step(e, self._startup_Z)
+            if joint is not None and np.isfinite(joint[2].lo).all() \
+                    and np.isfinite(joint[2].hi).all():
+                T.start_from(joint[2].lo, joint[2].hi)
+                if self._hull_feeds_tracker(box_o):
+                    self._startup_Z = None  # (the tracker goes on from here)
+            else:
+                T.lost = True
         elif self._ubar_prev is None:  # (no hull of the previous step: unbounded, soundly)
             T.lost = True
         else:
@@ -211,10 +231,41 @@ class SetRecursion:
             T.advance(*self._ubar_prev, e.u, dd, w)
         self._ubar_prev = (box_o.lo, box_o.hi)
         lo_b, hi_b = T.support(self._Mx_bar)
-        f = self._x_free
         x_lo, x_hi = x_lo.copy(), x_hi.copy()
         x_lo[f], x_hi[f] = self._outward(x_lo[f] + lo_b, x_hi[f] + hi_b)
+        if joint is not None:  # (both bounds are certified: the tighter of each end)
+            jl, jh = self._outward(joint[1].lo[f], joint[1].hi[f])
+            x_lo[f], x_hi[f] = np.maximum(x_lo[f], jl), np.minimum(x_hi[f], jh)
         return x_lo, x_hi
+
+    @staticmethod
+    def _hull_feeds_tracker(box_o: Box) -> bool:
+        """Whether the filter's hull is finite (in every coordinate: one that ``A_21``
+        does not read may still feed one it reads at the next step)."""
+        return bool(np.isfinite(box_o.lo).all() and np.isfinite(box_o.hi).all())
+
+    def _startup_step(self, e: Entry, Z: ConstrainedZonotope | None):
+        """One step of the start-up's joint recursion (``Z``: the joint posterior of the
+        previous step, ``None`` at ``k = 0``): ``(Z_k, hull of the state, hull of
+        zbar)``, or ``None`` when it ends (``STARTUP_STEPS`` reached, an empty or
+        numerically failed set: the tracker is then lost, as before)."""
+        from ._unobservable import STARTUP_STEPS
+
+        M = self._startup
+        self._startup_Z = None
+        if self._startup_steps >= STARTUP_STEPS:
+            return None
+        self._startup_steps += 1
+        try:
+            Zp = M.Z0 if Z is None else self._prior(Z, e, M)
+            Zk = self._posterior(Zp, e, self._startup_steps, M.C)
+            # (a fallback is still a certified hull, only wider: not flagged here)
+            box_x = hull_with_status(M.X @ Zk)[0]
+            box_b = hull_with_status(M.bar @ Zk)[0]
+        except (EmptySetError, ArithmeticError):
+            return None
+        self._startup_Z = Zk
+        return Zk, box_x, box_b
 
     def _hull_pair(self, S: ConstrainedZonotope):
         """Certified hull of a per-step set (the fixed sets' once)."""
@@ -260,7 +311,7 @@ class SetRecursion:
         try:
             hull, _ = hull_with_status(Zp)
         except EmptySetError:
-            raise ModelInvalidatedError(msg + " (the prior itself is empty)", k) from None
+            raise self._invalidated(msg + " (the prior itself is empty)", k) from None
         w = np.where(np.isfinite(hull.width), hull.width, 0.0)
         scale = 1.0 + float(np.abs(np.where(np.isfinite(hull.lo), hull.lo, 0.0)).max(initial=0.0))
         factor = self.reset_inflation
@@ -270,4 +321,10 @@ class SetRecursion:
             if not Zr.is_empty():
                 return Zr
             factor *= 4.0
-        raise ModelInvalidatedError(msg + " (no reset box explains it)", k)
+        raise self._invalidated(msg + " (no reset box explains it)", k)
+
+    def _invalidated(self, msg: str, k: int) -> ModelInvalidatedError:
+        """The error for step ``k``, its advice naming what this model has (an increment
+        set, or for a model without disturbances the process noise)."""
+        hint = ModelInvalidatedError.HINT if self.sys.q else ModelInvalidatedError.HINT_STATE
+        return ModelInvalidatedError(msg, k, hint)

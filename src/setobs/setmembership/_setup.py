@@ -210,7 +210,8 @@ class ModelSetup:
         powers of two); a zero row (a state on the unobservable part only) gets
         ``[0, 0]`` here."""
         j, sc = self._X_coords, self._X_scale
-        a, b = sc * lo[j], sc * hi[j]
+        with np.errstate(invalid="ignore"):  # (0 * inf on a zero row: set to 0 below)
+            a, b = sc * lo[j], sc * hi[j]
         zero = sc == 0.0
         a[zero] = b[zero] = 0.0  # (0 * inf)
         xlo, xhi = np.minimum(a, b), np.maximum(a, b)
@@ -244,6 +245,25 @@ class ModelSetup:
         E_bar = Tb @ np.vstack([E, np.zeros((q, E.shape[1]))])
         return UnobservableTracker(dec.A_21, dec.A_obar, dec.B_obar, dec.Gamma_obar, E_bar,
                                    hull.lo, hull.hi, self.data_rtol)
+
+    def _startup_model(self, dec, dz, X0, D0, E):
+        """The joint recursion of the start-up (:class:`._unobservable.StartupModel`)."""
+        from ._unobservable import StartupModel
+
+        n, q = self.sys.n, self.sys.q
+        No, nb = dec.T_o.shape[0], dec.T_obar.shape[0]
+        Tf = dec.T / dz[None, :]
+        A = np.block([[dec.A_o, np.zeros((No, nb))], [dec.A_21, dec.A_obar]])
+        B = np.vstack([dec.B_o, dec.B_obar])
+        Gam = np.vstack([dec.Gamma_o, dec.Gamma_obar])
+        Ef = Tf @ np.vstack([E, np.zeros((q, E.shape[1]))])
+        C = np.hstack([dec.C_o, np.zeros((dec.C_o.shape[0], nb))])
+        X = np.hstack([np.eye(n), np.zeros((n, q))]) @ (dz[:, None] * dec.T.T)
+        bar = np.hstack([np.zeros((nb, No)), np.eye(nb)])
+        prior = X0 if not q else X0.cartesian(
+            ConstrainedZonotope.full_space(q) if D0 is None else D0)
+        Z0 = normalize_free_columns(Tf @ prior)
+        return StartupModel(A, B, Ef, Gam, C, X, bar, Z0)
 
     def _process_noise(self, k: int) -> ConstrainedZonotope | None:
         """``W_k`` (in the noise space of ``E``), or ``None``."""
@@ -439,6 +459,7 @@ class ModelSetup:
         # x = Mx z_o + Mx_bar zbar with zbar tracked outside the LPs.
         self._ubar = self._unobservable_tracker(dec, dz, X0, D0, E) \
             if self._x_free.any() else None
+        self._startup = None if self._ubar is None else self._startup_model(dec, dz, X0, D0, E)
         self._Mx_bar = Mx_bar[self._x_free]
         self._Mx = Mx if self._ubar is not None else np.where(self._x_free[:, None], 0.0, Mx)
         # A state map with at most one nonzero per row (a scaled coordinate of z_o:

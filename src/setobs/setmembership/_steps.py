@@ -137,6 +137,47 @@ class SMFDOResult:
         """Time axis ``k dt`` (or ``k`` when the sampling time is unknown)."""
         return time_axis(self.lo.shape[0], self.dt)
 
+    def __repr__(self) -> str:
+        """A summary like pandas': the size, the counts of statuses, the widest band, and
+        the table's first and last rows (a few kB whatever the record's length; the
+        whole table is :meth:`to_pandas`)."""
+        N, q = self.lo.shape
+        n = 0 if self.state_lo is None else self.state_lo.shape[1]
+        what = [f"q = {q} disturbance{'s' if q != 1 else ''}"] if q else []
+        if n:
+            what.append(f"n = {n} state bounds")
+        lines = [f"SMFDOResult: {N} steps" + (f", {', '.join(what)}" if what else "")]
+        st = self.status if self.status.size == N else np.full(N, "ok")
+        kinds, counts = np.unique(st, return_counts=True)
+        first = self.first_inconsistent
+        lines.append("statuses: " + ", ".join(f"{k} {c}" for k, c in zip(kinds, counts,
+                                                                          strict=True))
+                     + f"; first inconsistent step: {'none' if first is None else first}")
+        for label, lo, hi, names in (("disturbance", self.lo, self.hi, self.names),
+                                     ("state", self.state_lo, self.state_hi,
+                                      self.state_names)):
+            if lo is None or hi is None or not lo.size:
+                continue
+            with np.errstate(invalid="ignore"):
+                w = hi - lo
+            fin = np.isfinite(w)
+            nm = list(names) or [f"{label[0]}{i}" for i in range(lo.shape[1])]
+            if not fin.any():
+                lines.append(f"widest {label} band: all unbounded")
+                continue
+            k, i = np.unravel_index(int(np.argmax(np.where(fin, w, -np.inf))), w.shape)
+            unb = int((~fin.all(axis=1)).sum())
+            lines.append(f"widest {label} band (finite): {nm[i]} at k = {k}, "
+                         f"[{lo[k, i]:.6g}, {hi[k, i]:.6g}]"
+                         + (f"; {unb} step(s) with an unbounded {label}" if unb else ""))
+        try:
+            table = self.to_pandas().to_string(max_rows=10, max_cols=12, min_rows=10)
+        except Exception:  # pragma: no cover - pandas is a dependency; never fail a repr
+            table = ""
+        return "\n".join([*lines, table]) if table else "\n".join(lines)
+
+    __str__ = __repr__
+
     def __iter__(self):
         return iter((self.time, self.estimate, self.lo, self.hi))
 
@@ -182,9 +223,11 @@ class SMFDOResult:
         """One row (index ``"SMFDO"``) over steps ``k >= start``: ``error_bound`` (mean
         certified error bound over the bounded steps; the ``optimal`` worst-case
         error in exact mode), ``max_error_bound``, ``unbounded`` steps,
-        ``inconsistent`` steps and, with the truth, ``error_inf``, ``max_error_inf``,
-        ``error_2`` and ``truth_inside`` (fraction of steps whose certified interval
-        holds the truth).
+        ``inconsistent`` steps; with state bounds ``state_error_bound`` (mean over the
+        steps whose state bounds are all finite of the largest state half-width),
+        ``max_state_error_bound`` and ``state_unbounded`` (steps with an infinite state
+        bound); and, with the truth, ``error_inf``, ``max_error_inf``, ``error_2`` and
+        ``truth_inside`` (fraction of steps whose certified interval holds the truth).
 
         Parameters
         ----------
@@ -207,6 +250,14 @@ class SMFDOResult:
             "unbounded": int((~fin).sum()),
             "inconsistent": int(np.isin(st, ("skipped", "reset")).sum()),
         }
+        if self.state_lo is not None and self.state_hi is not None:
+            with np.errstate(invalid="ignore"):
+                half = 0.5 * (self.state_hi[start:] - self.state_lo[start:])
+            fin_x = np.isfinite(half).all(axis=1)
+            hb = half.max(axis=1, initial=0.0)[fin_x]
+            extra["state_error_bound"] = float(hb.mean()) if hb.size else np.inf
+            extra["max_state_error_bound"] = float(hb.max()) if hb.size else np.inf
+            extra["state_unbounded"] = int((~fin_x).sum())
         if truth is not None:
             D = as_matrix("truth", truth, cols=self.lo.shape[1])
             inside = np.all((D >= self.lo) & (D <= self.hi), axis=1)[start:]

@@ -26,20 +26,56 @@ is the observable part's certified LP bound plus the support of ``Zbar_k`` in th
 state's row. Rounding: every product's error is bounded by Higham's ``gamma`` on
 the absolute-value products and added as a box generator; generators beyond
 ``MAX_ORDER n_bar`` are boxed (Girard's reduction, outer).
+
+The start-up (:class:`StartupModel`). The recursion above needs ``IH(Z_k)`` finite in
+the coordinates that ``A_21`` reads, but at the first steps the observable part is
+not yet pinned down by the data (a disturbance ``d_0`` that is free until ``y_1``
+shows it: ``x2+ = 0.5 x2 + d`` with only ``x1`` measured). Its filtered hull at
+step ``k`` is then infinite, although the data up to ``k + 1`` bound it, and the
+whole-history LP bounds ``zbar_(k+1)``. So until the filter's hull is finite the
+SMFDO carries the *joint* set of all augmented coordinates ``(z_o, zbar)``: the set
+recursion of eqs. (20)-(21) on ``A_tilde = [[A_o, 0], [A_21, A_obar]]``, ``C_tilde
+= [C_o, 0]``, from ``T D^-1 (X_0 x D_0)``, which is the exact set of the whole
+history (no reduction). Its certified hull gives the states' bounds at those steps
+(as tight as the whole-history LP), and once both its ``zbar`` hull and the
+filter's hull of ``z_o`` are finite (every coordinate: one that ``A_21`` does not read
+feeds one it reads through ``A_o``) the tracker starts from that ``zbar`` box (an
+outer bound of ``zbar_k``) and goes on as above. The joint set grows by the step's
+noise and increment factors, so it is kept for at most ``STARTUP_STEPS`` steps
+(then the states on ``zbar`` are reported unbounded, as before).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._rounding import gamma
+from ..geometry import ConstrainedZonotope
 from ..geometry.box import box_center_radius
 
-__all__ = ["UnobservableTracker"]
+__all__ = ["StartupModel", "UnobservableTracker"]
 
 #: Generators kept per unobservable dimension (Girard's reduction beyond twice it).
 MAX_ORDER = 10
+#: Most steps the start-up's joint set is carried (see the module notes).
+STARTUP_STEPS = 64
+
+
+class StartupModel(NamedTuple):
+    """The joint recursion of the start-up (see the module notes): the model on all
+    augmented coordinates ``z_tilde = (z_o, zbar)`` (balanced units)."""
+
+    A: NDArray[np.float64]        # A_tilde
+    B: NDArray[np.float64]        # B_tilde (the increment)
+    E: NDArray[np.float64]        # T D^-1 [E; 0] (the process noise)
+    Gamma: NDArray[np.float64]    # Gamma_tilde
+    C: NDArray[np.float64]        # C_tilde = [C_o, 0]
+    X: NDArray[np.float64]        # the state map x = [I 0] D T^T z_tilde
+    bar: NDArray[np.float64]      # the rows that select zbar
+    Z0: ConstrainedZonotope       # the prior T D^-1 (X_0 x D_0)
 
 
 class UnobservableTracker:
@@ -71,6 +107,12 @@ class UnobservableTracker:
     def reset(self) -> None:
         """Back to ``Zbar_0``."""
         self.c, self.G = self.c0.copy(), self.G0.copy()
+        self.lost = False
+
+    def start_from(self, lo, hi) -> None:
+        """Restart from the certified box ``[lo, hi]`` of ``zbar_k`` (finite)."""
+        self.c, r = box_center_radius(lo, hi)
+        self.G = np.diag(r)
         self.lost = False
 
     def advance(self, lo_o, hi_o, u, dd_box, w_box) -> None:

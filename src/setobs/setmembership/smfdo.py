@@ -15,12 +15,13 @@ from .._validation import as_matrix, check_real_scalar
 from ..exceptions import (
     DimensionError,
     ExistenceError,
+    MissingDataWarning,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
 )
 from ..geometry import Box, ConstrainedZonotope
 from ..systems import DisturbanceInputs, LinearSystem, require_system
-from ..tolerances import DATA_RTOL
+from ..tolerances import DATA_RTOL, MISSING_WARN_FRACTION
 from ._exact import ExactSteps
 from ._history import HistoryLP
 from ._hrep import HState
@@ -378,6 +379,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self.first_inconsistent: int | None = None
         self._last_y = np.zeros(0)  # the last step's measurement (balanced units)
         self._ubar_prev = None  # (the hull of Z_(k-1): the tracker's input)
+        self._startup_Z = None  # the start-up's joint set of (z_o, zbar) (see _unobservable)
+        self._startup_steps = 0
         self._auto_poly = True  # restart="auto": the polytope restart is in use
         self._auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
         self._set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
@@ -579,6 +582,19 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         """
         Ya = as_matrix("Y", Y, cols=self.sys.l, allow_nan=True)
         N = Ya.shape[0]
+        if Ya.size:
+            missing = float(np.isnan(Ya).mean())
+            if missing == 1.0 and self.k < 0:
+                raise DimensionError(
+                    f"Y has no measured (finite) entry: all {N} samples are missing (NaN), "
+                    "so every band would be the prior's; check the record's columns and "
+                    "its missing-value marker")
+            if missing > MISSING_WARN_FRACTION:
+                warnings.warn(
+                    f"{100 * missing:.1f} % of the record's output samples are missing "
+                    f"(NaN; warned above {100 * MISSING_WARN_FRACTION:g} %, "
+                    "setobs.tolerances.MISSING_WARN_FRACTION): the bands are mostly "
+                    "predictions", MissingDataWarning, stacklevel=3)
         Ua = None
         if not self.sys.p and U is not None and np.size(U):
             raise DimensionError("U is given but the system has no inputs (no Gamma): pass "
