@@ -246,8 +246,10 @@ def test_estimate_states_writes_certified_state_bounds(tmp_path, capsys):
 
 
 def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
-    """--calibrate finds a bound at most the simulated noise that the record
-    accepts; a too small bound reports the first inconsistent step (not a crash)."""
+    """--calibrate finds a smallest bound at most the simulated noise, validates it on
+    the last 30 % and uses it with its 10 % safety, and the record accepts it; a too
+    small bound reports the first inconsistent step (not a crash); skipping stops at
+    max_skip_fraction."""
     rec, _ = _motor_record(tmp_path, noise=2e-4)
     model = tmp_path / "m.yaml"
     model.write_text(yaml.safe_dump(MOTOR_CT))
@@ -256,8 +258,20 @@ def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
     assert main([*args, "--calibrate", "--out", str(tmp_path / "a")]) == 0
     text = capsys.readouterr().out
     noise = float(text.split("calibrated noise: theta ")[1].split()[0])
-    assert 0 < noise <= 2e-4 * (1 + 1e-6) + 1e-7
+    smallest = float(text.split("smallest bound theta ")[1].split()[0])
+    validated = float(text.split("validated theta ")[1].split()[0])
+    assert 0 < smallest <= validated <= 2e-4 * (1 + 1e-6) + 1e-7
+    assert noise == pytest.approx(1.1 * validated, rel=1e-4)  # (printed to 6 digits)
     assert "first inconsistent step: none" in text
+    # --safety 0: the validated bound itself (it still explains the record)
+    assert main([*args, "--calibrate", "--safety", "0", "--out", str(tmp_path / "s")]) == 0
+    text = capsys.readouterr().out
+    noise0 = float(text.split("calibrated noise: theta ")[1].split()[0])
+    assert noise0 == pytest.approx(validated, rel=1e-4)
+    assert json.loads((tmp_path / "s" / "summary.json").read_text())[
+        "calibration"]["safety"] == 0.0
+    assert main([*args, "--safety", "0", "--noise", "1e-3", "--out", str(tmp_path / "t")]) == 2
+    assert "apply to --calibrate only" in capsys.readouterr().err
     # too small a bound: by default the run stops at the first inconsistent sample,
     # exit 1, with the step, its time and what to do (it used to skip silently)
     assert main([*args, "--noise", "1e-6", "--out", str(tmp_path / "b")]) == 1
@@ -266,9 +280,15 @@ def test_estimate_calibrate_and_inconsistent_data(tmp_path, capsys):
     assert has_number(err, step * 1e-3, rtol=1e-9, after="(t =")
     assert "--calibrate" in err and "--on-inconsistent skip" in err
     assert not (tmp_path / "b" / "summary.json").exists()
-    # skipping is explicit, and a run that skips more than 1 % says so on stderr
+    # skipping is explicit and stops once more than 1 % of the samples were skipped
     assert main([*args, "--noise", "1e-6", "--on-inconsistent", "skip",
-                 "--out", str(tmp_path / "c")]) == 0
+                 "--out", str(tmp_path / "d")]) == 1
+    err = capsys.readouterr().err
+    assert "more than max_skip_fraction = 1 % of 400 samples" in err
+    assert "--max-skip-fraction" in err
+    # with the limit raised, a run that skips more than 1 % says so on stderr
+    assert main([*args, "--noise", "1e-6", "--on-inconsistent", "skip",
+                 "--max-skip-fraction", "1", "--out", str(tmp_path / "c")]) == 0
     summary = json.loads((tmp_path / "c" / "summary.json").read_text())
     assert summary["first_inconsistent_step"] == step
     skipped = summary["statuses"].get("skipped", 0)
@@ -448,7 +468,7 @@ def test_estimate_a_model_without_disturbances_is_a_state_estimation(tmp_path, c
     import matplotlib.image as mpimg
 
     h, w = mpimg.imread(out / "estimate.png").shape[:2]
-    assert h == round(2 * 2.6 * 110) and w == 8 * 110  # one panel per state
+    assert h == round(4 * 2.6 * 110) and w == 8 * 110  # two panels per state
     capsys.readouterr()
     assert main([*base, "--increment", "1e-3", "--out", str(tmp_path / "b")]) == 2
     assert "no disturbance" in capsys.readouterr().err

@@ -166,15 +166,38 @@ SKIP_WARN_FRACTION = 0.01
 
 
 
+def _units(unit: str | Sequence[str] | None, from_model: dict[str, str],
+           sys_: Any) -> dict[str, str]:
+    """The plot's units: the model file's ``units:``, then ``--unit`` items
+    (``name=unit``; a plain unit: every disturbance)."""
+    out = dict(from_model)
+    items = [] if unit is None else ([unit] if isinstance(unit, str) else list(unit))
+    known = [*sys_.state_names, *sys_.output_names, *sys_.disturbance_names]
+    for item in items:
+        if "=" in item:
+            name, u = (x.strip() for x in item.split("=", 1))
+            if name not in known:
+                raise CLIError(f"--unit {item!r}: the model has no signal {name!r} (its "
+                               f"signals: {', '.join(dict.fromkeys(known))})")
+            out[name] = u
+        else:
+            if not sys_.q:
+                raise CLIError(f"--unit {item!r}: the model has no disturbance; name the "
+                               "signal, e.g. --unit omega=rad/s")
+            out.update(dict.fromkeys(sys_.disturbance_names, item.strip()))
+    return out
+
+
 def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None,
              time_col: str | None = None, dt: float | None = None,
              variable: str | None = None, decimate: int = 1, increment: str | None = None,
              noise: str | None = None, calibrate: bool = False, window: int | None = 10,
              out: str | None = None, plot: bool = True, progress: bool | None = None,
-             on_inconsistent: str = "raise", unit: str | None = None,
+             on_inconsistent: str = "raise", unit: str | Sequence[str] | None = None,
              states: bool = False, process_noise: str | None = None,
              restart: str = "auto", per_channel: bool = False,
-             time_limit: float = 120.0) -> int:
+             time_limit: float = 120.0, holdout: float = 0.3, max_outliers: int = 0,
+             max_skip_fraction: float = 0.01, safety: float | None = None) -> int:
     """Certified disturbance bounds from a measured record (CSV + plot + summary);
     with ``states``, the certified state bounds too (``<state>_lo``/``_hi`` columns).
     A model without disturbances (``disturbance_inputs: []``) is a state estimation:
@@ -189,13 +212,22 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
 
     ``calibrate`` runs :func:`setobs.calibrate_noise` with the options the run itself
     uses (the increment, the process noise, the noise shape) and its own
-    (``per_channel``, ``time_limit``): the calibrated bound is the one that makes the
-    record consistent *for this run's model*.
+    (``per_channel``, ``time_limit``, ``holdout``, ``max_outliers``): the calibrated
+    bound is the one that makes the record consistent *for this run's model*. It prints
+    the smallest bound of the calibrated part, the validated one and its margin, the
+    samples where the bound is attained (with their times) and the outliers removed,
+    which the run then ignores; the run uses the recommended radii
+    (``NoiseCalibration.radii``: validated plus ``safety``, default
+    ``SAFETY_MARGIN`` = 10 %; ``safety=0`` uses ``validated`` itself).
+
+    ``unit`` labels the plot's axes: ``"name=unit"`` items (a state, output or
+    disturbance by its name), over the model file's ``units:``; a plain unit applies to
+    every disturbance. State bands are drawn around their centre (:func:`plot_state_band`).
     """
     import time as _time
 
     from .exceptions import ModelInvalidatedError
-    from .io import load_model, load_record, round_time
+    from .io import load_model, load_record, model_units, round_time
     from .setmembership import SMFDO, calibrate_noise
 
     rec = load_record(record, outputs=outputs, inputs=inputs, time=time_col, dt=dt,
@@ -207,6 +239,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
 
         rec = dataclasses.replace(rec, t=np.arange(rec.Y.shape[0]) * sys_.dt, dt=sys_.dt)
     times_known = rec.dt is not None
+    units = _units(unit, model_units(model, dt=rec.dt), sys_)
     if rec.Y.shape[1] != sys_.l:
         raise CLIError(f"the model has {sys_.l} output(s), the record {rec.Y.shape[1]} "
                        f"(--outputs {outputs})")
@@ -228,8 +261,10 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         inc = _per_channel("--increment", _numbers("--increment", increment), sys_.q)
     w = None if process_noise is None else _per_channel(
         "--process-noise", _numbers("--process-noise", process_noise), sys_.n)
-    if (per_channel or time_limit != 120.0) and not calibrate:
-        raise CLIError("--per-channel and --time-limit apply to --calibrate only")
+    if (per_channel or time_limit != 120.0 or holdout != 0.3 or max_outliers
+            or safety is not None) and not calibrate:
+        raise CLIError("--per-channel, --time-limit, --holdout, --max-outliers and --safety "
+                       "apply to --calibrate only")
     if calibrate and noise is not None:
         shape = _per_channel("--noise (shape for --calibrate)", _numbers("--noise", noise),
                              sys_.l)
@@ -239,17 +274,21 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     if calibrate:
         cal = calibrate_noise(sys_, rec.Y, rec.U, increment=inc, shape=shape,
                               per_channel=per_channel, process_noise=w,
-                              time_limit=time_limit)
+                              time_limit=time_limit, holdout=holdout,
+                              max_outliers=max_outliers,
+                              **({} if safety is None else {"safety": safety}))
         v = cal.radii
+        print(cal.describe())
         pairs = ", ".join(f"{n} {r:.6g}" for n, r in zip(sys_.output_names, v, strict=True))
-        print(f"calibrated noise: {pairs} (LP over {cal.samples} samples)")
+        print(f"calibrated noise: {pairs} (used; LPs over {cal.samples} samples)")
     elif noise is not None:
         v = _per_channel("--noise", _numbers("--noise", noise), sys_.l)
     else:
         v = None
     obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
                 process_noise=w, on_inconsistent=on_inconsistent, state_bounds=states,
-                restart=restart)
+                restart=restart, max_skip_fraction=max_skip_fraction)
+    ignore = cal.ignore_mask(rec.Y.shape[0]) if calibrate and cal.outliers else None
     N = rec.Y.shape[0]
     if progress is None:  # automatic: long records on a terminal, when tqdm is installed
         import importlib.util
@@ -265,10 +304,15 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ModelInvalidatedWarning)
-            res = obs.run(rec.Y, rec.U, progress=show)
+            res = obs.run(rec.Y, rec.U, progress=show, ignore=ignore)
     except ModelInvalidatedError as exc:
         k = exc.step
         when = f" (t = {round_time(float(rec.t[k])):g} s)" if times_known else ""
+        if "max_skip_fraction" in str(exc):
+            print(f"setobs: stopped at step {k}{when}: " + str(exc).split("; what to do")[0]
+                  + ". What to do: --calibrate, a larger --noise or --increment, or "
+                  "--max-skip-fraction if these are outliers.", file=sys.stderr)
+            return EXIT_INCONSISTENT
         print(f"setobs: the record is inconsistent with the model at step {k}{when}: no "
               f"trajectory within the bounds explains it. What to do: --calibrate (the "
               f"smallest noise bound that explains the record), a larger --noise or "
@@ -296,8 +340,13 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
                "noise": None if v is None else np.asarray(v).tolist(),
                "calibrated": bool(calibrate),
                "calibration": None if not calibrate else {
-                   "minimal": cal.minimal.tolist(), "radii": cal.radii.tolist(),
+                   "minimal": cal.minimal.tolist(), "validated": cal.validated.tolist(),
+                   "margin": cal.margin.tolist(), "radii": cal.radii.tolist(),
+                   "holdout": cal.holdout, "safety": cal.safety,
+                   "active_samples": cal.active_samples.tolist(),
+                   "outliers": [int(o.sample) for o in cal.outliers],
                    "scale": cal.scale, "status": cal.status, "per_channel": per_channel},
+               "units": units,
                "statuses": statuses,
                "first_inconsistent_step": first,
                "first_inconsistent_time": (None if first is None or not times_known
@@ -321,16 +370,18 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from .plotting import plot_estimate_band
+        from .plotting import plot_estimate_band, plot_state_band
 
-        n_pan = sys_.q + (sys_.n if states else 0)
+        n_pan = sys_.q + (2 * sys_.n if states else 0)
         fig, axes = plt.subplots(n_pan, 1, figsize=(8, 2.6 * n_pan), sharex=True,
                                  squeeze=False)
+        tt = rec.t if times_known else None
         for i in range(sys_.q):
-            plot_estimate_band(res, component=i, ax=axes[i, 0],
-                               t=rec.t if times_known else None, unit=unit)
+            plot_estimate_band(res, component=i, ax=axes[i, 0], t=tt,
+                               unit=units.get(sys_.disturbance_names[i]))
         for i in range(sys_.n if states else 0):
-            res.plot(ax=axes[sys_.q + i, 0], component=i, states=True)
+            plot_state_band(res, component=i, t=tt, unit=units.get(sys_.state_names[i]),
+                            axes=(axes[sys_.q + 2 * i, 0], axes[sys_.q + 2 * i + 1, 0]))
         what = "disturbance" if not states else ("state" if not sys_.q else
                                                  "disturbance and state")
         axes[0, 0].set_title(f"certified {what} bounds: {Path(record).name}")
@@ -458,16 +509,34 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "--noise shape (calibrate_noise(per_channel=True))")
     pe.add_argument("--time-limit", type=float, default=120.0,
                     help="with --calibrate: seconds each LP solver may take (default 120)")
+    pe.add_argument("--holdout", type=float, default=0.3,
+                    help="with --calibrate: fraction of the record (its end) held out to "
+                         "validate the bound (default 0.3; 0: none)")
+    pe.add_argument("--max-outliers", type=int, default=0,
+                    help="with --calibrate: remove up to this many samples that raise the "
+                         "bound most (named in the output; the run ignores them)")
+    pe.add_argument("--max-skip-fraction", type=float, default=0.01,
+                    help="with --on-inconsistent skip: stop (exit 1) once more than this "
+                         "fraction of the samples were skipped (default 0.01)")
     pe.add_argument("--window", default="10", help="SMFDO window (the paper's delta), or 'exact'")
     pe.add_argument("--on-inconsistent", choices=["raise", "skip", "reset"], default="raise",
                     help="what to do with a sample the model cannot explain: 'raise' "
                          "(default) stops at the first one with exit code 1, saying the step, "
-                         "its time and what to do; 'skip' drops such samples (a run that "
-                         "skips more than 1 %% of them says so on stderr); 'reset' restarts "
-                         "the filter there (the guarantee is lost at that step)")
+                         "its time and what to do; 'skip' drops such samples, up to "
+                         "--max-skip-fraction of them (then it stops, exit 1; the CSV's "
+                         "after_skip column marks the steps after the first skip: their "
+                         "guarantee is for the record without those samples); 'reset' "
+                         "restarts the filter there (the guarantee is lost at that step)")
     pe.add_argument("--states", action="store_true",
                     help="also write the certified state bounds (<state>_lo, <state>_hi)")
-    pe.add_argument("--unit", help="unit of the disturbance, for the plot's axis (e.g. 'N m')")
+    pe.add_argument("--unit", action="append",
+                    help="a signal's unit for the plot's axes, NAME=UNIT (e.g. "
+                         "omega=rad/s; repeat for more; over the model file's units:); a "
+                         "plain UNIT labels the disturbances (e.g. 'N m')")
+    pe.add_argument("--safety", type=float, default=None,
+                    help="with --calibrate: relative safety added to the validated bound "
+                         "(default 0.1: 10 %%; 0 uses the validated bound itself, whose "
+                         "bands collapse where it is attained)")
     pe.add_argument("--out", help="output directory")
     pe.add_argument("--no-plot", action="store_true")
     pe.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None)
@@ -505,7 +574,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                             on_inconsistent=args.on_inconsistent, unit=args.unit,
                             states=args.states, process_noise=args.process_noise,
                             restart=args.restart, per_channel=args.per_channel,
-                            time_limit=args.time_limit)
+                            time_limit=args.time_limit, holdout=args.holdout,
+                            max_outliers=args.max_outliers,
+                            max_skip_fraction=args.max_skip_fraction, safety=args.safety)
         return study(args.config, args.dask, args.out, args.processes)
     except BrokenPipeError:
         # the reader went away (setobs check all | head -1): not an error of ours

@@ -11,8 +11,13 @@ Model files hold matrices in either naming:
 Optional keys: ``Ts`` (or ``dt``) the sampling time; ``continuous: true`` for
 a continuous-time model, discretised with a zero-order hold at ``Ts`` (MATLAB's
 ``Ts = 0`` also means continuous); ``state_names``, ``input_names``,
-``output_names``, ``disturbance_names``. Anything wrong raises
-:class:`ModelFileError` with one line saying what and where.
+``output_names``, ``disturbance_names`` (lists of names: the columns of a result's
+table, ``<name>_lo`` and ``<name>_hi``, and the plots' labels; defaults ``x0, x1, ...``,
+``u0, ...``, ``y0, ...``, ``d0, ...``); ``units``, a mapping from signal names to
+units (``{theta: rad, omega: rad/s, tau_L: N m}``, read by :func:`model_units`; the
+CLI's plots label their axes with them). Any other key is refused, with the known
+keys listed (a misspelt ``state_name`` is an error, not a silent default). Anything
+wrong raises :class:`ModelFileError` with one line saying what and where.
 """
 
 from __future__ import annotations
@@ -30,10 +35,15 @@ from ._lazy import optional_import
 from .exceptions import ModelFileError
 from .systems import LinearSystem
 
-__all__ = ["ModelFileError", "Record", "load_model", "load_record"]
+__all__ = ["ModelFileError", "Record", "load_model", "load_record", "model_units"]
 
 _KEYS = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
          "Gamma": ("Gamma", "B", "B0"), "Du": ("Du", "D")}
+_NAME_KEYS = ("state_names", "input_names", "output_names", "disturbance_names")
+#: Every key a model file may have (the matrices under any of their names).
+MODEL_KEYS = tuple(sorted({k for names in _KEYS.values() for k in names}
+                          | {"Ts", "dt", "continuous", "disturbance_inputs", "units",
+                             *_NAME_KEYS}, key=str.lower))
 
 def _read_mapping(p: Path) -> dict[str, Any]:
     if not p.exists():
@@ -132,7 +142,19 @@ def load_model(path: str | Path, *, dt: float | None = None) -> LinearSystem:
         raise ModelFileError(f"{p}: {exc}") from None
 
 
+def _check_keys(data: dict, p: Path) -> None:
+    unknown = sorted(set(data) - set(MODEL_KEYS))
+    if unknown:
+        import difflib
+
+        hints = [f"{k!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(
+            k, MODEL_KEYS, n=1)) else repr(k) for k in unknown]
+        raise ModelFileError(f"{p}: unknown key(s) {', '.join(hints)}; a model file's keys "
+                             f"are {', '.join(MODEL_KEYS)}")
+
+
 def _system_from_mapping(data: dict, dt: float | None, p: Path) -> LinearSystem:
+    _check_keys(data, p)
     Phi = _matrix(data, "Phi")
     Xi = _matrix(data, "Xi")
     if Phi is None:
@@ -170,10 +192,56 @@ def _system_from_mapping(data: dict, dt: float | None, p: Path) -> LinearSystem:
         raise ModelFileError(
             f"{p}: the disturbance channels are not stated: give G (accepted names: G, E, F), "
             "or disturbance_inputs (the columns of B that are disturbances)")
-    names = {k: _names(data, k) for k in ("state_names", "input_names", "output_names",
-                                          "disturbance_names")}
-    return LinearSystem.from_matrices(A=Phi, C=Xi, B=B, D=D, G=G, disturbance_inputs=dist,
+    names = {k: _names(data, k) for k in _NAME_KEYS}
+    sys_ = LinearSystem.from_matrices(A=Phi, C=Xi, B=B, D=D, G=G, disturbance_inputs=dist,
                                       dt=Ts, continuous=continuous, **names)
+    _units(data, sys_, p)  # refuse a bad units: mapping when the model is loaded
+    return sys_
+
+
+def _units(data: dict, sys_: LinearSystem, p: Path) -> dict[str, str]:
+    if "units" not in data:
+        return {}
+    v = data["units"]
+    if not isinstance(v, dict) or not all(isinstance(u, str | int | float)
+                                          for u in v.values()):
+        raise ModelFileError(f"{p}: units must be a mapping from signal names to units "
+                             f"(e.g. {{theta: rad, omega: rad/s}}), got {str(v)[:60]!r}")
+    known = [*sys_.state_names, *sys_.output_names, *sys_.input_names,
+             *sys_.disturbance_names]
+    bad = sorted(str(k) for k in v if str(k) not in known)
+    if bad:
+        raise ModelFileError(f"{p}: units names unknown signal(s) {bad}; the model's "
+                             f"signals are {', '.join(dict.fromkeys(known))}")
+    return {str(k): str(u) for k, u in v.items()}
+
+
+def model_units(path: str | Path, *, dt: float | None = None) -> dict[str, str]:
+    """The ``units`` of a model file: ``{signal name: unit}`` (empty without the key).
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (as for :func:`load_model`).
+    dt : float, optional
+        As for :func:`load_model` (the model is built to check the names).
+
+    Returns
+    -------
+    dict of str to str
+        The unit of each signal named under ``units`` (states, outputs, inputs,
+        disturbances by their names).
+
+    Raises
+    ------
+    ModelFileError
+        As :func:`load_model`; also when ``units`` is not a mapping or names a
+        signal the model does not have.
+    """
+    p = Path(path)
+    data = _read_mapping(p)
+    sys_ = load_model(p, dt=dt)
+    return _units(data, sys_, p)
 
 
 @dataclass(frozen=True)

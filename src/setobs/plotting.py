@@ -14,7 +14,8 @@ from numpy.typing import ArrayLike
 from .geometry._draw import plot_set
 from .results import time_axis
 
-__all__ = ["plot_comparison_bars", "plot_error_curves", "plot_estimate_band", "plot_set"]
+__all__ = ["plot_comparison_bars", "plot_error_curves", "plot_estimate_band", "plot_set",
+           "plot_state_band"]
 
 
 def _ax(ax):
@@ -80,6 +81,102 @@ def plot_estimate_band(result: Any, truth: ArrayLike | None = None, component: i
         if lim is not None:
             ax.set_ylim(*lim)
     return ax
+
+
+def plot_state_band(result: Any, component: int = 0, axes: Any = None, *,
+                    truth: ArrayLike | None = None, truth_error: ArrayLike | None = None,
+                    t: ArrayLike | None = None, unit: str | None = None,
+                    truth_label: str = "truth") -> Any:
+    """A certified state band a person can read: the band's centre with the band on
+    top, and below it the band around its centre (``lo - centre``, ``hi - centre``,
+    i.e. minus and plus the half-width) with the truth's deviation from the centre.
+
+    A state such as a motor angle spans thousands of radians while its band is a
+    fraction of one: drawn on the state's own axis the band is a line. The lower
+    panel shows what the guarantee says (how wide, and whether a reference lies
+    inside).
+
+    Parameters
+    ----------
+    result : SMFDOResult
+        A result with state bounds (``state_bounds=True``).
+    component : int
+        State component to draw.
+    axes : pair of matplotlib Axes, optional
+        Where to draw (default: a new figure with two panels sharing the time axis).
+    truth : array_like, shape (N,) or (N, n), optional
+        A reference for the state (the true state in a simulation, an independent
+        measurement on a record); with shape ``(N, n)`` its column ``component``.
+    truth_error : array_like, shape (N,), optional
+        The reference's own error bound, drawn in the lower panel as a grey region
+        around the reference's deviation.
+    t : array_like, shape (N,), optional
+        Time axis (default ``k dt`` from the result's sampling time, else ``k``).
+    unit : str, optional
+        The state's unit, in both y labels (``"omega [rad/s]"``).
+    truth_label : str
+        Legend label of the reference.
+
+    Returns
+    -------
+    tuple of matplotlib Axes
+        The two panels.
+    """
+    import matplotlib.pyplot as plt
+
+    from .exceptions import DimensionError
+
+    lo_all, hi_all = getattr(result, "state_lo", None), getattr(result, "state_hi", None)
+    if lo_all is None or hi_all is None:
+        raise DimensionError("no state bounds in this result: run the SMFDO with "
+                             "state_bounds=True")
+    n = lo_all.shape[1]
+    if not 0 <= component < n:
+        raise DimensionError(f"component must be in 0..{n - 1}, got {component}")
+    if axes is None:
+        _, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 4.5))
+    ax_top, ax_dev = axes
+    N = lo_all.shape[0]
+    k = (np.asarray(t, dtype=float)[:N] if t is not None
+         else time_axis(N, getattr(result, "dt", None)))
+    lo, hi = lo_all[:, component], hi_all[:, component]
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    mid = np.full(N, np.nan)
+    mid[ok] = 0.5 * (lo[ok] + hi[ok])
+    names = tuple(getattr(result, "state_names", ()) or ())
+    name = names[component] if len(names) > component else f"x{component}"
+    lab = f"{name} [{unit}]" if unit else name
+    ref = None
+    if truth is not None:
+        ref = np.asarray(truth, dtype=float)
+        ref = ref[:, component] if ref.ndim == 2 else ref.reshape(-1)
+        ref = ref[:N]
+    ax_top.fill_between(k[ok], lo[ok], hi[ok], alpha=0.3, label="certified band")
+    ax_top.plot(k, mid, lw=1.0, label="band centre")
+    if ref is not None:
+        ax_top.plot(k[: ref.size], ref, "k--", lw=0.8, label=truth_label)
+    ax_top.set_ylabel(lab)
+    ax_top.legend(loc="best", fontsize=7)
+    half = np.where(ok, 0.5 * (hi - lo), np.nan)
+    ax_dev.fill_between(k[ok], -half[ok], half[ok], alpha=0.3,
+                        label="band - centre (+- half-width)")
+    ax_dev.axhline(0.0, lw=0.6, color="0.4")
+    if ref is not None:
+        dev = ref - mid[: ref.size]
+        if truth_error is not None:
+            err = np.asarray(truth_error, dtype=float).reshape(-1)[: ref.size]
+            fin = np.isfinite(dev) & np.isfinite(err)
+            ax_dev.fill_between(k[: ref.size][fin], (dev - err)[fin], (dev + err)[fin],
+                                color="0.5", alpha=0.25, lw=0,
+                                label=f"{truth_label} +- its error bound")
+        ax_dev.plot(k[: ref.size], dev, "k.", ms=1.5, label=f"{truth_label} - centre")
+    ax_dev.set_ylabel(f"{name} - centre" + (f" [{unit}]" if unit else ""))
+    ax_dev.set_xlabel("time [s]" if t is not None or getattr(result, "dt", None) else "k")
+    ax_dev.legend(loc="best", fontsize=7)
+    lim = _steady_range([half, -half])
+    if lim is not None:
+        ax_dev.set_ylim(*lim)
+    return ax_top, ax_dev
 
 
 def _steady_range(series: list[ArrayLike], startup: float = 0.05,

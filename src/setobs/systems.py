@@ -56,6 +56,16 @@ def _names(param: str, prefix: str, given: Sequence[str] | None, count: int
     return names
 
 
+def _own_default(labels: list[str], prefix: str) -> list[str] | None:
+    """python-control's generated labels (``x[0], x[1], ...``) become setobs's own
+    defaults (``x0, x1, ...``: ``None``), so that a table's columns are spelled the same
+    (``x0_lo``) whether the model came from python-control or from a model file; names
+    a user gave are kept."""
+    if all(lab == f"{prefix}[{i}]" for i, lab in enumerate(labels)):
+        return None
+    return labels
+
+
 class LinearSystem:
     """``x[k+1] = Phi x[k] + Gamma u[k] + G d[k]``, ``y[k] = Xi x[k] + D_u u[k]``.
 
@@ -384,7 +394,9 @@ class LinearSystem:
             (then discretised with a zero-order hold, the disturbance held
             constant over a sample). Its ``D`` columns of the control inputs
             become the feedthrough ``Du``; those of the disturbances must be zero.
-            Signal names (``ss.input_labels``, ...) are kept.
+            Signal names (``ss.input_labels``, ...) are kept, except python-control's
+            generated ones (``x[0]``, ``u[1]``, ...), which become setobs's defaults
+            (``x0``, ``u1``, ...: one spelling of a table's columns, ``x0_lo``).
         disturbance_inputs : sequence of int or str
             Indices or names (``ss.input_labels``) of the inputs that are
             disturbances; the others are control inputs (empty: no disturbance,
@@ -400,7 +412,9 @@ class LinearSystem:
         A, B, C, D = (np.asarray(M, dtype=float) for M in (ss.A, ss.B, ss.C, ss.D))
         labels = {key: list(getattr(ss, f"{key}_labels", None) or [])
                   for key in ("state", "input", "output")}
-        names = {f"{key}_names": (v if len(v) == dim else None) for (key, v), dim in
+        names = {f"{key}_names": (_own_default(v, {"state": "x", "input": "u", "output": "y"}[key])
+                                if len(v) == dim else None)
+                 for (key, v), dim in
                  zip(labels.items(), (A.shape[0], B.shape[1], C.shape[0]), strict=True)}
         ss_dt = ss.dt
         continuous = ss_dt is not None and ss_dt is not True and float(ss_dt) == 0.0
@@ -416,6 +430,18 @@ class LinearSystem:
                                      f"{ss_dt}")
             if dt is None:
                 dt = None if ss_dt in (None, True) else float(ss_dt)
+        if names["input_names"] is None and labels["input"]:
+            # python-control's generated input labels (u[0], ...) still name the inputs
+            gen = labels["input"]
+            items = ([disturbance_inputs] if isinstance(disturbance_inputs, str)
+                     else disturbance_inputs)
+            if isinstance(items, list | tuple) and any(isinstance(i, str) for i in items):
+                for i in items:
+                    if isinstance(i, str) and i not in gen:
+                        raise DimensionError(f"disturbance_inputs: no input named {i!r} "
+                                             f"(inputs {gen})")
+                disturbance_inputs = [gen.index(i) if isinstance(i, str) and i in gen else i
+                                      for i in items]
         return cls.from_matrices(A=A, B=B, C=C, D=D, disturbance_inputs=disturbance_inputs,
                                  dt=dt, continuous=continuous, **names)
 

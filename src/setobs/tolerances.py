@@ -24,6 +24,7 @@ Policy
 from __future__ import annotations
 
 __all__ = [
+    "CALIBRATION_ACTIVE_RTOL",
     "CALIBRATION_ATOL",
     "CALIBRATION_CHECK_TOL",
     "CALIBRATION_RTOL",
@@ -262,6 +263,10 @@ CALIBRATION_ATOL: float = 1e-9
 #: A solver's answer to the calibration LP is accepted when no row of the centred,
 #: scaled LP is violated by more than this times ``1 + max |variable|``.
 CALIBRATION_CHECK_TOL: float = 1e-7
+#: Relative distance of a residual below the bound within which its sample counts as
+#: active (``NoiseCalibration.active_samples``): the refined LP's accuracy is about
+#: 1e-9, so a sample within 1e-6 of the bound is where the bound is attained.
+CALIBRATION_ACTIVE_RTOL: float = 1e-6
 
 # ---- nonlinear modular observer (setobs.nonlinear, setobs.analysis.modular)
 #: Largest ``|f(0, 0)|``, ``|s(0)|``, ``|h(0, 0)|`` accepted as an equilibrium at

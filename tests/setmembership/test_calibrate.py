@@ -17,7 +17,8 @@ from tests.datasets import HSM150, noisy_record
 def _consistent(sys, Y, U, inc, radii, process_noise=None):
     """The exact SMFDO (whole history) finds a nonempty set at every step."""
     obs = so.SMFDO(sys, window=None, increment_set=inc, measurement_noise=radii,
-                   process_noise=process_noise, on_inconsistent="skip", data_rtol=0.0)
+                   process_noise=process_noise, on_inconsistent="skip", data_rtol=0.0,
+                   max_skip_fraction=1.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ModelInvalidatedWarning)
         return obs.run(Y, U).consistent
@@ -45,7 +46,7 @@ def test_scale_matches_bisection_with_the_exact_smfdo(case):
         U = 0.05 * np.ones((25, 1))
         inc, shape = np.array([0.01]), [1e-3]
     Y = noisy_record(sys, 25, rng, inc, 0.05 * np.asarray(shape), U)
-    cal = so.calibrate_noise(sys, Y, U, increment=inc, shape=shape)
+    cal = so.calibrate_noise(sys, Y, U, increment=inc, shape=shape, holdout=0)
     radii = np.asarray(shape, float)
     lo, hi = _bisect(lambda a: _consistent(sys, Y, U, inc, a * radii), 0.0, 1.0)
     assert lo <= cal.scale * (1 + 1e-3) and cal.scale <= hi * (1 + 1e-3), (lo, hi, cal.scale)
@@ -87,7 +88,7 @@ def test_tradeoff_curve_is_monotone_and_consistent_with_calibration():
     Y = noisy_record(sys, 40, rng, np.array([0.3, 0.3]), 0.02)
     curve = so.noise_tradeoff(sys, Y, increment=[1.0, 1.0], betas=[0.01, 0.1, 1.0, 10.0])
     assert np.all(np.diff(curve.alpha) <= 1e-9)
-    one = so.calibrate_noise(sys, Y, increment=[0.1, 0.1])
+    one = so.calibrate_noise(sys, Y, increment=[0.1, 0.1], holdout=0)
     assert abs(curve.alpha[1] - one.scale) <= 1e-7
     import matplotlib
 

@@ -111,7 +111,7 @@ def test_regression_lp_is_solved_not_crashed(tmp_path):
     consistent at 2.1221931). The issue quoted 2.12218 from a solve at cvxpy's default
     tolerances (1e-8), which stops 1e-5 short: a number checked, not copied."""
     Y, U = regression_record(tmp_path)
-    cal = so.calibrate_noise(exchanger_model(), Y, U, increment=1e-3)
+    cal = so.calibrate_noise(exchanger_model(), Y, U, increment=1e-3, holdout=0)
     opt, upper = io_oracle(Y, U, 1e-3)
     assert 2.122192 < opt <= upper < 2.1221935
     assert cal.status == "optimal" and cal.info["solver"] == "clarabel"
@@ -128,7 +128,7 @@ def test_sweep_of_lengths_and_increments_matches_independent_solve(N):
     Y, U = exchanger_like(N, np.random.default_rng(N))
     sys_ = exchanger_model()
     for inc in (5e-4, 2e-3, 1e-2):
-        cal = so.calibrate_noise(sys_, Y, U, increment=inc)
+        cal = so.calibrate_noise(sys_, Y, U, increment=inc, holdout=0)
         opt, upper = io_oracle(Y, U, inc)
         assert opt <= upper * (1 + 1e-9)
         assert abs(cal.scale - opt) <= 1e-6 * opt, (N, inc, cal.scale, opt)
@@ -180,7 +180,7 @@ def test_noise_free_record_gets_the_documented_floor():
     not a fixed absolute number."""
     sys_ = so.LinearSystem([[1.0]], [[1.0]], [[1.0]])
     Y = np.array([[0.0], [1.0], [2.0], [3.0], [4.0], [5.0], [6.0], [7.0], [8.0]])
-    cal = so.calibrate_noise(sys_, Y, increment=0.0)
+    cal = so.calibrate_noise(sys_, Y, increment=0.0, holdout=0)
     assert cal.minimal[0] < 1e-9
     assert cal.info["data_scale"] == pytest.approx(4.0)
     floor = so.tolerances.CALIBRATION_ATOL * 4.0

@@ -140,7 +140,7 @@ def record_lp(sys, Y, U, inc, rw=None, alpha=None):
 def calibrate_quietly(*args, **kwargs):
     with warnings.catch_warnings(record=True) as wl:
         warnings.simplefilter("always")
-        cal = so.calibrate_noise(*args, **kwargs)
+        cal = so.calibrate_noise(*args, holdout=0, **kwargs)
     return cal, [w for w in wl if issubclass(w.category, SolverWarning)]
 
 

@@ -296,7 +296,7 @@ def test_skip_drops_outliers_soundly_and_equals_missing_samples():
     with pytest.raises(ModelInvalidatedError) as err:
         so.SMFDO(sys, window=None, **kw).run(Y)
     assert err.value.step == 12
-    obs = so.SMFDO(sys, window=None, on_inconsistent="skip", **kw)
+    obs = so.SMFDO(sys, window=None, on_inconsistent="skip", max_skip_fraction=0.1, **kw)
     with pytest.warns(ModelInvalidatedWarning) as rec:
         res = obs.run(Y)
     assert len(rec) == 1 and "2 of 40" in str(rec[0].message)
@@ -321,7 +321,7 @@ def test_skip_drops_outliers_soundly_and_equals_missing_samples():
 def test_skip_in_windowed_mode_keeps_the_window_sound(fast):
     sys, Y, D, r_inc, r_v = _with_outliers()
     obs = so.SMFDO(sys, window=5, increment_set=r_inc, measurement_noise=r_v,
-                   on_inconsistent="skip", fast=fast)
+                   on_inconsistent="skip", fast=fast, max_skip_fraction=0.1)
     with pytest.warns(ModelInvalidatedWarning):
         res = obs.run(Y)
     assert list(np.flatnonzero(res.status == "skipped")) == [12, 25]
@@ -347,7 +347,7 @@ def test_compare_refuses_a_reference_with_skips_unless_told():
     sys, Y, D, r_inc, r_v = _with_outliers()
     with pytest.warns(ModelInvalidatedWarning):
         ref = so.SMFDO(sys, window=5, increment_set=r_inc, measurement_noise=r_v,
-                       on_inconsistent="skip").run(Y)
+                       on_inconsistent="skip", max_skip_fraction=0.1).run(Y)
     est = {"truth": D}
     with pytest.raises(ValueError, match=r"status \['skipped'\].*first at record step 12"):
         so.compare.compare(est, ref)

@@ -108,7 +108,8 @@ def test_inconsistent_noisy_record_is_invalidated_after_another_highs_user(windo
     """Reproducer noisy_inconsistent_not_flagged.py: below the calibrated bound the
     independent LP says infeasible, and the SMFDO must raise, not fall back."""
     Y = _record()
-    minimal = float(so.calibrate_noise(so.LinearSystem(PHI, G, XI), Y, increment=RD).minimal[0])
+    minimal = float(so.calibrate_noise(so.LinearSystem(PHI, G, XI), Y, increment=RD,
+                                     holdout=0).minimal[0])
     assert _feasible(Y, minimal * (1 + 1e-6)) and not _feasible(Y, 0.9 * minimal)
 
     def run(factor):
@@ -312,7 +313,7 @@ def test_exact_mode_at_the_calibrated_bound_equals_the_whole_history_lp(seed, st
     Phi, G_, Xi, Gam, rd, rv, Y, U = campaign_record(seed)
     s = so.LinearSystem(Phi, G_, Xi, Gam if Gam.shape[1] else None)
     Ua = U if Gam.shape[1] else None
-    cal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv)
+    cal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv, holdout=0)
     res = so.SMFDO(s, window=None, increment_set=rd, measurement_noise=cal.radii).run(Y, Ua)
     assert set(np.unique(res.status)) <= {"ok", "unbounded"}
     for k in steps:
@@ -362,7 +363,7 @@ def test_exact_mode_at_the_minimal_noise_bound_is_exact_and_below_it_invalidated
     np.testing.assert_allclose(rv, [0.01072969, 2.81311208], rtol=1e-6)
     s = so.LinearSystem(Phi, G_, Xi, Gam if Gam.shape[1] else None)
     Ua = U if Gam.shape[1] else None
-    minimal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv).minimal
+    minimal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv, holdout=0).minimal
     obs = so.SMFDO(s, window=None, increment_set=rd, measurement_noise=minimal)
     with warnings.catch_warnings():
         warnings.simplefilter("error", so.SolverWarning)
@@ -405,7 +406,7 @@ def campaign_seed(seed: int) -> dict:
     out = {"seed": seed, "n": s.n, "q": s.q, "l": s.l, "p": s.p}
     if not so.analysis.bounded_do_exists(s).satisfied:
         return {**out, "skipped": "Theorem 1 fails"}
-    cal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv)
+    cal = so.calibrate_noise(s, Y, Ua, increment=rd, shape=rv, holdout=0)
     out["fallback"], out["lp_excess"] = {}, {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", so.SolverWarning)

@@ -54,6 +54,10 @@ class SMFDOStep:
         Certified interval hull of the consistent states ``x_k`` (with
         ``state_bounds=True``; ``+-inf`` for a state that depends on the
         unobservable part, or while unbounded), else ``None``.
+    after_skip : bool
+        Whether a step up to this one (this one included) was skipped or reset
+        (``on_inconsistent``): the bands then hold for the model with the skipped
+        samples discarded (or from the reset set), not for the record itself.
     """
 
     k: int
@@ -65,6 +69,7 @@ class SMFDOStep:
     status: str = "ok"
     state_lo: NDArray[np.float64] | None = None
     state_hi: NDArray[np.float64] | None = None
+    after_skip: bool = False
 
     radius = renamed("radius", "error_bound")
 
@@ -115,6 +120,10 @@ class SMFDOResult:
         Certified interval hulls of the consistent states (``state_bounds=True``).
     state_names : tuple of str
         The state names (for tables).
+    after_skip : ndarray of bool, shape (N,)
+        True from the first skipped or reset step on (:attr:`SMFDOStep.after_skip`):
+        those bands hold for the model with the skipped samples discarded, not for
+        the record.
     """
 
     estimate: NDArray[np.float64]
@@ -129,6 +138,7 @@ class SMFDOResult:
     state_lo: NDArray[np.float64] | None = None
     state_hi: NDArray[np.float64] | None = None
     state_names: tuple[str, ...] = ()
+    after_skip: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     radius = renamed("radius", "error_bound")
 
@@ -196,7 +206,9 @@ class SMFDOResult:
             Disturbance component (with ``states``: state component).
         states : bool
             Draw the certified state interval ``[state_lo, state_hi]`` (and its
-            centre) instead (a result of ``state_bounds=True``).
+            centre) instead (a result of ``state_bounds=True``); for a state whose
+            band is narrow against its range (a motor angle) use
+            :func:`setobs.plotting.plot_state_band`, which draws it around its centre.
 
         Returns
         -------
@@ -267,7 +279,8 @@ class SMFDOResult:
     def to_pandas(self, dt: float | None = None, names: Sequence[str] | None = None) -> Any:
         """A ``pandas.DataFrame``: per disturbance ``name``, ``name_lo``, ``name_hi``
         (the estimate and its certified interval), then ``error_bound`` and ``status``;
-        with state bounds, per state ``name_lo`` and ``name_hi`` after them.
+        with state bounds, per state ``name_lo`` and ``name_hi`` after them. A run with
+        skipped or reset steps has an ``after_skip`` column after ``status``.
 
         The index is the time ``k dt`` (named ``"time"``) when a sampling time is
         known (``dt`` or the system's), else the step ``k``.
@@ -298,6 +311,8 @@ class SMFDOResult:
             cols[f"{name}_hi"] = self.hi[:, i]
         cols["error_bound"] = self.error_bound
         cols["status"] = self.status if self.status.size == N else np.full(N, "ok")
+        if self.after_skip.size == N and self.after_skip.any():
+            cols["after_skip"] = self.after_skip
         if self.state_lo is not None and self.state_hi is not None:
             n = self.state_lo.shape[1]
             xn = list(self.state_names) or [f"x{i}" for i in range(n)]

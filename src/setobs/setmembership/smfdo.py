@@ -114,6 +114,16 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         one per observer.
     reset : {"raise", "box"}, optional
         Deprecated spelling of ``on_inconsistent`` (``"box"`` is ``"reset"``).
+    max_skip_fraction : float
+        With ``on_inconsistent="skip"``: once more than this fraction of the samples
+        were skipped (of the record given to :meth:`run`, or of the steps so far for
+        :meth:`update`; counted over at least ``1 / max_skip_fraction`` samples, so
+        that a short record may lose one outlier; 0: no skip at all), the run stops
+        with a :class:`ModelInvalidatedError` naming the fraction (default 0.01: a
+        bound that 80 % of a record contradicts is a wrong bound, not outliers).
+        Every step from the first skipped or reset one on is flagged
+        (``step.after_skip``, ``result.after_skip``): its bands hold for the model with
+        those samples discarded, not for the record.
     reset_inflation : float
         Positive initial inflation factor of the reset box.
     margin : float
@@ -300,8 +310,14 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         restart: str = "auto",
         restart_depth: int = DEFAULT_RESTART_DEPTH,
         disturbance_inputs: DisturbanceInputs = None,
+        max_skip_fraction: float = 0.01,
     ) -> None:
         sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
+        self.max_skip_fraction = check_real_scalar("max_skip_fraction", max_skip_fraction,
+                                                   nonnegative=True)
+        if self.max_skip_fraction > 1.0:
+            raise DimensionError(f"max_skip_fraction is a fraction in [0, 1], got "
+                                 f"{max_skip_fraction!r}")
         window = check_window(window)
         if reset is not None:
             if reset not in ("raise", "box"):
@@ -381,6 +397,9 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self._ubar_prev = None  # (the hull of Z_(k-1): the tracker's input)
         self._startup_Z = None  # the start-up's joint set of (z_o, zbar) (see _unobservable)
         self._startup_steps = 0
+        self._skipped = 0  # skipped steps since k = 0 (max_skip_fraction)
+        self._after_skip = False  # a step was skipped or reset since k = 0
+        self._run_length = 0  # the record length run() is processing (0: update() alone)
         self._auto_poly = True  # restart="auto": the polytope restart is in use
         self._auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
         self._set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
@@ -512,9 +531,36 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             # the last step was a window small enough for BLAS to run single-threaded
             # by itself (setobs._blas.SMALL_BLAS_DIM): the limit's four thread-count
             # calls (a tenth of such a step) are skipped; only speed depends on it
-            return self._update(y, u_prev, u)
+            step = self._update(y, u_prev, u)
+            if step.status == "skipped":
+                self._count_skip(step.k)
+            return step
         with single_threaded_blas():
-            return self._update(y, u_prev, u)
+            step = self._update(y, u_prev, u)
+        if step.status == "skipped":
+            self._count_skip(step.k)
+        return step
+
+    def _count_skip(self, k: int) -> None:
+        """Count a skipped step; stop once more than ``max_skip_fraction`` of the
+        samples (of the record being run, else of the steps so far; at least
+        ``1 / max_skip_fraction`` samples, so that one outlier of a short record may
+        be skipped) were skipped."""
+        self._skipped += 1
+        f = self.max_skip_fraction
+        total = self._run_length or k + 1
+        if f > 0:
+            total = max(total, int(np.ceil(1.0 / f)))
+        if self._skipped > f * total:
+            raise ModelInvalidatedError(
+                f"{self._skipped} of the {k + 1} samples so far were skipped as inconsistent "
+                f"(more than max_skip_fraction = {100 * f:g} % of {total} samples; the "
+                f"first at step {self.first_inconsistent}): so many samples contradict the "
+                "model that the bounds, not the samples, are wrong", k,
+                self._hint())
+
+    def _hint(self) -> str:
+        return ModelInvalidatedError.HINT if self.sys.q else ModelInvalidatedError.HINT_STATE
 
     def _update(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
                 ) -> SMFDOStep:
@@ -550,7 +596,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
 
     @with_single_threaded_blas
     def run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
-            progress: bool = False) -> SMFDOResult:
+            progress: bool = False, ignore: ArrayLike | None = None) -> SMFDOResult:
         """Process a whole record from the current state.
 
         Parameters
@@ -568,6 +614,11 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             step of the next call.
         progress : bool
             Show a progress bar (tqdm, on stderr) over the record.
+        ignore : array_like, optional
+            Samples to ignore: a boolean mask of length ``N`` or sample indices (e.g.
+            :attr:`NoiseCalibration.ignored <setobs.setmembership.NoiseCalibration.ignored>`,
+            the outliers a calibration removed); their measurements are treated as
+            missing (NaN), so the bands hold for the record without them.
 
         Returns
         -------
@@ -582,6 +633,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         """
         Ya = as_matrix("Y", Y, cols=self.sys.l, allow_nan=True)
         N = Ya.shape[0]
+        if ignore is not None:
+            Ya[_ignore_mask(ignore, N)] = np.nan
         if Ya.size:
             missing = float(np.isnan(Ya).mean())
             if missing == 1.0 and self.k < 0:
@@ -618,6 +671,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         with_u = self._Du is not None
         bar = progress_bar(progress, total=N, unit="step", desc="SMFDO", mininterval=0.5)
         self._in_run = True
+        self._run_length = N + max(self.k + 1, 0)
         try:
             for j in range(N):
                 if j % 200 == 0 and j:
@@ -627,6 +681,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             bar.update(N - bar.n)
         finally:
             self._in_run = False
+            self._run_length = 0
             bar.close()
         if Ua is not None and Ua.shape[0] == N and N:
             self._u_pending = Ua[N - 1].copy()
@@ -654,6 +709,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             self.sys.dt,
             tuple(self.sys.disturbance_names),
             *self._state_arrays(steps),
+            np.array([s.after_skip for s in steps], dtype=bool),
         )
 
     def _state_arrays(self, steps: list[SMFDOStep]):
@@ -668,3 +724,21 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
     def __repr__(self) -> str:
         mode = "exact" if self.window is None else f"window={self.window}"
         return f"SMFDO({self.sys!r}, {mode}, k={self.k})"
+
+
+def _ignore_mask(ignore: ArrayLike, N: int) -> NDArray[np.bool_]:
+    """``ignore`` (a boolean mask of length ``N`` or sample indices) as a mask."""
+    a = np.asarray(ignore)
+    if a.dtype == bool:
+        if a.shape != (N,):
+            raise DimensionError(f"ignore must be a boolean mask of length N = {N} or sample "
+                                 f"indices, got a mask of shape {a.shape}")
+        return a
+    if a.size and (a.dtype.kind not in "iu" or a.ndim != 1):
+        raise DimensionError("ignore must be a boolean mask of length N or a 1-D array of "
+                             f"sample indices, got {a.dtype} of shape {a.shape}")
+    if a.size and (a.min() < 0 or a.max() >= N):
+        raise DimensionError(f"ignore holds sample indices outside [0, {N - 1}]")
+    m = np.zeros(N, dtype=bool)
+    m[a.astype(np.int64)] = True
+    return m
