@@ -344,6 +344,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
                    "margin": cal.margin.tolist(), "radii": cal.radii.tolist(),
                    "holdout": cal.holdout, "safety": cal.safety,
                    "active_samples": cal.active_samples.tolist(),
+                   "validated_samples": cal.validated_samples.tolist(),
                    "outliers": [int(o.sample) for o in cal.outliers],
                    "scale": cal.scale, "status": cal.status, "per_channel": per_channel},
                "units": units,

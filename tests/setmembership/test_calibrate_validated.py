@@ -218,6 +218,21 @@ def test_skipping_stops_at_its_limit_and_flags_every_later_step():
                 obs.update(Y[k], U[k - 1] if k else None)
 
 
+def test_a_glitch_in_the_held_out_part_is_where_validated_is_attained():
+    """A glitch of 0.15 at sample 250 (held out) on a 0.01 record: the margin is its
+    doing; validated is attained there, and without that sample the LP (written here)
+    needs about the first part's bound again."""
+    sys_, Y, U = record(7, glitches=((250, 0.15),))
+    cal = so.calibrate_noise(sys_, Y, U, increment=INC)
+    assert cal.validated_samples[0] == 250 and cal.margin[0] > 2.0
+    assert "validated bound is attained at sample(s) 250 (t = 2.5 s)" in cal.describe()
+    Y2 = Y.copy()
+    Y2[250] = np.nan
+    split = cal.split
+    without = oracle(Y2, U, fixed=cal.minimal, split=split)
+    assert without[0] < 0.5 * cal.validated[0]
+
+
 def test_a_short_record_may_lose_one_outlier():
     """40 samples: the limit counts at least 1 / max_skip_fraction = 100 samples, so one
     glitch is skipped (and flagged), a second one stops the run at its step."""

@@ -91,6 +91,10 @@ class NoiseCalibration:
         The samples at which ``minimal`` is attained (the LP's active rows, within
         ``CALIBRATION_ACTIVE_RTOL``), the tightest first: glitches and outliers show up here
         (:attr:`active_times`).
+    validated_samples : ndarray of int
+        The samples of the held-out part at which ``validated`` is attained (where it
+        needed the margin; empty with no margin or without a held-out part), the
+        tightest first: at exactly ``validated`` the bands collapse there.
     outliers : tuple of Outlier
         The samples removed (``max_outliers``), in order, with the bound with and
         without each.
@@ -121,6 +125,8 @@ class NoiseCalibration:
     active_samples: NDArray[np.int64] = field(
         default_factory=lambda: np.zeros(0, dtype=np.int64))
     outliers: tuple[Outlier, ...] = ()
+    validated_samples: NDArray[np.int64] = field(
+        default_factory=lambda: np.zeros(0, dtype=np.int64))
     holdout: float = 0.0
     split: int | None = None
     record_length: int = 0
@@ -174,6 +180,11 @@ class NoiseCalibration:
             more = "" if self.active_samples.size <= 12 else \
                 f" and {self.active_samples.size - 12} more"
             lines.append(f"the smallest bound is attained at sample(s) {shown}{more}")
+        if self.validated_samples.size:
+            shown = ", ".join(at(int(k)) for k in self.validated_samples[:6])
+            more = "" if self.validated_samples.size <= 6 else \
+                f" and {self.validated_samples.size - 6} more"
+            lines.append(f"the validated bound is attained at sample(s) {shown}{more}")
         for o in self.outliers:
             lines.append(f"outlier removed: sample {at(o.sample)}: bound "
                          f"{fmt(o.bound_with)} with it, {fmt(o.bound_without)} without")
@@ -875,6 +886,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     scale = None if per_channel else float(minimal[0] / r_v[0])
     active = _active(lp_f, res_f, minimal)
     # the whole record with the first part's bound: the smallest bound of the rest
+    val_active = np.zeros(0, dtype=np.int64)
     if split is None:
         lp, res, validated = lp_f, res_f, minimal
     else:
@@ -888,6 +900,9 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         # within the LP's accuracy of minimal: no margin (the radii are checked below)
         validated = np.where(validated <= minimal * (1.0 + CALIBRATION_ACTIVE_RTOL), minimal,
                              validated)
+        if np.any(validated > minimal):
+            held = _active(lp, res, validated)
+            val_active = held[held >= split]
     margin = np.where(minimal > 0, validated / np.where(minimal > 0, minimal, 1.0) - 1.0, 0.0)
     # the bound to use: validated with a safety, so that no sample sits exactly at it
     target = validated if split is None else validated * (1.0 + safety)
@@ -937,6 +952,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     return NoiseCalibration(
         radii, minimal, scale, inc, worst, lp.samples, status, info, validated=validated,
         margin=margin, active_samples=active, outliers=tuple(outliers),
+        validated_samples=val_active,
         holdout=0.0 if split is None else float(holdout), split=split, record_length=N,
         dt=sys.dt, output_names=tuple(sys.output_names),
         safety=0.0 if split is None else float(safety))

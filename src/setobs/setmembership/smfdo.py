@@ -557,7 +557,10 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
                 f"(more than max_skip_fraction = {100 * f:g} % of {total} samples; the "
                 f"first at step {self.first_inconsistent}): so many samples contradict the "
                 "model that the bounds, not the samples, are wrong", k,
-                self._hint())
+                "what to do: calibrate the noise bound (setobs.calibrate_noise, or `setobs "
+                "estimate --calibrate`; max_outliers= names the samples that raise it most, "
+                "run(ignore=) leaves them out), use larger bounds, or, if these samples "
+                "really are outliers, a larger max_skip_fraction")
 
     def _hint(self) -> str:
         return ModelInvalidatedError.HINT if self.sys.q else ModelInvalidatedError.HINT_STATE
