@@ -1,4 +1,4 @@
-"""ZonoOpt as a peer of the geometry (issue 34): the same sets, the same operations,
+"""ZonoOpt as a peer of the geometry: the same sets, the same operations,
 interleaved medians, the ratios by dimension, and what each answer is worth.
 
 ZonoOpt (``pip install setobs[peers]``) is a C++ library with Python bindings; its

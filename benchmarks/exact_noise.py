@@ -1,4 +1,4 @@
-"""Benchmark: exact mode with noise against the whole-history LP (issue 33, item 6).
+"""Benchmark: exact mode with noise against the whole-history LP.
 
 Exact mode with process and measurement noise keeps the whole-history LP and
 warm-starts it from step to step (``setobs.setmembership._history``). Here, on

@@ -1,4 +1,4 @@
-"""Benchmark: the LP/QP-based set operations of issue 17 vs the straightforward cvxpy formulation.
+"""Benchmark: the LP/QP-based set operations vs the straightforward cvxpy formulation.
 
 For random non-empty constrained zonotopes ``(n, n_gen, n_con)`` in
 {(3, 20, 10), (5, 60, 40)} and a polytope ``P`` of ``m = 20`` random

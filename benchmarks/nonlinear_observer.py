@@ -1,4 +1,4 @@
-"""Benchmark: the nonlinear modular observer's cost (issue 35).
+"""Benchmark: the nonlinear modular observer's cost.
 
 * **Design time against order and dimension.** ``design_modular`` on the paper's
   example (``n + q = 2``) at orders 3-19, a Henon-like map with an unknown input

@@ -87,7 +87,7 @@ def main() -> None:
         print(f"{r['mode']:>22}: median {r['median_update_ms']:7.3f} ms/update "
               f"({r['per_linprog']:.3f} linprog), "
               f"p90 {r['p90_update_ms']:7.2f} ms, mean inf-norm radius {r['mean_radius_inf']:.3f}")
-    # issue 33's target for the noise-free step (window 3 with the default restart)
+    # the target for the noise-free step (window 3 with the default restart)
     w3 = rows[0]
     targets = [{"target": "paper example, noise-free, window 3, default restart: median "
                           "step at most 0.05 linprog (goal 0.033)", "limit": 0.05,

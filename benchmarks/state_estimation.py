@@ -1,4 +1,4 @@
-"""Benchmark: guaranteed state estimation, tightness against cost (issue 33).
+"""Benchmark: guaranteed state estimation, tightness against cost.
 
 Physical systems of our own, all with bounded process noise on every state and
 bounded measurement noise on every output (``q = 0``, ``state_bounds=True``):
@@ -249,7 +249,7 @@ def iteration_fields(obs, steps: int, dt: float) -> dict:
 
 def target(what: str, row: dict | None, limit: float, key: str = "per_linprog",
            at_least: bool = False) -> dict:
-    """One of issue 33's targets against its row: the measured value, whether it is met,
+    """One of the state-estimation targets against its row: the measured value, whether it is met,
     and (speed) the iterations per step the limit allows at the measured cost of one."""
     if row is None:
         return {"target": what, "limit": limit, "measured": None, "met": None}
@@ -291,7 +291,7 @@ def main() -> None:
     if args.r30:
         r30 = r30_timing(args.r30)
         out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30,
-               "targets": [target("random 30-state plant, 21 outputs, window 10 (issue 33: "
+               "targets": [target("random 30-state plant, 21 outputs, window 10 (target: "
                                   "at most 10 linprog)", find(r30, "random_30_21", 10, "box"),
                                   10.0)],
                "machine": platform.platform(), "python": platform.python_version()}
@@ -325,7 +325,7 @@ def main() -> None:
         ln = np.log(np.array(pts, dtype=float))
         growth = float(np.polyfit(ln[:, 0], ln[:, 1], 1)[0])
     targets = [target("random 6-state plant, 4 outputs, window 10, noise, state bounds, "
-                      "default restart (issue 33: at most 0.7 linprog)",
+                      "default restart (target: at most 0.7 linprog)",
                       find(rows, "random_6", 10, "auto"), 0.7)]
     for name in ("two_mass", "vehicle", "random_6", "tanks_6", "tanks_15", "tanks_30"):
         r10 = find(rows, name, 10, "auto")

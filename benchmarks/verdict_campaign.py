@@ -1,4 +1,4 @@
-"""Verdicts at calibrated noise bounds on random systems (issue 32's campaign).
+"""Verdicts at calibrated noise bounds on random systems (the verdict campaign).
 
 Each seed draws a 2-5-state system (up to two decades of diagonal scaling of
 states, outputs and disturbances, 0-2 inputs, 10 % missing entries) and a record

@@ -27,7 +27,8 @@ matplotlib.use("Agg")
 
 # Derandomized: the same examples on every run, so CI is reproducible (a random
 # exploration once found seed 4275 of the unbounded-factor certificate test, where
-# the HiGHS-path bound is sound but 4.4e-9 relative loose: see the issue-12 note).
+# the HiGHS-path bound is sound but 4.4e-9 relative loose: the certificate adds
+# |r_j| UNBOUNDED_RADIUS per unbounded factor whose reduced cost is not exactly zero).
 settings.register_profile(
     "setobs", deadline=None, max_examples=60, derandomize=True,
     suppress_health_check=[HealthCheck.too_slow],

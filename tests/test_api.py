@@ -12,6 +12,7 @@ from __future__ import annotations
 import ast
 import inspect
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -199,8 +200,28 @@ def unasserted_tests(root: Path) -> list[str]:
 
 
 def test_every_test_can_fail(tmp_path):
-    """Issue 35: no test without an assertion (checked on the AST of every test module);
+    """No test without an assertion (checked on the AST of every test module);
     the checker sees one when there is one."""
     assert unasserted_tests(ROOT / "tests") == []
     (tmp_path / "test_x.py").write_text("def test_nothing():\n    x = 1 + 1\n")
     assert unasserted_tests(tmp_path) == ["test_x.py::test_nothing"]
+
+
+def test_no_issue_numbers_in_the_repository():
+    """Code, tests, docs, notebooks and benchmarks say the behaviour or the finding, not
+    the number of the internal ticket that asked for it (a reader has no tracker)."""
+    word = "iss" + "ue"
+    pattern = re.compile(rf"\b{word}s? ?#?\d+|\b{word}-\d+|\(#\d+\)", re.IGNORECASE)
+    roots = [ROOT / d for d in ("src", "tests", "docs", "notebooks", "benchmarks")]
+    files = [ROOT / "README.md", ROOT / "pyproject.toml"]
+    for r in roots:
+        files += [p for p in r.rglob("*") if p.is_file() and p.suffix in (
+            ".py", ".md", ".rst", ".ipynb", ".json", ".c", ".toml", ".yaml", ".txt", ".sh")
+            and "_build" not in p.parts and "generated" not in p.parts
+            and p.parent != ROOT / "docs" / "notebooks"]   # (the docs build's copies)
+    found = []
+    for p in files:
+        for i, line in enumerate(p.read_text(errors="replace").splitlines(), 1):
+            if pattern.search(line):
+                found.append(f"{p.relative_to(ROOT)}:{i}: {line.strip()[:80]}")
+    assert not found, "\n".join(found)

@@ -265,7 +265,7 @@ def test_a_closed_pipe_is_not_an_error():
     assert status.returncode == 0
 
 
-# ------------------------------------------------------------------ round 2 (issue 32, item 6)
+# ------------------------------------------------------------------ round 2
 _P, _G, _X = CHANG.Phi, CHANG.G, CHANG.Xi
 
 

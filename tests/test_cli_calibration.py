@@ -1,5 +1,5 @@
 """``setobs estimate --calibrate`` against the API on the same record, for both model
-kinds (issue 46, item 4; reproducer ``cli_calibrate_ignores_process_noise.sh``: with a
+kinds (reproducer ``cli_calibrate_ignores_process_noise.sh``: with a
 model without disturbance the CLI ignored ``--process-noise``, printed a calibrated
 noise of 4261 rad and wrote +-4261 rad bands, exit 0, where the API gives 1.35 counts).
 

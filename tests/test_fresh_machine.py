@@ -1,4 +1,4 @@
-"""What a new user meets first (issue 31): messages that say what to do, plots that
+"""What a new user meets first: messages that say what to do, plots that
 show the band, no machine paths, and a repository that ignores its virtual env."""
 
 from __future__ import annotations

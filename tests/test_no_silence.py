@@ -1,5 +1,5 @@
-"""Places where a useless or misleading answer came back without a word (issue 46,
-item 5): a record with nothing measured, advice that names what the model does not
+"""Places where a useless or misleading answer came back without a word:
+a record with nothing measured, advice that names what the model does not
 have, a printed result of half a megabyte, hull LPs on rows scaled by 2^+-30.
 
 Oracles: counts and extremes computed here from the result's arrays; scipy's linprog

@@ -173,7 +173,7 @@ LP_REFINE_GAP: float = 1e-9
 #: bounds to the same tolerance): a guard against gross errors, above the solvers'
 #: own feasibility tolerances (1e-10 to 1e-7). HiGHS once returned "optimal" with a
 #: relative residual of 3e-3 on an exact-mode set, and a multiplier certified near
-#: that point's objective, 0.01 below the true minimum (issue 32, item 3).
+#: that point's objective, 0.01 below the true minimum.
 PRIMAL_RESIDUAL_RTOL: float = 1e-6
 #: The LP with rows relaxed (the last resort after an uncertified "infeasible") counts
 #: as exact when its minimiser satisfies the exact rows and its objective is within
@@ -219,7 +219,7 @@ HREP_CONVERT_RTOL: float = 1e-12
 #: The set recursion (exact mode's reference path) carries the rounding bound of a
 #: posterior's centre as bounded factors once it exceeds this fraction of the
 #: set's magnitude: mapped as a bound, ``|A| c_err``, it grows like
-#: ``rho(|A|)^k`` (1e-3 of the width after 30 steps of a non-normal ``A``, issue 32);
+#: ``rho(|A|)^k`` (1e-3 of the width after 30 steps of a non-normal ``A``);
 #: mapped as generators it follows ``A^k``.
 CENTER_ERROR_ABSORB_RTOL: float = 1e-13
 #: :meth:`SMFDO.run <setobs.SMFDO.run>` warns (``MissingDataWarning``) when more than

@@ -208,7 +208,7 @@ def test_extension_along_the_observer_map_reaches_beyond_the_radius():
 
 
 def test_diagnostics_by_order_fall_inside_the_radius_and_warn_beyond_the_pole():
-    """Issue 35: the residuals of (31), (28), (35) by truncation order. Near the
+    """The residuals of (31), (28), (35) by truncation order. Near the
     equilibrium (default points, half the radius estimate) each falls at every order and
     nothing is flagged; the smallest divisor is 0.1 (|Aw - 0.5| = |A0 - 0.5|, by hand:
     the linearization's eigenvalues are 1/2 and 1). At |w| > 1, beyond the exact

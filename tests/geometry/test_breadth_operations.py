@@ -1,4 +1,4 @@
-"""Cuts, hulls, differences, uncertain maps and constraint elimination (issue 17).
+"""Cuts, hulls, differences, uncertain maps and constraint elimination.
 
 Oracles: exact rational vertex enumeration (the factor polytope's vertices, and
 the vertices of H-polytopes solved in Fractions), scipy's Qhull, sampling of

@@ -1,4 +1,4 @@
-"""The geometry's LP queries on the compiled simplex (issue 34): the interval hull's
+"""The geometry's LP queries on the compiled simplex: the interval hull's
 batch (``FactorPolytope.minimize_many``, ``FixedStructureLP.bounded``), the phase-1
 LP of emptiness and containment, and the closed-form hull of sets without
 constraints.

@@ -1,4 +1,4 @@
-"""The compiled construction of ``Z + W``, ``M @ Z`` and ``Z.intersect(W, R)`` (issue 34).
+"""The compiled construction of ``Z + W``, ``M @ Z`` and ``Z.intersect(W, R)``.
 
 Oracles:
 

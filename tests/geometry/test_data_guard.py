@@ -1,5 +1,5 @@
-"""No set with non-finite data, or data above ``MAX_MAGNITUDE``, is ever built (issue 46,
-item 1; reproducer ``tests/data/regressions/compiled_map_overflow_nan_set.py``).
+"""No set with non-finite data, or data above ``MAX_MAGNITUDE``, is ever built
+(reproducer ``tests/data/regressions/compiled_map_overflow_nan_set.py``).
 
 Oracles: the data of every set an operation returns, checked here entry by entry with
 NumPy (finite, at most ``1e150`` in magnitude; ``h`` nonnegative or ``+inf``), and the

@@ -1,4 +1,4 @@
-"""Constraint elimination without LPs (issue 34): interval propagation and the
+"""Constraint elimination without LPs: interval propagation and the
 heuristics of every factor from one factorisation.
 
 Oracles: the polytope's vertices from scipy's ``HalfspaceIntersection`` (the set is

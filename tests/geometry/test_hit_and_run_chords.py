@@ -1,4 +1,4 @@
-"""Hit-and-run's chords on one warm HiGHS model per chain (issue 34).
+"""Hit-and-run's chords on one warm HiGHS model per chain.
 
 Oracle: the chord ``{t : x + t u in Z}`` as two LPs written in the test and solved by
 scipy's ``linprog`` (a fresh model each), for many directions in a row on one chain.

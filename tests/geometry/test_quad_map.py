@@ -1,4 +1,4 @@
-"""The quadratic map (issue 34; CORA's quadMap).
+"""The quadratic map (CORA's quadMap).
 
 Oracles: CORA's test_zonotope_quadMap values (computed by hand there), closed forms
 (``x^2`` on an interval), and points of the set (rational vertices of the factor

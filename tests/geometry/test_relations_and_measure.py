@@ -1,4 +1,4 @@
-"""Containment, equality, nearest point, distance, sampling and volume (issue 17).
+"""Containment, equality, nearest point, distance, sampling and volume.
 
 Oracles: Qhull facets of the exact factor vertices, point-to-segment distances,
 closed-form zonotope volumes, and distribution tests of the samples.

@@ -1,4 +1,4 @@
-"""``represents`` and ``is_equal(tol=)`` (issue 34) against independent constructions.
+"""``represents`` and ``is_equal(tol=)`` against independent constructions.
 
 Oracles: sets whose kind is known by construction (polygons and polytopes written as
 vertices or half-spaces: a hexagon, a triangle, a rotated cube, the octahedron, a

@@ -1,4 +1,4 @@
-"""Geometry that does not depend on the units (issue 32, item 5).
+"""Geometry that does not depend on the units.
 
 For a set and its image under ``x -> s x`` (``s`` from 1e-12 to 1e12) the
 vertices, volume, samples, containment and distance are the same answer, scaled.

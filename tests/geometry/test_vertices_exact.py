@@ -1,5 +1,5 @@
 """Exact vertices where the set's facets meet exactly: points, boxes, segments and
-parallelotopes (issue 34). Oracles: the box's own corners and closed forms written in
+parallelotopes. Oracles: the box's own corners and closed forms written in
 the test; scipy's linprog (each vertex is the unique maximiser of a functional) and
 Qhull (every returned point is a vertex of their hull)."""
 

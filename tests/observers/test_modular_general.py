@@ -1,4 +1,4 @@
-"""Modular Luenberger observer in the general form of Sec. VIII (issue 18, item 6).
+"""Modular Luenberger observer in the general form of Sec. VIII.
 
 A general exosystem ``S`` (a harmonic disturbance), a nonzero ``Q`` and the
 paper's gains (49)-(52) beside the default DARE/placement ones. Oracles: the

@@ -172,7 +172,7 @@ def test_interface_pickling_and_bad_input():
 
 
 def test_refusals_name_the_problem():
-    """Issue 35: an unstable A0 (1.5: the estimates grew to 2e57 with no error) or a
+    """An unstable A0 (1.5: the estimates grew to 2e57 with no error) or a
     marginal Aw (eigenvalue -1) is refused at design time; so is an order whose series
     would take minutes (25 on the paper's plant: 351 monomials, 51 s), with its size
     and the way out; order 0 is refused as before."""

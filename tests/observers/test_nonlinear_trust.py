@@ -1,4 +1,4 @@
-"""The nonlinear observer's trust measure (issue 35), on runs with known truth.
+"""The nonlinear observer's trust measure, on runs with known truth.
 
 ``result.consistency`` estimates each step's error from the model and the data alone
 (the Gauss-Newton correction that makes the model's output predictions over the next

@@ -1,5 +1,5 @@
 """Noise calibration on real-record-like LPs: never a crash, always a checked answer
-(issue 31, item 2).
+(HiGHS's dual simplex once segfaulted on such an LP).
 
 The oracle is independent of the library: the same problem written in
 input-output form (an ARX recursion of the noise-free output, no state chain) in

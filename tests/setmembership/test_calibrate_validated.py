@@ -1,4 +1,4 @@
-"""Noise bounds a user can defend (issue 47, items 1-3): calibration validated on a
+"""Noise bounds a user can defend: calibration validated on a
 held-out part, outliers named, skipping with a limit.
 
 Oracles, written here: the whole-record LP with every state, disturbance and noise a

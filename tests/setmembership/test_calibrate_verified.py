@@ -1,4 +1,4 @@
-"""Calibration's promise (issue 46, item 2): ``minimal`` is the LP optimum to 1e-6
+"""Calibration's promise: ``minimal`` is the LP optimum to 1e-6
 (relative) and the recommended ``radii`` make the record consistent, or the status says
 they could not be checked (reproducer ``calibration_recommended_inconsistent.py``: on a
 20 000-sample record of a marginally stable plant ``minimal`` was 3.7e-4 short and

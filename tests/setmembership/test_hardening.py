@@ -158,7 +158,7 @@ def test_huge_measurements_widen_the_bands_instead_of_excluding_the_truth(fast):
     assert (res.hi[big, 0] - res.lo[big, 0] > 2 * DATA_RTOL * np.abs(Y[big, 0])).all()
     # Where an ulp of y approaches d's effect (|y| eps > 1e-2 of the increment
     # bound), HiGHS may call a thin set infeasible; its relaxed LP is then a counted
-    # fallback, never an "ok" (issue 32): only there.
+    # fallback, never an "ok": only there.
     near = np.abs(Y[:, 0]) * np.finfo(float).eps > 1e-2 * 1.0
     assert not (res.status == "fallback")[~near].any()
 

@@ -1,4 +1,4 @@
-"""Exact mode with noise: the whole-history LP kept from step to step (issue 33, item 6).
+"""Exact mode with noise: the whole-history LP kept from step to step.
 
 Oracles: ``tests.oracles.history_lp_highs`` (the whole-history LP written
 independently, in the plant's own coordinates, solved by scipy's HiGHS from

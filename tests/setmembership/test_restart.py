@@ -1,4 +1,4 @@
-"""Windows that keep correlations (issue 33, item 4): the polytope restart.
+"""Windows that keep correlations: the polytope restart.
 
 Oracle: the whole-history LP of the state (``tests.oracles.history_lp_highs``, scipy's
 HiGHS with every state, increment and noise sample a variable; no setobs code). The

@@ -138,7 +138,7 @@ def test_large_unknown_initial_states_never_abort():
 
 
 def state_case(seed: int) -> tuple[int, int, list[str]]:
-    """A random system without disturbances (q = 0, issue 33) or with one, process
+    """A random system without disturbances (q = 0) or with one, process
     and measurement noise on the box's corners for a third of the runs; windows 3
     and 10 and exact mode with ``state_bounds=True``: every bounded state interval
     must hold the true state (own simulator), and no run may abort."""
@@ -166,7 +166,7 @@ def state_case(seed: int) -> tuple[int, int, list[str]]:
     X, Y = np.array(X), np.array(Y)
     # A third of the cases (own generator, so the others stay as they were): an
     # unmeasured, stable block driven by the measured one, and a bounded X0 around
-    # the truth, so that the unobservable state is tracked (issue 33, item 3).
+    # the truth, so that the unobservable state is tracked.
     extra = np.random.default_rng(9000 + seed)
     X0 = None
     if extra.random() < 0.34:

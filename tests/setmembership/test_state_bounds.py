@@ -1,4 +1,4 @@
-"""Certified state bounds (issue 33, item 2): ``SMFDO(..., state_bounds=True)``, and a
+"""Certified state bounds: ``SMFDO(..., state_bounds=True)``, and a
 system without disturbances (q = 0) as a set-membership state observer.
 
 Oracle: the whole-history LP of the state (``tests.oracles.history_lp_highs``, scipy's
@@ -118,7 +118,7 @@ def test_a_state_of_the_unobservable_part_is_unbounded_without_a_bounded_initial
 
 
 def test_a_stable_unobservable_state_is_bounded_by_the_initial_set_and_the_noise():
-    """Issue 33, item 3: x_1+ = 0.9 x_1 + w_1, |x_1(0)| <= 1, |w| <= 0.05, unmeasured:
+    """An unobservable state: x_1+ = 0.9 x_1 + w_1, |x_1(0)| <= 1, |w| <= 0.05, unmeasured:
     |x_1(k)| <= 0.9^k + 0.05 (1 - 0.9^k) / 0.1 (closed form), in every mode."""
     sys = so.LinearSystem(np.diag([0.5, 0.9]), np.zeros((2, 0)), [[1.0, 0.0]])
     k = np.arange(40)

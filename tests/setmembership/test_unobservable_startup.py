@@ -1,5 +1,5 @@
 """States on the unobservable part driven by the disturbance or by observable states not
-yet pinned down (issue 46, item 3; reproducer ``unobservable_driven_state_unbounded.py``:
+yet pinned down (reproducer ``unobservable_driven_state_unbounded.py``:
 ``x2+ = 0.5 x2 + d + w2`` with only ``x1`` measured kept a band of +-inf for the whole
 record, exact and windowed, although the whole-history LP bounds it from ``k = 1``).
 

@@ -1,7 +1,7 @@
-"""Three verdicts kept apart (issue 32): an inconsistent record is invalidated, a
+"""Three verdicts kept apart: an inconsistent record is invalidated, a
 consistent one is decided exactly, and a solver's trouble is neither.
 
-Root cause of the reported confusion (items 1-2): HiGHS keeps one task scheduler
+Root cause of the reported confusion: HiGHS keeps one task scheduler
 per calling thread, sized by the first solve in that thread; a later model whose
 ``threads`` option differs fails in ``run()`` ("Not Set"). The LP layer set
 ``threads = 1``, so after any HiGHS solve at the default size in the same thread
@@ -390,7 +390,7 @@ CAMPAIGN_CHECKS = (10, 20, 29)
 
 
 def campaign_seed(seed: int) -> dict:
-    """Issue 32's campaign on one seed (``campaign_record``): windows 3 and 10 (where
+    """The verdict campaign on one seed (``campaign_record``): windows 3 and 10 (where
     Algorithm 1 allows them) and exact mode at the calibrated bound, their
     ``fallback`` steps; exact mode against the independent whole-history LP at
     ``CAMPAIGN_CHECKS`` (the excess over the LP relative to the interval width);
@@ -439,7 +439,7 @@ def campaign_seed(seed: int) -> dict:
 
 
 def campaign_failures(rows: list[dict]) -> dict:
-    """What issue 32's campaign must not find in ``rows`` (of :func:`campaign_seed`)."""
+    """What the verdict campaign must not find in ``rows`` (of :func:`campaign_seed`)."""
     ran = [r for r in rows if "skipped" not in r]
     return {
         "fallback": [(r["seed"], w, v) for r in ran for w, v in r["fallback"].items() if v],
@@ -471,7 +471,7 @@ def test_verdict_campaign_short():
 
 @pytest.mark.slow
 def test_verdict_campaign_200_systems():
-    """Issue 32's campaign: 200 random systems (seeds where Theorem 1 fails are
+    """The verdict campaign: 200 random systems (seeds where Theorem 1 fails are
     replaced), windows 3, 10 and exact at calibrated noise bounds."""
     rows, seed = [], 0
     while sum("skipped" not in r for r in rows) < 200:

@@ -1,4 +1,4 @@
-"""Issue 18, item 8: the windowed SMFDO depends on the state coordinates of its
+"""The windowed SMFDO depends on the state coordinates of its
 restart box; the exact mode does not (Li-Cong-Dong Algorithm 1, line 12)."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Fair comparisons (issue 18, items 1-2): equal information, Kalman and tuned PIO baselines.
+"""Fair comparisons: equal information, Kalman and tuned PIO baselines.
 
 The Kalman baseline is checked against a textbook time-varying Kalman filter
 written here; the pinned finding (the ">40 % better" claim holds against the
@@ -99,7 +99,7 @@ def test_the_forty_percent_claim_holds_only_against_the_printed_pole_pio():
     (59 %); on equal information against the steady-state Kalman filter it does not
     (31 %, interval below 40 %), nor against a PIO tuned on separate runs (38 %); with
     window 3 the SMFDO is no better than the Kalman filter. With the polytope restart
-    (issue 33) window 3 is better than the Kalman filter (13 %,
+    window 3 is better than the Kalman filter (13 %,
     interval above 5 %): the box restart is what made window 3 weak."""
     sweep = pio_pole_sweep(SC, [0.3, 0.4, 0.5, 0.6, 0.7], runs=12, base_seed=1)
     assert 0.4 <= sweep.best_radius <= 0.6

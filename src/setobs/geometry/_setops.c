@@ -16,7 +16,7 @@
  *
  * Why C: these operations are array bookkeeping on small arrays, where NumPy's per-call
  * cost (about 1 us a call, a dozen calls an operation) made them 2-6x slower than
- * ZonoOpt's C++ (issue 34). Floating-point contraction is switched off in the build
+ * ZonoOpt's C++. Floating-point contraction is switched off in the build
  * (-ffp-contract=off), so each sum and product is rounded as in NumPy.
  */
 #define PY_SSIZE_T_CLEAN

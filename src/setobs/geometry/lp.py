@@ -516,7 +516,7 @@ class FactorPolytope:
         # here, any earlier HiGHS solve at the default size in the same thread (the
         # old calibration LP, a user's own model, cvxpy's HiGHS) turned every SMFDO LP
         # into a retry chain ending in "fallback", and records that contradicted
-        # the model were never invalidated (issue 32, items 1-2). The default (0)
+        # the model were never invalidated. The default (0)
         # accepts any scheduler; the LPs here run the serial dual simplex anyway.
         # Tighter than HiGHS's 1e-7 defaults: with them the certified bound sat up
         # to ~1e-6 (relative) below the optimum on SMFDO sets with constrained

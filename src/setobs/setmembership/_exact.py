@@ -49,7 +49,8 @@ HISTORY_RETRY = 4
 #: ``VERTEX_RTOL`` (not ``HREP_CONVERT_RTOL``) when its box is at most this many
 #: times wider than one step's uncertainty: converted earlier, in the transient
 #: before the data bound the set (widths 1e3 to 1e5 times the later ones), that
-#: tolerance became 1e-6 of the later width (issue 32, campaign seed 36).
+#: tolerance became 1e-6 of the later width (the verdict campaign on random systems,
+#: seed 36).
 H_LAX_SIZE_FACTOR = 1e3
 
 

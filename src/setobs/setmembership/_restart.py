@@ -1,4 +1,4 @@
-"""The window's restart set: a polytope that keeps the exact set's shape (issue 33).
+"""The window's restart set: a polytope that keeps the exact set's shape.
 
 Eq. (24) of Li-Cong-Dong restarts the window from the interval hull of
 ``Z_t`` (``t = k - delta``), a box that forgets every correlation of the

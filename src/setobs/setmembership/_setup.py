@@ -455,7 +455,7 @@ class ModelSetup:
         Mx_bar = sel_n @ (dz[:, None] * dec.T_obar.T)
         x_leak = np.abs(Mx_bar).max(axis=1, initial=0.0)
         self._x_free = x_leak > 1e-8 * np.abs(dz[:n])
-        # ... unless the unobservable part is bounded by X0 (issue 33, item 3): then
+        # ... unless the unobservable part is bounded by X0: then
         # x = Mx z_o + Mx_bar zbar with zbar tracked outside the LPs.
         self._ubar = self._unobservable_tracker(dec, dz, X0, D0, E) \
             if self._x_free.any() else None

@@ -1,4 +1,4 @@
-"""Bounds of the unobservable part of the state (issue 33, item 3).
+"""Bounds of the unobservable part of the state.
 
 In the coordinates of the observability staircase (``z_tilde = T D^-1 [x; d]``,
 :class:`~setobs.analysis.ObservabilityDecomposition`) the augmented system is
