@@ -299,6 +299,7 @@ def central_difference(theta, tau, m, dt, r, J, B, rate):
     return v, r / h + trunc + jump
 
 
+@pytest.mark.slow  # (the default run checks the same on the record: tests/test_readme.py)
 @pytest.mark.skipif(HSM150 is None, reason="the HSM150 record is not available here")
 def test_motor_record_at_the_recommended_bound():
     """The motor record with |d tau_L| <= 1e-3 N m per sample: never invalidated, the
