@@ -225,3 +225,29 @@ def test_no_issue_numbers_in_the_repository():
             if pattern.search(line):
                 found.append(f"{p.relative_to(ROOT)}:{i}: {line.strip()[:80]}")
     assert not found, "\n".join(found)
+
+
+def test_every_raise_in_the_library_is_a_setobs_error():
+    """No ``raise ValueError(...)`` (or any other built-in exception) in ``src/``: every
+    error a user can catch is a :class:`SetobsError` (its subclasses also derive from the
+    built-in with the same meaning, so ``except ValueError`` keeps working)."""
+    import builtins
+
+    bad = []
+    for path in SRC.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.Raise) or node.exc is None:
+                continue
+            exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+            name = exc.id if isinstance(exc, ast.Name) else None
+            obj = getattr(builtins, name, None) if name else None
+            if isinstance(obj, type) and issubclass(obj, BaseException):
+                bad.append(f"{path.relative_to(SRC)}:{node.lineno}: raise {name}")
+    assert bad == [], bad
+    for name in exceptions.__all__:
+        cls = getattr(exceptions, name)
+        if issubclass(cls, Exception) and not issubclass(cls, Warning):
+            assert issubclass(cls, exceptions.SetobsError), name
+    from setobs.cli import CLIError
+
+    assert issubclass(CLIError, exceptions.SetobsError)

@@ -15,6 +15,8 @@ import threading
 import types
 from typing import Any
 
+from .exceptions import MissingDependencyError
+
 __all__ = ["lazy_module", "optional_import", "progress_bar"]
 
 _LOCK = threading.Lock()
@@ -90,7 +92,7 @@ def optional_import(name: str, *, extra: str, feature: str) -> types.ModuleType:
     except ImportError as exc:
         top = name.split(".")[0]
         dist = _DISTRIBUTIONS.get(top, top)
-        raise ImportError(
+        raise MissingDependencyError(
             f"{feature} needs the optional package {top!r}, which is not installed: "
             f'pip install "setobs[{extra}]" (or pip install {dist})'
         ) from exc

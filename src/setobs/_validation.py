@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .exceptions import DimensionError
+from .exceptions import ArgumentError, DimensionError
 from .tolerances import MAX_MAGNITUDE
 
 __all__ = ["as_matrix", "as_vector", "check_real_scalar", "readonly"]
@@ -59,7 +59,7 @@ def check_real_scalar(name: str, value: object, *, positive: bool = False,
     """
     if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
                                                              | np.floating):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
+        raise ArgumentError(f"{name} must be a real number, got {value!r}")
     v = float(value)
     if not np.isfinite(v):
         raise DimensionError(f"{name} must be finite, got {value!r}")

@@ -25,7 +25,7 @@ from .exceptions import SetobsError
 EXIT_BAD_INPUT = 2
 
 
-class CLIError(Exception):
+class CLIError(SetobsError):
     """Bad input on the command line (one line for stderr)."""
 
 

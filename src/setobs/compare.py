@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._deprecation import renamed
+from .exceptions import InvalidValueError
 from .results import time_axis
 
 __all__ = ["ComparisonTable", "compare", "worst_case_error"]
@@ -31,7 +32,7 @@ def worst_case_error(estimates: ArrayLike, lo: ArrayLike, hi: ArrayLike) -> NDAr
     L = np.atleast_2d(np.asarray(lo, float))
     H = np.atleast_2d(np.asarray(hi, float))
     if not (E.shape == L.shape == H.shape):
-        raise ValueError(f"shapes differ: estimates {E.shape}, lo {L.shape}, hi {H.shape}")
+        raise InvalidValueError(f"shapes differ: estimates {E.shape}, lo {L.shape}, hi {H.shape}")
     with np.errstate(invalid="ignore"):
         per = np.maximum(np.abs(E - L), np.abs(H - E))
     return per.max(axis=1)
@@ -218,7 +219,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
     bad = np.flatnonzero((status == "skipped") | (status == "reset"))
     if bad.size and not allow_inconsistent:
         kinds = sorted(set(status[bad].tolist()))
-        raise ValueError(
+        raise InvalidValueError(
             f"the reference SMFDO run has {bad.size} step(s) with status {kinds} (first at "
             f"record step {bad[0]}): its measurements there were inconsistent with the model, "
             "so its bands are not the consistent set and its error bound is not the optimal "
@@ -239,7 +240,7 @@ def compare(estimates: Mapping[str, ArrayLike], reference, *, euclidean: bool = 
 
     steps = reference.steps
     if any(s.disturbance_set is None for s in steps):
-        raise ValueError("euclidean=True needs the SMFDO run with keep_sets=True")
+        raise InvalidValueError("euclidean=True needs the SMFDO run with keep_sets=True")
     N = len(steps)
     opt2 = np.full(N, np.inf)
     err2 = {name: np.full(N, np.inf) for name in estimates}

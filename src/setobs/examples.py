@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .exceptions import InvalidValueError
 from .nonlinear import NonlinearSystem
 from .systems import LinearSystem
 
@@ -111,7 +112,7 @@ def chen_gao_lin_example2(sample_time: str = "20ms") -> LinearSystem:
         E0 = [[0, 0], [4.3984e-5, 0], [0, 0], [0, 0.1904]]
         dt = 0.001
     else:
-        raise ValueError(f"sample_time must be '20ms' or '1ms', got {sample_time!r}")
+        raise InvalidValueError(f"sample_time must be '20ms' or '1ms', got {sample_time!r}")
     C0 = [[1, 0, 0, 0], [0, 0, 1, 0]]
     return LinearSystem(A0, E0, C0, B0, dt=dt)
 

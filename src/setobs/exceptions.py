@@ -13,16 +13,23 @@ from typing import Any
 # setobs.analysis.existence.BoundedDOReport, is named in the docstring only.)
 
 __all__ = [
+    "ArgumentError",
     "DesignError",
     "DesignWarning",
     "DimensionError",
     "EmptySetError",
     "ExistenceError",
+    "ImmutableError",
+    "InternalError",
+    "InvalidValueError",
     "MagnitudeError",
     "MissingDataWarning",
+    "MissingDependencyError",
     "ModelFileError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
+    "NotFoundError",
+    "NotSupportedError",
     "SetobsError",
     "SolverError",
     "SolverWarning",
@@ -36,6 +43,39 @@ class SetobsError(Exception):
 
 class DimensionError(SetobsError, ValueError):
     """An array has the wrong shape, or holds NaN/inf where it must not."""
+
+
+class InvalidValueError(SetobsError, ValueError):
+    """An argument of the right kind has a value the function cannot take (out of its
+    range, an unknown option name, inconsistent with another argument)."""
+
+
+class ArgumentError(SetobsError, TypeError):
+    """An argument of the wrong kind (a string where a number is needed, a set where a
+    matrix is needed)."""
+
+
+class NotSupportedError(SetobsError, NotImplementedError):
+    """A combination of arguments the library does not implement (the message says
+    what to use instead)."""
+
+
+class ImmutableError(SetobsError, AttributeError):
+    """An attempt to change an immutable object (sets, boxes, systems): operations
+    return new objects."""
+
+
+class NotFoundError(SetobsError, KeyError):
+    """A name looked up in a report or a table that is not there."""
+
+
+class MissingDependencyError(SetobsError, ImportError):
+    """An optional package a feature needs is not installed (the message names the
+    extra to install)."""
+
+
+class InternalError(SetobsError, RuntimeError):
+    """A state the library's own logic should never reach: please report it."""
 
 
 class MagnitudeError(SetobsError, OverflowError):

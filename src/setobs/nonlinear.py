@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._lazy import optional_import
 from ._validation import as_vector
-from .exceptions import DimensionError
+from .exceptions import ArgumentError, DimensionError, InvalidValueError
 from .tolerances import EQUILIBRIUM_ATOL
 
 __all__ = ["NonlinearSystem"]
@@ -32,7 +32,7 @@ def _symbols(sp: Any, given: Sequence[Any] | int, prefix: str) -> list[Any]:
         return list(sp.symbols(f"{prefix}0:{given}"))
     out = [sp.Symbol(g) if isinstance(g, str) else g for g in given]
     if not all(isinstance(v, sp.Symbol) for v in out):
-        raise TypeError(f"the {prefix} variables must be sympy symbols or names")
+        raise ArgumentError(f"the {prefix} variables must be sympy symbols or names")
     return out
 
 
@@ -108,10 +108,11 @@ class NonlinearSystem:
         free = set().union(*(e.free_symbols for e in self.f + self.h + self.s))
         extra = free - set(self.x) - set(self.w)
         if extra:
-            raise ValueError(f"the model has symbols that are neither states nor disturbances: "
-                             f"{sorted(map(str, extra))} (substitute their values first)")
+            raise InvalidValueError(
+                f"the model has symbols that are neither states nor disturbances: "
+                f"{sorted(map(str, extra))} (substitute their values first)")
         if any(e.free_symbols - set(self.w) for e in self.s):
-            raise ValueError("s(w) must depend on w only")
+            raise InvalidValueError("s(w) must depend on w only")
         self.dt = None if dt is None else float(dt)
         self.state_names = tuple(state_names) if state_names else tuple(map(str, self.x))
         self.disturbance_names = (tuple(disturbance_names) if disturbance_names
@@ -123,8 +124,9 @@ class NonlinearSystem:
         for name, val in (("f(0, 0)", self.f_num(*z)), ("s(0)", self.s_num(z[1])),
                           ("h(0, 0)", self.h_num(*z))):
             if not np.all(np.isfinite(val)) or np.abs(val).max() > EQUILIBRIUM_ATOL:
-                raise ValueError(f"{name} = {val}: the origin must be an equilibrium (shift the "
-                                 "coordinates to the operating point)")
+                raise InvalidValueError(
+                    f"{name} = {val}: the origin must be an equilibrium (shift the "
+                    "coordinates to the operating point)")
 
     # dimensions, as LinearSystem names them --------------------------------------
     @property

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from ._validation import as_matrix, as_vector, readonly
-from .exceptions import DimensionError
+from .exceptions import ArgumentError, DimensionError, ImmutableError, MissingDependencyError
 
 __all__ = ["AugmentedSystem", "DisturbanceInputs", "LinearSystem", "require_system"]
 
@@ -177,7 +177,7 @@ class LinearSystem:
         set_(self, "dt", None if dt is None else float(dt))
 
     def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError("LinearSystem is immutable")
+        raise ImmutableError("LinearSystem is immutable")
 
     def __getstate__(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in self.__slots__}
@@ -494,8 +494,8 @@ class LinearSystem:
         try:
             import control
         except ImportError as exc:  # pragma: no cover - exercised only without control
-            raise ImportError("LinearSystem.to_statespace needs python-control "
-                              "(pip install control)") from exc
+            raise MissingDependencyError("LinearSystem.to_statespace needs python-control "
+                                         "(pip install control)") from exc
         B = np.hstack([self.Gamma, self.G])
         D = np.hstack([self.Du, np.zeros((self.l, self.q))])
         return control.ss(np.array(self.Phi), B, np.array(self.Xi), D,
@@ -569,7 +569,8 @@ def _input_indices(name: str, indices: Any, m: int,
     try:
         items = list(indices)
     except TypeError:
-        raise TypeError(f"{name} must be a sequence of input indices, got {indices!r}") from None
+        raise ArgumentError(f"{name} must be a sequence of input indices, "
+                            f"got {indices!r}") from None
     out = []
     for i in items:
         if isinstance(i, str):
@@ -579,7 +580,7 @@ def _input_indices(name: str, indices: Any, m: int,
             i = list(labels).index(i)
         if isinstance(i, bool | np.bool_) or not isinstance(i, int | np.integer | float
                                                             | np.floating):
-            raise TypeError(f"{name} must hold integer input indices, got {i!r}")
+            raise ArgumentError(f"{name} must hold integer input indices, got {i!r}")
         if float(i) != int(i):
             raise DimensionError(f"{name} must hold integer input indices, got {i!r}")
         j = int(i)
@@ -617,19 +618,19 @@ def require_system(sys: Any, name: str = "sys", *,
     """
     if isinstance(sys, LinearSystem):
         if disturbance_inputs is not None:
-            raise TypeError(f"disturbance_inputs applies to a state-space model; {name} is "
-                            "already a LinearSystem (its disturbances are G's columns)")
+            raise ArgumentError(f"disturbance_inputs applies to a state-space model; {name} is "
+                                "already a LinearSystem (its disturbances are G's columns)")
         return sys
     if _is_statespace(sys):
         if disturbance_inputs is None:
-            raise TypeError(
+            raise ArgumentError(
                 f"{name} is a {type(sys).__name__}: say which of its inputs are disturbances "
                 "with disturbance_inputs=[...] (indices or input names), or convert it with "
                 "LinearSystem.from_statespace(ss, disturbance_inputs=[...])")
         return LinearSystem.from_statespace(sys, disturbance_inputs)
     if all(hasattr(sys, a) for a in ("A", "B", "C", "D")):
-        raise TypeError(
+        raise ArgumentError(
             f"{name} must be a LinearSystem, got {type(sys).__name__}: convert a state-space "
             "model with LinearSystem.from_statespace(ss, disturbance_inputs=[...]) (it must "
             "know which inputs are disturbances)")
-    raise TypeError(f"{name} must be a LinearSystem, got {type(sys).__name__}")
+    raise ArgumentError(f"{name} must be a LinearSystem, got {type(sys).__name__}")

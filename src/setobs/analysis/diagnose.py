@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .._format import format_complex, format_complex_list
+from ..exceptions import NotFoundError
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from .existence import (
@@ -55,7 +56,7 @@ class Diagnosis:
         for v in self.verdicts:
             if v.design == design:
                 return v
-        raise KeyError(f"no design {design!r}; designs: {[v.design for v in self.verdicts]}")
+        raise NotFoundError(f"no design {design!r}; designs: {[v.design for v in self.verdicts]}")
 
     @property
     def existing(self) -> list[str]:

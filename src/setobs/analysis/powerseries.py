@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_sylvester
 
 from .._lazy import optional_import
-from ..exceptions import DesignError
+from ..exceptions import DesignError, InvalidValueError
 from ..tolerances import RESONANCE_RTOL
 from ._linalg import rank_decision
 from .observability import observability
@@ -64,7 +64,7 @@ class Monomials:
 
     def __init__(self, n_vars: int, order: int) -> None:
         if n_vars < 1 or order < 1:
-            raise ValueError("need at least one variable and order >= 1")
+            raise InvalidValueError("need at least one variable and order >= 1")
         self.n_vars, self.order = int(n_vars), int(order)
         exps: list[tuple[int, ...]] = []
         for d in range(order + 1):
@@ -121,9 +121,9 @@ class Monomials:
         target = self if target is None else target
         F = np.asarray(F, dtype=float)
         if F.shape != (self.n_vars, len(target)):
-            raise ValueError(f"F must have shape ({self.n_vars}, {len(target)})")
+            raise InvalidValueError(f"F must have shape ({self.n_vars}, {len(target)})")
         if np.any(F[:, 0] != 0.0):
-            raise ValueError("F(0) must be 0 (expand around an equilibrium)")
+            raise InvalidValueError("F(0) must be 0 (expand around an equilibrium)")
         MF = np.zeros((len(self), len(target)))
         MF[0, 0] = 1.0
         for i in range(1, len(self)):
@@ -169,7 +169,7 @@ class Monomials:
             The positions of this basis's variables among ``other``'s.
         """
         if other.order != self.order:
-            raise ValueError("the bases must have the same order")
+            raise InvalidValueError("the bases must have the same order")
         e = np.zeros((len(self), other.n_vars), dtype=int)
         e[:, list(positions)] = self.exponents
         return np.array([other.index[tuple(r)] for r in e], dtype=int)
@@ -261,7 +261,7 @@ def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],
     sp = optional_import("sympy", extra="nonlinear", feature="Taylor series of nonlinear models")
     variables = list(variables)
     if len(variables) != basis.n_vars:
-        raise ValueError(f"{len(variables)} variables for a basis of {basis.n_vars}")
+        raise InvalidValueError(f"{len(variables)} variables for a basis of {basis.n_vars}")
     if callable(exprs):
         exprs = exprs(*variables)
     exprs = [sp.sympify(e) for e in exprs]
@@ -274,7 +274,7 @@ def taylor(exprs: Sequence[Any] | Callable[..., Any], variables: Sequence[Any],
         for monom, coef in poly.terms():
             d, e_v = monom[0], tuple(monom[1:])
             if d != sum(e_v):
-                raise ValueError("unexpected term in the Taylor expansion")
+                raise InvalidValueError("unexpected term in the Taylor expansion")
             out[r, basis.index[e_v]] = float(coef)
     return out
 
@@ -438,7 +438,7 @@ def solve_lfe(F: NDArray[np.float64], h: NDArray[np.float64], A: ArrayLike, B: A
     F, h = np.asarray(F, float), np.asarray(h, float)
     A, B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
     if np.any(h[:, 0] != 0.0):
-        raise ValueError("h(0) must be 0 (expand around an equilibrium)")
+        raise InvalidValueError("h(0) must be 0 (expand around an equilibrium)")
     MF = basis.substitution(F)
     blk = basis.block
     F1 = F[:, blk[1]]

@@ -9,6 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals, svd
 
 from .._format import format_complex_list
+from ..exceptions import InternalError
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, not_inside_unit_circle, rank_decision
@@ -184,12 +185,12 @@ def system_zeros(
             E = np.hstack([np.eye(nf), np.zeros((nf, Br.shape[1]))]) @ W
             k = W.shape[1] - r
             if k != nf:
-                raise RuntimeError(
+                raise InternalError(
                     f"pencil reduction did not end square ({nf} x {k}); please report this system"
                 )
             zeros = eigvals(AB[:, :k], E[:, :k]).astype(complex)
             if not np.all(np.isfinite(zeros)):
-                raise RuntimeError("pencil reduction left infinite eigenvalues; please report")
+                raise InternalError("pencil reduction left infinite eigenvalues; please report")
     zeros = zeros[np.argsort(np.abs(zeros), kind="stable")]
     return ZerosResult(zeros, normal_rank, normal_rank == n + m, n, m, decisions)
 

@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._deprecation import renamed
 from .._validation import as_vector, readonly
-from ..exceptions import DimensionError
+from ..exceptions import DimensionError, ImmutableError
 
 __all__ = ["Box", "box_center", "box_center_radius"]
 
@@ -111,7 +111,7 @@ class Box:
         return box
 
     def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError("Box is immutable")
+        raise ImmutableError("Box is immutable")
 
     def __reduce__(self):
         return (Box, (np.array(self._lo), np.array(self._hi)))

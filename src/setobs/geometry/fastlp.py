@@ -48,6 +48,7 @@ from numpy.typing import NDArray
 from .._blas import with_single_threaded_blas, with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
 from .._rounding import pow2_inverse
+from ..exceptions import InvalidValueError
 from ..tolerances import (
     EQUILIBRATION_FLOOR,
     FASTLP_BOUNDED_CLEAR,
@@ -329,7 +330,7 @@ class FixedStructureLP:
             Objectives over the original factors (without the artificial columns).
         """
         if self.fidx.size or self.W.shape[1] != W.shape[1] + self.m:
-            raise ValueError("with_objectives applies to structures made by bounded()")
+            raise InvalidValueError("with_objectives applies to structures made by bounded()")
         out = copy.copy(self)
         n = W.shape[1]
         Wa = np.zeros((W.shape[0], n + self.m))
@@ -383,7 +384,7 @@ class FixedStructureLP:
         """
         h = np.asarray(h, dtype=np.float64)
         if not np.array_equal(np.isinf(h), self.free):
-            raise ValueError("the unbounded factors differ from the structure's")
+            raise InvalidValueError("the unbounded factors differ from the structure's")
         st = self.new_state() if state is None else state
         bounds, ok = self.minimize_all_unchecked(np.ascontiguousarray(b, dtype=np.float64),
                                         np.ascontiguousarray(h), st, b_err=b_err)

@@ -25,7 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 from .._lazy import optional_import
 from .._rounding import gamma, round_down
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from ..exceptions import (
+    DimensionError,
+    EmptySetError,
+    InvalidValueError,
+    SolverError,
+    UnboundedSetError,
+)
 from .lp import FactorPolytope, highspy
 from .zonotope import (
     ConstrainedZonotope,
@@ -364,7 +370,7 @@ def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None
     if int(n) != n or n < 0:
         raise DimensionError(f"n must be a nonnegative integer, got {n!r}")
     if method not in ("auto", "facets", "lp"):
-        raise ValueError(f"method must be 'auto', 'facets' or 'lp', got {method!r}")
+        raise InvalidValueError(f"method must be 'auto', 'facets' or 'lp', got {method!r}")
     Zs, f = unit_scaled(Z)
     if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
         return sample(Zs, n, rng, burn_in=burn_in, thin=thin, method=method) * f

@@ -32,7 +32,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._rounding import gamma, round_down, round_up
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from ..exceptions import (
+    ArgumentError,
+    DimensionError,
+    EmptySetError,
+    InvalidValueError,
+    SolverError,
+    UnboundedSetError,
+)
 from ..tolerances import PONTRYAGIN_MATCH_RTOL
 from .box import Box, box_center_radius
 from .zonotope import (
@@ -292,7 +299,7 @@ def convex_hull(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ConstrainedZo
     (True, False)
     """
     if not isinstance(W, ConstrainedZonotope):
-        raise TypeError(f"convex_hull expects a ConstrainedZonotope, got {type(W).__name__}")
+        raise ArgumentError(f"convex_hull expects a ConstrainedZonotope, got {type(W).__name__}")
     if W.dim != Z.dim:
         raise DimensionError(f"convex hull: dimensions differ ({Z.dim} vs {W.dim})")
     Z = _bounded_factors(Z, "convex_hull")
@@ -370,8 +377,8 @@ def _zonotope_data(W: ConstrainedZonotope | Box) -> tuple[NDArray[np.float64], N
         keep = r > 0
         return np.diag(r)[:, keep], c
     if not isinstance(W, ConstrainedZonotope):
-        raise TypeError("the subtrahend must be a ConstrainedZonotope (a zonotope) or a Box, "
-                        f"got {type(W).__name__}")
+        raise ArgumentError("the subtrahend must be a ConstrainedZonotope (a zonotope) or a Box, "
+                            f"got {type(W).__name__}")
     if W.n_con or W.has_unbounded_factors:
         raise DimensionError("the subtrahend must be a zonotope or a box (no constraints, "
                              "bounded factors); for a general set use an outer zonotope of it "
@@ -461,7 +468,7 @@ def pontryagin_difference(Z: ConstrainedZonotope, W: ConstrainedZonotope | Box |
     True
     """
     if method not in ("exact", "inner"):
-        raise ValueError(f"method must be 'exact' or 'inner', got {method!r}")
+        raise InvalidValueError(f"method must be 'exact' or 'inner', got {method!r}")
     if not isinstance(W, ConstrainedZonotope | Box):
         w = as_vector("W", W, size=Z.dim)
         return Z.minkowski_sum(-w)

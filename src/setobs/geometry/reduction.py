@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import qr
 
 from .._rounding import UNIT_ROUNDOFF, gamma
-from ..exceptions import DimensionError, EmptySetError
+from ..exceptions import DimensionError, EmptySetError, InvalidValueError
 from ..tolerances import (
     ELIMINATION_ERR_RTOL,
     ELIMINATION_PIVOT_TOL,
@@ -792,7 +792,7 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
         raise DimensionError(
             f"max_constraints must be a nonnegative integer, got {max_constraints!r}")
     if method not in ("auto", "fast", "lp"):
-        raise ValueError(f"method must be 'auto', 'fast' or 'lp', got {method!r}")
+        raise InvalidValueError(f"method must be 'auto', 'fast' or 'lp', got {method!r}")
     if Z.n_con <= max_constraints:
         return Z
     if method == "fast" or (method == "auto" and Z.n_gen * Z.n_con > FAST_ELIMINATION_SIZE):

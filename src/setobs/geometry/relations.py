@@ -26,7 +26,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
+from ..exceptions import (
+    ArgumentError,
+    DimensionError,
+    EmptySetError,
+    InvalidValueError,
+    NotSupportedError,
+    SolverError,
+    UnboundedSetError,
+)
 from ..tolerances import CONTAINMENT_RTOL, FEASIBILITY_TOL
 from .zonotope import ConstrainedZonotope, magnitude, scaled_by, support_unwarned, unit_scaled
 
@@ -67,7 +75,8 @@ class ContainmentResult:
 
     def __bool__(self) -> bool:
         if self.holds is None:
-            raise ValueError("the relation is undecided (holds=None); read .holds explicitly")
+            raise InvalidValueError("the relation is undecided (holds=None); read .holds "
+                                    "explicitly")
         return self.holds
 
 
@@ -193,7 +202,7 @@ def is_subset(Z: ConstrainedZonotope, W: ConstrainedZonotope) -> ContainmentResu
     (True, False)
     """
     if not isinstance(W, ConstrainedZonotope):
-        raise TypeError(f"is_subset expects a ConstrainedZonotope, got {type(W).__name__}")
+        raise ArgumentError(f"is_subset expects a ConstrainedZonotope, got {type(W).__name__}")
     if W.dim != Z.dim:
         raise DimensionError(f"containment: dimensions differ ({Z.dim} vs {W.dim})")
     # Both sets at the container's magnitude (exact power-of-two scaling), so the
@@ -336,7 +345,7 @@ def is_equal(Z: ConstrainedZonotope, W: ConstrainedZonotope, tol: float = 0.0
     Zb, Wb = Z, W
     if tol > 0.0:
         if not isinstance(W, ConstrainedZonotope):
-            raise TypeError(f"is_equal expects a ConstrainedZonotope, got {type(W).__name__}")
+            raise ArgumentError(f"is_equal expects a ConstrainedZonotope, got {type(W).__name__}")
         if W.dim != Z.dim:
             raise DimensionError(f"equality: dimensions differ ({Z.dim} vs {W.dim})")
         B = ConstrainedZonotope.from_box(np.full(Z.dim, -tol), np.full(Z.dim, tol))
@@ -405,7 +414,7 @@ def represents(Z: ConstrainedZonotope, kind: str, tol: float | None = None) -> b
     False
     """
     if kind not in REPRESENTABLE_KINDS:
-        raise ValueError(f"kind must be one of {REPRESENTABLE_KINDS}, got {kind!r}")
+        raise InvalidValueError(f"kind must be one of {REPRESENTABLE_KINDS}, got {kind!r}")
     if tol is not None:
         tol = check_real_scalar("tol", tol, nonnegative=True)
     if kind == "empty":
@@ -436,8 +445,8 @@ def _corners(box) -> NDArray[np.float64]:
 
 def _is_its_hull(Z: ConstrainedZonotope, box, t: float) -> bool:
     if Z.dim > 12:
-        raise NotImplementedError("represents(..., 'box') checks the 2^n corners of the hull; "
-                                  f"n = {Z.dim} is above 12")
+        raise NotSupportedError("represents(..., 'box') checks the 2^n corners of the hull; "
+                                f"n = {Z.dim} is above 12")
     if Z.n_con == 0 and ((Z.G != 0.0).sum(axis=0) <= 1).all():
         return True  # axis-aligned generators: a box
     Zt = Z + ConstrainedZonotope.from_box(np.full(Z.dim, -t), np.full(Z.dim, t)) if t > 0 else Z
@@ -475,7 +484,7 @@ def _is_zonotope(Z: ConstrainedZonotope, t: float) -> bool:
             if not _symmetric(F, t):
                 return False
         return True
-    raise NotImplementedError(
+    raise NotSupportedError(
         f"represents(..., 'zonotope') decides polytopes up to 3 (affine) dimensions; this one "
         f"has {d} and constraints that exact reduction cannot remove")
 

@@ -14,8 +14,10 @@ from numpy.typing import ArrayLike, NDArray
 from .._rounding import UNIT_ROUNDOFF, gamma, outward_interval, round_up
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
+    ArgumentError,
     DimensionError,
     EmptySetError,
+    ImmutableError,
     MagnitudeError,
     SolverError,
     SolverWarning,
@@ -354,7 +356,7 @@ class ConstrainedZonotope:
         return self
 
     def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError("ConstrainedZonotope is immutable; operations return new objects")
+        raise ImmutableError("ConstrainedZonotope is immutable; operations return new objects")
 
     def __reduce__(self):
         # Pickling and deepcopy rebuild from the data (the LP cache is dropped).
@@ -602,7 +604,7 @@ class ConstrainedZonotope:
                 cerr = _add(cerr, e)
             return self._same_factors(self._G, c, cerr, "Minkowski sum with a vector")
         if err is not None:
-            raise TypeError("err applies to a vector summand only")
+            raise ArgumentError("err applies to a vector summand only")
         if compiled_ops is not None:
             out = compiled_ops.minkowski_sum(self, other)
             if out is not None:
@@ -631,8 +633,8 @@ class ConstrainedZonotope:
 
     def __sub__(self, other: Any) -> ConstrainedZonotope:
         if isinstance(other, ConstrainedZonotope):
-            raise TypeError("Z - W is ambiguous for sets: use Z + (-W) for the Minkowski sum "
-                            "with the reflection, or Z.pontryagin_difference(W)")
+            raise ArgumentError("Z - W is ambiguous for sets: use Z + (-W) for the Minkowski sum "
+                                "with the reflection, or Z.pontryagin_difference(W)")
         if np.ndim(other) == 1:
             return self.minkowski_sum(-as_vector("vector", other, size=self.dim))
         return NotImplemented
@@ -686,7 +688,8 @@ class ConstrainedZonotope:
             The second factor.
         """
         if not isinstance(other, ConstrainedZonotope):
-            raise TypeError(f"cartesian expects a ConstrainedZonotope, got {type(other).__name__}")
+            raise ArgumentError(f"cartesian expects a ConstrainedZonotope, got "
+                                f"{type(other).__name__}")
         return ConstrainedZonotope._owned(
             _blockdiag2(self._G, other._G),
             np.concatenate([self._c, other._c]),
@@ -754,7 +757,8 @@ class ConstrainedZonotope:
             if out is not None:
                 return out
         if not isinstance(other, ConstrainedZonotope):
-            raise TypeError(f"intersect expects a ConstrainedZonotope, got {type(other).__name__}")
+            raise ArgumentError(f"intersect expects a ConstrainedZonotope, got "
+                                f"{type(other).__name__}")
         if R is None:
             self._check_same_dim(other, "intersection")
             R_a = np.eye(self.dim)

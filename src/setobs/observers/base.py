@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._deprecation import renamed
 from .._validation import as_matrix, as_vector
-from ..exceptions import DesignError, DimensionError
+from ..exceptions import DesignError, DimensionError, NotSupportedError
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 
@@ -168,7 +168,7 @@ class PointObserver:
 
     def reset(self) -> None:  # pragma: no cover - overridden
         """Restart from the initial estimate."""
-        raise NotImplementedError
+        raise NotSupportedError("a subclass implements this")
 
     def _check(self, y: ArrayLike, u: ArrayLike | None):
         yv = as_vector("y", y, size=self.sys.l)
@@ -191,7 +191,7 @@ class PointObserver:
         u : array_like, shape (p,), optional
             Input ``u_k`` applied at step ``k`` (required when the system has inputs).
         """
-        raise NotImplementedError  # pragma: no cover
+        raise NotSupportedError("a subclass implements this")  # pragma: no cover
 
     def state_estimate(self) -> NDArray[np.float64] | None:
         """Current state estimate (``None`` if the observer has none)."""

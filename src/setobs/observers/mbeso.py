@@ -12,6 +12,7 @@ from scipy.linalg import block_diag, lstsq
 
 from .._format import format_complex_list
 from ..analysis import invariant_zeros, relative_degrees
+from ..exceptions import InvalidValueError
 from ..systems import DisturbanceInputs, LinearSystem
 from ._gains import place_gain
 from .base import DesignError, StateSpaceObserver
@@ -66,7 +67,7 @@ def mbeso_l1_norm(r: int, omega: float) -> float:
     (3.0, 6.0)
     """
     if not 0.0 <= omega < 1.0:
-        raise ValueError(f"omega must lie in [0, 1), got {omega}")
+        raise InvalidValueError(f"omega must lie in [0, 1), got {omega}")
     return (int(r) + 1) / (1.0 - float(omega))
 
 
@@ -98,7 +99,7 @@ def mbeso_error_bound(degrees: Sequence[int], omega: float | Sequence[float],
     om = _omegas(omega, p)
     delta = np.broadcast_to(np.asarray(increment_bound, float), (p,))
     if np.any(delta < 0) or not np.all(np.isfinite(delta)):
-        raise ValueError(f"increment_bound must be finite and nonnegative, got {delta}")
+        raise InvalidValueError(f"increment_bound must be finite and nonnegative, got {delta}")
     return np.array([mbeso_l1_norm(r, w) * d for r, w, d in zip(degrees, om, delta,
                                                                    strict=True)])
 

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis.modular import ModularDesign, design_modular
-from ..exceptions import DimensionError
+from ..exceptions import ArgumentError, DimensionError, InvalidValueError
 from ..tolerances import TRUST_TOL
 from .base import ObserverResult, PointObserver
 
@@ -132,15 +132,16 @@ class NonlinearModularObserver(PointObserver):
                  trust_tol: float = TRUST_TOL) -> None:
         if isinstance(system, ModularDesign):
             if any(a is not None for a in (A0, B0, Aw, Bw, order)):
-                raise TypeError("pass either a ModularDesign or the design's parameters")
+                raise ArgumentError("pass either a ModularDesign or the design's parameters")
             design = system
         else:
             if A0 is None or Aw is None:
-                raise TypeError("A0 and Aw (or their eigenvalues) are required")
+                raise ArgumentError("A0 and Aw (or their eigenvalues) are required")
             design = design_modular(system, A0, B0, Aw, Bw,
                                     order=7 if order is None else int(order))
         if coordinates not in COORDINATES:
-            raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+            raise InvalidValueError(f"coordinates must be one of {COORDINATES}, got "
+                                    f"{coordinates!r}")
         self.trust_tol = check_real_scalar("trust_tol", trust_tol, positive=True)
         self.design = design
         self.sys = design.system

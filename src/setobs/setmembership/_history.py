@@ -73,6 +73,7 @@ from numpy.typing import NDArray
 
 from .._lazy import lazy_module
 from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, round_up
+from ..exceptions import InternalError
 from ..geometry import ConstrainedZonotope
 from ..geometry.zonotope import trusted_cz
 from ..tolerances import HISTORY_GAP_RTOL
@@ -243,7 +244,7 @@ class HistoryLP:
         :class:`~setobs.setmembership._setup.Entry`): the new state, the factors
         of its uncertainty sets, the dynamics and the measurement rows."""
         if self.box is None:
-            raise RuntimeError("HistoryLP.push: the last step has no hull yet (call hull)")
+            raise InternalError("HistoryLP.push: the last step has no hull yet (call hull)")
         self._undo = []
         N = self.N
         lo0, hi0 = self.box

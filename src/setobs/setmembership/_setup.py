@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._rounding import UNIT_ROUNDOFF, gamma, pow2_inverse, round_down, round_up
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis import bounded_do_exists, observability_decomposition
-from ..exceptions import DimensionError, ExistenceError
+from ..exceptions import ArgumentError, DimensionError, ExistenceError, InvalidValueError
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import trusted_box
 from ..geometry.zonotope import trusted_cz
@@ -78,8 +78,8 @@ def check_window(window: object) -> int | None:
     if window is None:
         return None
     if isinstance(window, bool | np.bool_) or not isinstance(window, numbers.Real):
-        raise TypeError(f"window must be a positive integer or None (exact mode), "
-                        f"got {window!r}")
+        raise ArgumentError(f"window must be a positive integer or None (exact mode), "
+                            f"got {window!r}")
     w = float(window)
     if not np.isfinite(w) or w != int(w) or w < 1:
         raise DimensionError(f"window must be a positive integer or None (exact mode), "
@@ -94,7 +94,7 @@ def as_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
     if isinstance(value, Box):
         value = ConstrainedZonotope.from_box(value.lo, value.hi)
     if not isinstance(value, ConstrainedZonotope):
-        raise TypeError(
+        raise ArgumentError(
             f"{name} must be a ConstrainedZonotope or a Box (e.g. Box(lo, hi)), got "
             f"{type(value).__name__}")
     if value.dim != dim:
@@ -118,8 +118,8 @@ def noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
                 "NaN in Y, not unbounded noise)")
         return value
     if isinstance(value, str | bytes) or callable(value):
-        raise TypeError(f"{name} must be a ConstrainedZonotope, a Box, per-channel radii "
-                        f"or a callable k -> set, got {type(value).__name__}")
+        raise ArgumentError(f"{name} must be a ConstrainedZonotope, a Box, per-channel radii "
+                            f"or a callable k -> set, got {type(value).__name__}")
     r = np.asarray(value)
     if r.ndim == 0:
         r = np.full(dim, check_real_scalar(name, value, nonnegative=True))
@@ -303,8 +303,8 @@ class ModelSetup:
         if isinstance(dd, Box):
             dd = ConstrainedZonotope.from_box(dd.lo, dd.hi)
         if not isinstance(dd, ConstrainedZonotope):
-            raise TypeError(f"increment_set({k}) must return a ConstrainedZonotope or a Box, "
-                            f"got {type(dd).__name__}")
+            raise ArgumentError(f"increment_set({k}) must return a ConstrainedZonotope or a Box, "
+                                f"got {type(dd).__name__}")
         if dd.dim != self.sys.q:
             raise DimensionError(f"increment_set({k}) has dimension {dd.dim}, "
                                  f"expected {self.sys.q}")
@@ -427,9 +427,9 @@ class ModelSetup:
         F = np.eye(l) if measurement_noise_matrix is None else as_matrix(
             "measurement_noise_matrix", measurement_noise_matrix, rows=l)
         if process_noise_matrix is not None and process_noise is None:
-            raise ValueError("process_noise_matrix is given without process_noise")
+            raise InvalidValueError("process_noise_matrix is given without process_noise")
         if measurement_noise_matrix is not None and measurement_noise is None:
-            raise ValueError("measurement_noise_matrix is given without measurement_noise")
+            raise InvalidValueError("measurement_noise_matrix is given without measurement_noise")
         self._E_o = (T_o / dz[None, :]) @ np.vstack([E, np.zeros((q, E.shape[1]))])
         self._F_b = F / dy[:, None]
         self._w_spec, self._v_spec = process_noise, measurement_noise

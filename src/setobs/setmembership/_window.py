@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 from .._blas import SMALL_BLAS_DIM
 from .._lazy import lazy_module
 from .._rounding import gamma
+from ..exceptions import InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..geometry.fastlp import FixedStructureLP, LPState, hull_objectives
 from ..geometry.zonotope import trusted_cz
@@ -108,7 +109,7 @@ class WindowModel:
             masks = [np.ones(l, dtype=bool)] * n_y
         masks = [np.asarray(m, dtype=bool) for m in masks]
         if len(masks) != n_y or any(m.shape != (l,) for m in masks):
-            raise ValueError(f"masks must be {n_y} boolean vectors of length {l}")
+            raise InvalidValueError(f"masks must be {n_y} boolean vectors of length {l}")
         nV = 0 if noise is None else noise.n_gen
         n_noisy = sum(bool(m.any()) for m in masks) if nV else 0
         n_x = nS + s * nD  # factors with generator columns

@@ -27,7 +27,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import DimensionError, SolverError, SolverWarning
+from ..exceptions import ArgumentError, DimensionError, SolverError, SolverWarning
 from ..geometry import Box
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import (
@@ -276,8 +276,8 @@ def _radii(name: str, value: Any, dim: int) -> NDArray[np.float64]:
                                  f"[{value.lo}, {value.hi}]")
         value = value.hi
     if value is None or isinstance(value, str | bytes) or callable(value) or hasattr(value, "G"):
-        raise TypeError(f"{name} must be per-channel radii (a number or a vector) or a "
-                        f"symmetric Box, got {type(value).__name__}")
+        raise ArgumentError(f"{name} must be per-channel radii (a number or a vector) or a "
+                            f"symmetric Box, got {type(value).__name__}")
     r = np.asarray(value, dtype=float)
     if r.ndim == 0:
         r = np.full(dim, float(r))

@@ -13,8 +13,10 @@ from .._blas import single_threaded_blas, with_single_threaded_blas
 from .._lazy import progress_bar
 from .._validation import as_matrix, check_real_scalar
 from ..exceptions import (
+    ArgumentError,
     DimensionError,
     ExistenceError,
+    InvalidValueError,
     MissingDataWarning,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
@@ -321,28 +323,28 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         window = check_window(window)
         if reset is not None:
             if reset not in ("raise", "box"):
-                raise ValueError(f"reset must be 'raise' or 'box', got {reset!r}")
+                raise InvalidValueError(f"reset must be 'raise' or 'box', got {reset!r}")
             if on_inconsistent != "raise":
-                raise ValueError("give on_inconsistent only (reset is its deprecated "
-                                 "spelling)")
+                raise InvalidValueError("give on_inconsistent only (reset is its deprecated "
+                                        "spelling)")
             warnings.warn("SMFDO(reset=...) is deprecated: use on_inconsistent='raise' | "
                           "'skip' | 'reset'", DeprecationWarning, stacklevel=2)
             on_inconsistent = "reset" if reset == "box" else "raise"
         if on_inconsistent not in ON_INCONSISTENT:
-            raise ValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
-                             f"{on_inconsistent!r}")
+            raise InvalidValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
+                                    f"{on_inconsistent!r}")
         self.reset_inflation = check_real_scalar("reset_inflation", reset_inflation,
                                                  positive=True)
         self.margin = check_real_scalar("margin", margin, nonnegative=True)
         if not isinstance(state_bounds, bool | np.bool_):
-            raise TypeError(f"state_bounds must be True or False, got {state_bounds!r}")
+            raise ArgumentError(f"state_bounds must be True or False, got {state_bounds!r}")
         self.state_bounds = bool(state_bounds)
         self.data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
         if restart not in ("auto", "polytope", "box"):
-            raise ValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
+            raise InvalidValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
         if isinstance(restart_depth, bool) or not isinstance(restart_depth, numbers.Integral) \
                 or restart_depth < 1:
-            raise ValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
+            raise InvalidValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
         self.restart = restart
         self.restart_depth = int(restart_depth)
         if self.data_rtol > 1e-6:

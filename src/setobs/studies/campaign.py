@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._lazy import progress_bar
-from ..exceptions import DimensionError
+from ..exceptions import ArgumentError, DimensionError
 from .scenarios import Scenario, rng_for_run
 
 __all__ = ["FILTERED_KINDS", "OBSERVER_KINDS", "SMFDO_PARAMS", "CampaignResult", "Improvement",
@@ -99,8 +99,8 @@ class ObserverSpec:
             raise DimensionError(f"unknown observer kind {self.kind!r}; choose from "
                                  f"{list(OBSERVER_KINDS)}")
         if not isinstance(self.params, dict):
-            raise TypeError(f"params of observer {self.name!r} must be a mapping, got "
-                            f"{type(self.params).__name__}")
+            raise ArgumentError(f"params of observer {self.name!r} must be a mapping, got "
+                                f"{type(self.params).__name__}")
         accepted = _accepted_params(self.kind)
         unknown = sorted(set(self.params) - set(accepted))
         if unknown:

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import examples
-from ..exceptions import DimensionError
+from ..exceptions import ArgumentError, DimensionError, InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..systems import LinearSystem
 
@@ -78,9 +78,9 @@ def band_limited_noise(power: float | Any, dt: float, size: int,
     """
     pw = np.atleast_1d(np.asarray(power, float))
     if pw.ndim != 1 or np.any(pw < 0) or not np.all(np.isfinite(pw)):
-        raise ValueError(f"power must be nonnegative and finite per channel, got {power!r}")
+        raise InvalidValueError(f"power must be nonnegative and finite per channel, got {power!r}")
     if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be positive, got {dt!r}")
+        raise InvalidValueError(f"dt must be positive, got {dt!r}")
     return rng.standard_normal((int(size), pw.size)) * np.sqrt(pw / dt)
 
 
@@ -150,8 +150,8 @@ class Scenario:
         if isinstance(self.system, LinearSystem):
             pass
         elif not isinstance(self.system, str):
-            raise TypeError(f"system must be an example name, a model file or a LinearSystem, "
-                            f"got {type(self.system).__name__}")
+            raise ArgumentError(f"system must be an example name, a model file or a LinearSystem, "
+                                f"got {type(self.system).__name__}")
         elif self.system not in EXAMPLE_SYSTEMS and not Path(self.system).is_file():
             raise DimensionError(f"unknown system {self.system!r}: neither an example "
                                  f"({', '.join(sorted(EXAMPLE_SYSTEMS))}) nor a model file")
