@@ -226,7 +226,7 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     """
     import time as _time
 
-    from .exceptions import ModelInvalidatedError
+    from .exceptions import ModelInvalidatedError, SkipLimitError
     from .io import load_model, load_record, model_units, round_time
     from .setmembership import SMFDO, calibrate_noise
 
@@ -308,8 +308,9 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
     except ModelInvalidatedError as exc:
         k = exc.step
         when = f" (t = {round_time(float(rec.t[k])):g} s)" if times_known else ""
-        if "max_skip_fraction" in str(exc):
-            print(f"setobs: stopped at step {k}{when}: " + str(exc).split("; what to do")[0]
+        if isinstance(exc, SkipLimitError):  # (the message without the API's advice)
+            print(f"setobs: stopped at step {k}{when}: "
+                  + str(exc).removesuffix(f"; {exc.hint}")
                   + ". What to do: --calibrate, a larger --noise or --increment, or "
                   "--max-skip-fraction if these are outliers.", file=sys.stderr)
             return EXIT_INCONSISTENT

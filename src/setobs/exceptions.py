@@ -31,6 +31,7 @@ __all__ = [
     "NotFoundError",
     "NotSupportedError",
     "SetobsError",
+    "SkipLimitError",
     "SolverError",
     "SolverWarning",
     "UnboundedSetError",
@@ -193,6 +194,11 @@ class ModelInvalidatedError(SetobsError, RuntimeError):
 
     def __reduce__(self):
         return (type(self), (str(self), self.step, self.hint))
+
+
+class SkipLimitError(ModelInvalidatedError):
+    """With ``on_inconsistent="skip"``, more than ``max_skip_fraction`` of the samples
+    were skipped: the bounds, not the samples, are wrong (the message says how many)."""
 
 
 class ModelInvalidatedWarning(RuntimeWarning):

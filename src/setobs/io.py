@@ -132,14 +132,21 @@ def load_model(path: str | Path, *, dt: float | None = None) -> LinearSystem:
         Unreadable file, missing or ill-shaped matrices, disturbances not
         stated, conflicting sampling times.
     """
+    return _load_model_and_units(path, dt=dt)[0]
+
+
+def _load_model_and_units(path: str | Path, *, dt: float | None = None
+                          ) -> tuple[LinearSystem, dict[str, str]]:
+    """:func:`load_model` and :func:`model_units` from one reading of the file."""
     p = Path(path)
     data = _read_mapping(p)
     try:
-        return _system_from_mapping(data, dt, p)
+        sys_ = _system_from_mapping(data, dt, p)
     except ModelFileError:
         raise
     except (ValueError, TypeError) as exc:  # DimensionError and friends: one line
         raise ModelFileError(f"{p}: {exc}") from None
+    return sys_, _units(data, sys_, p)
 
 
 def _check_keys(data: dict, p: Path) -> None:
@@ -193,10 +200,8 @@ def _system_from_mapping(data: dict, dt: float | None, p: Path) -> LinearSystem:
             f"{p}: the disturbance channels are not stated: give G (accepted names: G, E, F), "
             "or disturbance_inputs (the columns of B that are disturbances)")
     names = {k: _names(data, k) for k in _NAME_KEYS}
-    sys_ = LinearSystem.from_matrices(A=Phi, C=Xi, B=B, D=D, G=G, disturbance_inputs=dist,
+    return LinearSystem.from_matrices(A=Phi, C=Xi, B=B, D=D, G=G, disturbance_inputs=dist,
                                       dt=Ts, continuous=continuous, **names)
-    _units(data, sys_, p)  # refuse a bad units: mapping when the model is loaded
-    return sys_
 
 
 def _units(data: dict, sys_: LinearSystem, p: Path) -> dict[str, str]:
@@ -238,10 +243,7 @@ def model_units(path: str | Path, *, dt: float | None = None) -> dict[str, str]:
         As :func:`load_model`; also when ``units`` is not a mapping or names a
         signal the model does not have.
     """
-    p = Path(path)
-    data = _read_mapping(p)
-    sys_ = load_model(p, dt=dt)
-    return _units(data, sys_, p)
+    return _load_model_and_units(path, dt=dt)[1]
 
 
 @dataclass(frozen=True)

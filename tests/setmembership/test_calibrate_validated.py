@@ -204,6 +204,7 @@ def test_skipping_stops_at_its_limit_and_flags_every_later_step():
         res = so.SMFDO(sys_, window=10, max_skip_fraction=1.0, **kw).run(Y, U)
     skipped = res.status == "skipped"
     assert skipped.sum() > 3 and info.value.step == np.flatnonzero(skipped)[3]
+    assert isinstance(info.value, so.SkipLimitError)
     first = int(np.argmax(skipped))
     np.testing.assert_array_equal(res.after_skip, np.arange(300) >= first)
     assert res.to_pandas()["after_skip"].sum() == 300 - first

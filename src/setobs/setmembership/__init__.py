@@ -7,6 +7,7 @@ from .smfdo import (
     ExistenceError,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
+    SkipLimitError,
     SMFDOResult,
     SMFDOStep,
 )
@@ -21,6 +22,7 @@ __all__ = [
     "PointEstimate",
     "SMFDOResult",
     "SMFDOStep",
+    "SkipLimitError",
     "calibrate_noise",
     "chebyshev_center",
     "interval_center",

@@ -191,8 +191,6 @@ class SetRecursion:
                 del self._hist[:len(self._hist) - self.window]
         if status == "ok" and not finite:
             status = "unbounded"
-        if status in ("skipped", "reset"):
-            self._after_skip = True
         x_lo = x_hi = None
         if box_x is not None:
             x_lo, x_hi = self._outward(box_x.lo, box_x.hi)
@@ -200,7 +198,9 @@ class SetRecursion:
                 x_lo[self._x_free], x_hi[self._x_free] = -np.inf, np.inf
             else:
                 x_lo, x_hi = self._add_unobservable(k, e, box_o, x_lo, x_hi)
-        return SMFDOStep(k, est, lo, hi, rad, Zd, status, x_lo, x_hi, self._after_skip)
+        # (first_inconsistent: the first skipped or reset step since k = 0)
+        return SMFDOStep(k, est, lo, hi, rad, Zd, status, x_lo, x_hi,
+                         self.first_inconsistent is not None)
 
     def _add_unobservable(self, k: int, e: Entry, box_o: Box, x_lo, x_hi):
         """States on the unobservable part: the observable part's bound (``x_lo``,

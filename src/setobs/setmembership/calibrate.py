@@ -85,8 +85,6 @@ class NoiseCalibration:
         The smallest radii, at least ``minimal``, with which the whole record is
         consistent when its calibrated part keeps ``minimal`` (equal to ``minimal``
         with ``holdout=0``).
-    margin : ndarray, shape (l,)
-        ``validated / minimal - 1``: what the held-out part needed beyond the rest.
     active_samples : ndarray of int
         The samples at which ``minimal`` is attained (the LP's active rows, within
         ``CALIBRATION_ACTIVE_RTOL``), the tightest first: glitches and outliers show up here
@@ -121,7 +119,6 @@ class NoiseCalibration:
     status: str
     info: dict[str, Any] = field(default_factory=dict)
     validated: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    margin: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     active_samples: NDArray[np.int64] = field(
         default_factory=lambda: np.zeros(0, dtype=np.int64))
     outliers: tuple[Outlier, ...] = ()
@@ -153,6 +150,13 @@ class NoiseCalibration:
         return m
 
     @property
+    def margin(self) -> NDArray[np.float64]:
+        """``validated / minimal - 1`` (0 where ``minimal`` is 0): what the held-out part
+        needed beyond the rest."""
+        m = self.minimal
+        return np.where(m > 0, self.validated / np.where(m > 0, m, 1.0) - 1.0, 0.0)
+
+    @property
     def active_times(self) -> NDArray[np.float64] | None:
         """Times ``k dt`` of :attr:`active_samples` (``None`` without a sampling time)."""
         return None if self.dt is None else self.active_samples * self.dt
@@ -175,16 +179,12 @@ class NoiseCalibration:
                          f": smallest bound {fmt(self.minimal)}")
             lines.append(f"the bound needed a margin of {fmt(100.0 * self.margin)} % to "
                          f"explain the other {100.0 - pct:.0f} %: validated {fmt(self.validated)}")
-        if self.active_samples.size:
-            shown = ", ".join(at(int(k)) for k in self.active_samples[:12])
-            more = "" if self.active_samples.size <= 12 else \
-                f" and {self.active_samples.size - 12} more"
-            lines.append(f"the smallest bound is attained at sample(s) {shown}{more}")
-        if self.validated_samples.size:
-            shown = ", ".join(at(int(k)) for k in self.validated_samples[:6])
-            more = "" if self.validated_samples.size <= 6 else \
-                f" and {self.validated_samples.size - 6} more"
-            lines.append(f"the validated bound is attained at sample(s) {shown}{more}")
+        for what, ks, shown in (("smallest", self.active_samples, 12),
+                                ("validated", self.validated_samples, 6)):
+            if ks.size:
+                more = "" if ks.size <= shown else f" and {ks.size - shown} more"
+                lines.append(f"the {what} bound is attained at sample(s) "
+                             + ", ".join(at(int(k)) for k in ks[:shown]) + more)
         for o in self.outliers:
             lines.append(f"outlier removed: sample {at(o.sample)}: bound "
                          f"{fmt(o.bound_with)} with it, {fmt(o.bound_without)} without")
@@ -823,8 +823,9 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
     Clarabel with robust settings, then HiGHS's interior point); ``info`` names
     the solver, the dual lower bound and the attempts passed over.
 
-    The recommended ``radii`` are ``minimal (1 + CALIBRATION_RTOL) +
-    CALIBRATION_ATOL * spread``, with ``spread`` the largest deviation of a
+    The recommended ``radii`` are ``target (1 + CALIBRATION_RTOL) +
+    CALIBRATION_ATOL * spread`` (``target``: ``validated (1 + safety)``, or ``minimal``
+    with ``holdout=0``), then checked, with ``spread`` the largest deviation of a
     measured output from the record's equilibrium (``info["data_scale"]``): a
     record that the model explains exactly (no noise at all) gets radii of about
     ``1e-9 spread``, not 0 -- the solver's accuracy, not a noise level.
@@ -858,8 +859,11 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         Uf = Ua if (Ua is None or split is None) else Ua[:split]
         lp = _RecordLP(sys, Yf, Uf, w)
         sol = lp.solve(inc, r_v, per_channel, limit)
-        bound = sol.v * lp.sigma if per_channel else float(sol.v[0]) * lp.sigma / wmax * r_v
-        return lp, sol, bound
+        return lp, sol, radii_of(lp, sol)
+
+    def radii_of(lp, sol):
+        """The radii of the LP's noise variable (per channel, or a scale of the shape)."""
+        return sol.v * lp.sigma if per_channel else float(sol.v[0]) * lp.sigma / wmax * r_v
 
     def objective(bound):
         return float(np.sum(bound / r_v))
@@ -895,15 +899,13 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         fixed = np.where(lp.kk < split, minimal[lp.ii] / lp.sigma, np.nan)
         lower = minimal / lp.sigma if per_channel else np.array([scale * wmax / lp.sigma])
         res = lp.solve(inc, r_v, per_channel, limit, fixed=fixed, lower=lower)
-        validated = np.maximum(minimal, res.v * lp.sigma if per_channel
-                               else float(res.v[0]) * lp.sigma / wmax * r_v)
+        validated = np.maximum(minimal, radii_of(lp, res))
         # within the LP's accuracy of minimal: no margin (the radii are checked below)
         validated = np.where(validated <= minimal * (1.0 + CALIBRATION_ACTIVE_RTOL), minimal,
                              validated)
         if np.any(validated > minimal):
             held = _active(lp, res, validated)
             val_active = held[held >= split]
-    margin = np.where(minimal > 0, validated / np.where(minimal > 0, minimal, 1.0) - 1.0, 0.0)
     # the bound to use: validated with a safety, so that no sample sits exactly at it
     target = validated if split is None else validated * (1.0 + safety)
     standard = target + (CALIBRATION_RTOL * target + CALIBRATION_ATOL * lp.sigma)
@@ -951,7 +953,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
                       "may not be the smallest", SolverWarning, stacklevel=2)
     return NoiseCalibration(
         radii, minimal, scale, inc, worst, lp.samples, status, info, validated=validated,
-        margin=margin, active_samples=active, outliers=tuple(outliers),
+        active_samples=active, outliers=tuple(outliers),
         validated_samples=val_active,
         holdout=0.0 if split is None else float(holdout), split=split, record_length=N,
         dt=sys.dt, output_names=tuple(sys.output_names),

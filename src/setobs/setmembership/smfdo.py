@@ -20,6 +20,7 @@ from ..exceptions import (
     MissingDataWarning,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
+    SkipLimitError,
 )
 from ..geometry import Box, ConstrainedZonotope
 from ..systems import DisturbanceInputs, LinearSystem, require_system
@@ -121,7 +122,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         were skipped (of the record given to :meth:`run`, or of the steps so far for
         :meth:`update`; counted over at least ``1 / max_skip_fraction`` samples, so
         that a short record may lose one outlier; 0: no skip at all), the run stops
-        with a :class:`ModelInvalidatedError` naming the fraction (default 0.01: a
+        with a :class:`SkipLimitError` (a :class:`ModelInvalidatedError`) naming the
+        fraction (default 0.01: a
         bound that 80 % of a record contradicts is a wrong bound, not outliers).
         Every step from the first skipped or reset one on is flagged
         (``step.after_skip``, ``result.after_skip``): its bands hold for the model with
@@ -400,7 +402,6 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self._startup_Z = None  # the start-up's joint set of (z_o, zbar) (see _unobservable)
         self._startup_steps = 0
         self._skipped = 0  # skipped steps since k = 0 (max_skip_fraction)
-        self._after_skip = False  # a step was skipped or reset since k = 0
         self._run_length = 0  # the record length run() is processing (0: update() alone)
         self._auto_poly = True  # restart="auto": the polytope restart is in use
         self._auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
@@ -534,11 +535,9 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             # by itself (setobs._blas.SMALL_BLAS_DIM): the limit's four thread-count
             # calls (a tenth of such a step) are skipped; only speed depends on it
             step = self._update(y, u_prev, u)
-            if step.status == "skipped":
-                self._count_skip(step.k)
-            return step
-        with single_threaded_blas():
-            step = self._update(y, u_prev, u)
+        else:
+            with single_threaded_blas():
+                step = self._update(y, u_prev, u)
         if step.status == "skipped":
             self._count_skip(step.k)
         return step
@@ -554,7 +553,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         if f > 0:
             total = max(total, int(np.ceil(1.0 / f)))
         if self._skipped > f * total:
-            raise ModelInvalidatedError(
+            raise SkipLimitError(
                 f"{self._skipped} of the {k + 1} samples so far were skipped as inconsistent "
                 f"(more than max_skip_fraction = {100 * f:g} % of {total} samples; the "
                 f"first at step {self.first_inconsistent}): so many samples contradict the "
@@ -563,9 +562,6 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
                 "estimate --calibrate`; max_outliers= names the samples that raise it most, "
                 "run(ignore=) leaves them out), use larger bounds, or, if these samples "
                 "really are outliers, a larger max_skip_fraction")
-
-    def _hint(self) -> str:
-        return ModelInvalidatedError.HINT if self.sys.q else ModelInvalidatedError.HINT_STATE
 
     def _update(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
                 ) -> SMFDOStep:
