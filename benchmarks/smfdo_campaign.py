@@ -35,7 +35,7 @@ import numpy as np
 
 import setobs as so
 from _common import hull_cvxpy
-from setobs.geometry.fastlp import FixedStructureLP, hull_objectives
+from setobs.lp.fastlp import FixedStructureLP, hull_objectives
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign
 
 

@@ -109,24 +109,24 @@ def assert_hull_tight(Z: ConstrainedZonotope, box, rtol: float = 1e-9) -> None:
 
 def cripple_highs(monkeypatch) -> None:
     """Make every HiGHS model stop before its first iteration (simplex and IPM)."""
-    from setobs.geometry.lp import FactorPolytope
+    from setobs.lp import highs
 
-    original = FactorPolytope.new_highs
+    original = highs.new_model
 
-    def crippled():
-        hs = original()
+    def crippled(settings=None):
+        hs = original(settings)
         hs.setOptionValue("simplex_iteration_limit", 0)
         hs.setOptionValue("ipm_iteration_limit", 0)
         return hs
 
-    monkeypatch.setattr(FactorPolytope, "new_highs", staticmethod(crippled))
+    monkeypatch.setattr(highs, "new_model", crippled)
 
 
 def disable_compiled_lps(monkeypatch) -> None:
     """Take the compiled simplex out of the factor polytope's queries (the batch of
     :meth:`FactorPolytope.minimize_many` and the last retry, ``try_compiled``), so that
     a test reaches the HiGHS path."""
-    from setobs.geometry.lp import FactorPolytope
+    from setobs.lp.factor import FactorPolytope
 
     def nothing_solved(self, W):
         return np.full(W.shape[0], -np.inf), np.zeros(W.shape[0], dtype=bool)

@@ -3,7 +3,7 @@
 Rule checked on the package, the tests, the benchmarks and the notebooks: a name
 that starts with one underscore (a function, class, method, attribute or
 constant) is used only in the file that defines it. Private *modules*
-(``setobs._blas``, ``setobs.geometry._simplex``, ...) are package-internal; the
+(``setobs._blas``, ``setobs.lp._simplex``, ...) are package-internal; the
 names they export carry no underscore.
 """
 
@@ -172,6 +172,58 @@ def test_the_base_layer_imports_nothing_above_it():
                 bad += [f"{name}.py:{node.lineno}: import {a.name}" for a in node.names
                         if a.name.split(".")[0] == "setobs"]
     assert bad == []
+
+
+#: What each package may import (besides the base layer and itself): arrows point down.
+ALLOWED_ABOVE_BASE = {
+    "lp": set(),
+    "geometry": {"lp"},
+    "setmembership": {"lp", "geometry", "analysis", "systems", "results", "plotting"},
+}
+
+
+def upward_imports(root: Path) -> list[str]:
+    """Relative imports (at any depth, also inside functions) from a package in
+    :data:`ALLOWED_ABOVE_BASE` to a module it may not import."""
+    bad = []
+    for pkg, allowed in ALLOWED_ABOVE_BASE.items():
+        for path in sorted((root / pkg).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                targets = []
+                if isinstance(node, ast.ImportFrom) and node.level >= 2:
+                    mod = (node.module or "").split(".")[0]
+                    targets = [mod] if mod else [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0 and (
+                        node.module or "").startswith("setobs."):
+                    targets = [node.module.split(".")[1]]
+                elif isinstance(node, ast.Import):
+                    targets = [a.name.split(".")[1] for a in node.names
+                               if a.name.startswith("setobs.")]
+                if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "lazy_module" \
+                        and node.args and isinstance(node.args[0], ast.Constant) \
+                        and str(node.args[0].value).startswith("setobs."):
+                    targets = [str(node.args[0].value).split(".")[1]]
+                for t in targets:
+                    if t != pkg and t not in BASE_LAYER and t not in allowed:
+                        bad.append(f"{path.relative_to(root)}:{node.lineno}: imports {t}")
+    return bad
+
+
+def test_no_arrow_points_up():
+    """``setobs.lp`` imports nothing above the base layer; ``geometry`` only ``lp``;
+    ``setmembership`` neither observers, studies, compare nor the CLI."""
+    assert upward_imports(SRC) == []
+
+
+def test_the_import_checker_sees_an_arrow_up(tmp_path):
+    (tmp_path / "lp").mkdir()
+    (tmp_path / "lp" / "x.py").write_text("def f():\n    from ..geometry import Box\n")
+    (tmp_path / "geometry").mkdir()
+    (tmp_path / "geometry" / "y.py").write_text(
+        "from .._lazy import lazy_module\nm = lazy_module('setobs.setmembership.smfdo')\n")
+    (tmp_path / "setmembership").mkdir()
+    assert upward_imports(tmp_path) == ["lp/x.py:2: imports geometry",
+                                        "geometry/y.py:2: imports setmembership"]
 
 
 def unasserted_tests(root: Path) -> list[str]:

@@ -10,7 +10,7 @@ from threadpoolctl import threadpool_info
 
 import setobs as so
 from setobs import _blas
-from setobs.geometry.lp import FactorPolytope
+from setobs.lp.factor import FactorPolytope
 
 
 def blas_threads() -> list[int]:
@@ -53,7 +53,7 @@ def spy_minimize(monkeypatch, seen):
 def test_lp_queries_run_single_threaded_and_restore(monkeypatch, two_threads):
     """A set with more factors than ``SMALL_BLAS_DIM``: its support LP (HiGHS path) and
     its hull (the compiled batch) run with one BLAS thread; the setting comes back."""
-    from setobs.geometry.fastlp import FixedStructureLP
+    from setobs.lp.fastlp import FixedStructureLP
 
     seen: list[list[int]] = []
     spy_minimize(monkeypatch, seen)

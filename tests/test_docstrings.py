@@ -14,8 +14,9 @@ import re
 
 PUBLIC_MODULES = [
     "setobs", "setobs.geometry", "setobs.geometry.zonotope", "setobs.geometry.box",
-    "setobs.geometry.lp", "setobs.geometry.polytope", "setobs.geometry.reduction",
-    "setobs.geometry.fastlp", "setobs.analysis",
+    "setobs.lp.factor", "setobs.geometry.polytope", "setobs.geometry.reduction",
+    "setobs.lp", "setobs.lp.fastlp", "setobs.lp.certificate", "setobs.lp.highs",
+    "setobs.lp.boxlp", "setobs.analysis",
     "setobs.setmembership", "setobs.setmembership.estimates", "setobs.observers",
     "setobs.studies", "setobs.compare", "setobs.plotting", "setobs.io", "setobs.systems",
     "setobs.examples", "setobs.results", "setobs.exceptions",

@@ -55,7 +55,7 @@ def lazy_module(name: str) -> types.ModuleType:
     Parameters
     ----------
     name : str
-        Absolute module name, e.g. ``"highspy"`` or ``"setobs.geometry._simplex"``.
+        Absolute module name, e.g. ``"highspy"`` or ``"setobs.lp._simplex"``.
 
     Returns
     -------

@@ -5,7 +5,7 @@ Policy
 * **LP bounds are certified, not tolerance-based.** Interval hulls and support
   values are computed from a dual (Lagrangian) bound that is valid for *any*
   multiplier vector, evaluated with a rigorous floating-point error term
-  (see :mod:`setobs.geometry.lp`). They contain the set defined by the stored
+  (see :mod:`setobs.lp.factor`). They contain the set defined by the stored
   data, whatever the solver's tolerances were.
 * **Unbounded factors** (``h_j = inf``) need zero reduced cost on their columns.
   After refinement the residual reduced cost is tiny but rarely exactly zero; the
@@ -133,7 +133,7 @@ UNIT_CIRCLE_TOL: float = 1e-8
 #: are displayed as real (messages and reports only; no decision uses it).
 IMAG_DISPLAY_RTOL: float = 1e-10
 
-# ---- the compiled fast path (setobs.geometry.fastlp)
+# ---- the compiled fast path (setobs.lp.fastlp)
 #: Relative least-squares residual of ``w_U`` on ``range(A_U^T)`` above which a
 #: direction is unbounded below, and below which it is bounded; in between the
 #: direction is left to the reference path.
@@ -165,7 +165,7 @@ EQUILIBRATION_FLOOR: float = 1e-10
 #: set recursion (still certified, only slower).
 HISTORY_GAP_RTOL: float = 1e-8
 
-# ---- the HiGHS reference LPs (setobs.geometry.lp)
+# ---- the HiGHS reference LPs (setobs.lp.factor)
 #: Relative certification gap above which duals are recomputed from the basis.
 LP_REFINE_GAP: float = 1e-9
 #: A solver's "optimal" point is accepted only when every row satisfies

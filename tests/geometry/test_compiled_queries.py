@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from setobs import ConstrainedZonotope
-from setobs.geometry.lp import FactorPolytope
+from setobs.lp.factor import FactorPolytope
 from tests.conftest import assert_hull_tight, random_cz
 from tests.oracles import exact_lp_min
 
@@ -139,7 +139,7 @@ def test_large_polytopes_stay_on_highs():
     (against scipy's linprog over the same factor set)."""
     from scipy.optimize import linprog
 
-    from setobs.geometry.lp import COMPILED_MAX_ROWS
+    from setobs.lp.factor import COMPILED_MAX_ROWS
 
     rng = np.random.default_rng(8)
     m = COMPILED_MAX_ROWS + 6

@@ -9,7 +9,7 @@ import pytest
 
 import setobs as so
 from setobs import ConstrainedZonotope, LinearSystem
-from setobs.geometry.lp import FactorPolytope
+from setobs.lp.factor import FactorPolytope
 from setobs.setmembership import ModelInvalidatedError, ModelInvalidatedWarning
 from setobs.setmembership import smfdo as smfdo_module
 from setobs.studies import Scenario, rng_for_run

@@ -1,7 +1,7 @@
 """Set geometry: extended constrained zonotopes, certified LP queries, reduction, conversion."""
 
+from ..lp.factor import EmptinessReport, FactorPolytope, LPResult
 from .box import Box
-from .lp import EmptinessReport, FactorPolytope, LPResult
 from .measure import (
     DistanceResult,
     QPResult,

@@ -32,7 +32,7 @@ from ..exceptions import (
     SolverError,
     UnboundedSetError,
 )
-from .lp import FactorPolytope, highspy
+from ..lp import highs
 from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
@@ -294,11 +294,10 @@ class LPChords:
         M[n:, 1:] = Z.A
         inf = np.inf
         up = np.concatenate([[inf], Z.h])  # (h = inf: free, as HiGHS's infinity)
-        self.hs = FactorPolytope.new_highs()
-        self.hs.setOptionValue("simplex_strategy", 1)
+        self.hs = highs.new_model()
         rows = np.concatenate([Z.c, Z.b])
-        ok = FactorPolytope.pass_model(self.hs, M, -up, up, rows, rows,
-                                       np.concatenate([[1.0], np.zeros(n_g)]))
+        ok = highs.pass_dense(self.hs, M, -up, up, rows, rows,
+                              np.concatenate([[1.0], np.zeros(n_g)]))
         if not ok:
             raise SolverError("hit-and-run: HiGHS rejected the chord model")
         self.n = n
@@ -307,10 +306,8 @@ class LPChords:
     def _solve(self, sign: float) -> float:
         hs = self.hs
         hs.changeColCost(0, sign)
-        hs.run()
-        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-            raise SolverError("a chord LP of hit-and-run failed",
-                              status=str(hs.getModelStatus()))
+        if highs.solve(hs) != "optimal":
+            raise SolverError("a chord LP of hit-and-run failed", status=highs.status_name(hs))
         return float(hs.getSolution().col_value[0])
 
     def chord(self, x: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, float]:

@@ -33,6 +33,7 @@ from scipy.linalg import qr
 
 from .._rounding import UNIT_ROUNDOFF, gamma
 from ..exceptions import DimensionError, EmptySetError, InvalidValueError
+from ..lp.factor import COMPILED_MAX_ROWS
 from ..tolerances import (
     ELIMINATION_ERR_RTOL,
     ELIMINATION_PIVOT_TOL,
@@ -40,7 +41,6 @@ from ..tolerances import (
     ZERO_TOL,
 )
 from .box import box_center_radius
-from .lp import COMPILED_MAX_ROWS
 from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
 
 __all__ = [
@@ -418,7 +418,7 @@ def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.fl
     of :func:`eliminate_constraints`).
 
     Where every bound is finite (and the rows are at most
-    :data:`~setobs.geometry.lp.COMPILED_MAX_ROWS`), by the compiled simplex: with ``xi_j``'s bound
+    :data:`~setobs.lp.factor.COMPILED_MAX_ROWS`), by the compiled simplex: with ``xi_j``'s bound
     dropped, ``|xi_j|`` is still at most its one-sweep propagated range ``R0_j`` (an
     outer bound over the relaxed set: each row bounds ``xi_j`` by the other factors'
     own bounds, rounding included), so the relaxed set is the bounded polytope with
@@ -446,7 +446,7 @@ def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.fl
         return r
     todo = list(cand)
     if np.isfinite(h).all() and 0 < Z.n_con <= COMPILED_MAX_ROWS:
-        from .fastlp import FixedStructureLP
+        from ..lp.fastlp import FixedStructureLP
 
         R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h, Z.b_err)
         reach0 = np.maximum(-R0_lo, R0_hi)

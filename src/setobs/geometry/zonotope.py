@@ -23,9 +23,9 @@ from ..exceptions import (
     SolverWarning,
     UnboundedSetError,
 )
+from ..lp.factor import EmptinessReport, FactorPolytope, LPResult
 from ..tolerances import FEASIBILITY_TOL, MAX_MAGNITUDE, UNBOUNDED_RADIUS
 from .box import Box, box_center_radius, trusted_box
-from .lp import EmptinessReport, FactorPolytope, LPResult
 
 try:  # the optional compiled construction of +, @ and intersect (setup.py)
     from . import _setops as compiled_ops
@@ -239,7 +239,7 @@ class ConstrainedZonotope:
     ``1e8`` whose differences carry the information), is tracked: :attr:`c_err`
     and :attr:`b_err` bound it elementwise, and every LP query (interval hull,
     support function, emptiness, containment) is certified for all centres and
-    right-hand sides within those bounds; see :mod:`setobs.geometry.lp`. The
+    right-hand sides within those bounds; see :mod:`setobs.lp.factor`. The
     rounding of ``G`` and ``A`` (relative to the factor magnitudes) is not
     tracked.
 
@@ -811,7 +811,7 @@ class ConstrainedZonotope:
 
         Computed with ``2n`` LPs that share one HiGHS model (only the objective
         changes). Bounds are certified outer bounds (see
-        :mod:`setobs.geometry.lp`); unbounded directions give ``+-inf``.
+        :mod:`setobs.lp.factor`); unbounded directions give ``+-inf``.
 
         Raises
         ------

@@ -5,11 +5,11 @@ every step (the paper example with a noise box: 44, 107, 264 facets at
 ``k = 2, 3, 4``), so neither the H-representation recursion (:mod:`._hrep`)
 nor the set recursion (dense generators and constraints that grow with ``k``)
 keeps its cost. The exact set's interval hull is the whole-history LP, and that
-LP is sparse when every state is a variable. :class:`HistoryLP` keeps it in one
-HiGHS model: each step *adds* the step's variables and rows, and the hull's
-``2 N`` LPs are re-solved from the previous basis (a handful of simplex
-iterations each), instead of solving a dense LP of the whole history from
-scratch.
+LP is sparse when every state is a variable. :class:`HistoryLP` assembles it
+in a :class:`setobs.lp.boxlp.BoxLP` (one HiGHS model per objective): each step
+*adds* the step's variables and rows, and the hull's ``2 N`` LPs are re-solved
+from the previous basis (a handful of simplex iterations each), instead of
+solving a dense LP of the whole history from scratch.
 
 The LP
 ------
@@ -43,17 +43,14 @@ variable box ``[l, u]``),
 .. math::  \\min \\{w^\\top x : Ax = b,\\ l \\le x \\le u\\}
            \\ge y^\\top b + \\sum_j \\min(r_j l_j, r_j u_j),
 
-whatever the solver's accuracy. ``r`` is computed in floating point with the
-forward error bound ``gamma(k_j + 2) (|w_j| + |A_j|^T |y|)`` of its
-``k_j``-term column sums (doubled), which enters as ``err_j max(|l_j|, |u_j|)``;
-``y^T b`` is correctly rounded; a right-hand side known only to ``+- b_err``
-(the rounding of the products that formed it, the data's representation)
-costs ``|y|^T b_err``; the sums' own rounding is bounded by ``gamma`` of their
-length and the result rounded down once more. The stored matrices ``A_o``,
-``C_o``, ``G_V`` enter as variables' coefficients, without products; the
-products ``B_o G_D`` and ``E_o G_W`` carry their rounding into ``b_err``
-(times the factor bounds). So a reported bound holds for the stored model and
-data; the solver only decides how tight it is (its tolerances are 1e-10).
+whatever the solver's accuracy: the one certificate of the package
+(:mod:`setobs.lp.certificate`, with its rounding analysis), over the variable box
+with the right-hand side known to ``+- b_err`` (the rounding of the products that
+formed it, the data's representation). The stored matrices ``A_o``, ``C_o``,
+``G_V`` enter as variables' coefficients, without products; the products
+``B_o G_D`` and ``E_o G_W`` carry their rounding into ``b_err`` (times the factor
+bounds). So a reported bound holds for the stored model and data; the solver
+only decides how tight it is (its tolerances are 1e-10).
 
 Anything HiGHS does not solve to optimality (an infeasible LP: data that may
 contradict the model; a numerical failure) returns ``None``, and the set
@@ -71,17 +68,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._lazy import lazy_module
-from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, round_up
+from .._rounding import UNIT_ROUNDOFF, gamma, round_down, round_up
 from ..exceptions import InternalError
 from ..geometry import ConstrainedZonotope
 from ..geometry.zonotope import trusted_cz
-from ..tolerances import HISTORY_GAP_RTOL
+from ..lp.boxlp import BoxLP
 
 __all__ = ["HistoryLP"]
-
-highspy = lazy_module("highspy")
-sparse = lazy_module("scipy.sparse")
 
 #: Relative widening of the implied bounds of a new state (they only need to
 #: contain the prior; a generous margin costs nothing).
@@ -112,25 +105,16 @@ class HistoryLP:
         self.N = A_o.shape[0]
         self.objectives = np.vstack([np.eye(self.N), rows]) if rows.shape[0] else np.eye(self.N)
         self.data_rtol = data_rtol
-        # columns: bounds; rows: right-hand side, its uncertainty; entries (COO)
-        self._lo: list[NDArray[np.float64]] = []
-        self._hi: list[NDArray[np.float64]] = []
-        self._s: list[NDArray[np.float64]] = []  # (HiGHS's column scales, powers of two)
-        self._b: list[NDArray[np.float64]] = []
-        self._berr: list[NDArray[np.float64]] = []
-        self._ent: list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]] = []
-        self._n_col = 0
-        self._n_row = 0
+        self.box_lp = BoxLP()  # (the LP itself: columns, rows, warm models)
         self._z = np.zeros(0, dtype=np.int64)  # columns of the newest state
         self.box: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.steps = 0
-        self.retries = 0  # solves that were not optimal with a tight certificate
-        self._models: list = []
-        self._warm: list[bool] = []
-        self._ranged: list[bool] = []
-        self._undo: list[tuple] = []
         self._products: dict[int, tuple] = {}
-        self._cache = None
+
+    @property
+    def retries(self) -> int:
+        """Solves that were not optimal with a tight certificate."""
+        return self.box_lp.retries
 
     @property
     def state_columns(self) -> NDArray[np.int64]:
@@ -140,7 +124,7 @@ class HistoryLP:
     def lp(self):
         """The LP as ``(A, b, b_err, lo, hi)``: ``A x = b`` (a ``scipy.sparse`` array;
         the right-hand side known to ``+- b_err``), ``lo <= x <= hi``."""
-        lo, hi, b, berr, A, _, _, _ = self._arrays()
+        lo, hi, b, berr, A, _, _ = self.box_lp.arrays()
         return A, b, berr, lo, hi
 
     # ------------------------------------------------------------------ building
@@ -153,10 +137,10 @@ class HistoryLP:
             return None
         H = cls(**kw)
         N, ng = H.N, Z.n_gen
-        xi = H._add_cols(-Z.h, Z.h)
-        z = H._add_cols(lo, hi)
+        xi = H.box_lp.add_cols(-Z.h, Z.h)
+        z = H.box_lp.add_cols(lo, hi)
         # z - G xi = c ; A xi = b
-        r0 = H._n_row
+        r0 = H.box_lp.n_row
         rr = [np.arange(N), np.repeat(np.arange(N), ng)]
         cc = [z, np.tile(xi, N)]
         vv = [np.ones(N), -Z.G.ravel()]
@@ -164,60 +148,12 @@ class HistoryLP:
             rr.append(N + np.repeat(np.arange(Z.n_con), ng))
             cc.append(np.tile(xi, Z.n_con))
             vv.append(Z.A.ravel())
-        H._add_rows(r0 + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
-                    np.concatenate([Z.c, Z.b]), np.concatenate([Z.c_err, Z.b_err]))
+        H.box_lp.add_rows(r0 + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                          np.concatenate([Z.c, Z.b]), np.concatenate([Z.c_err, Z.b_err]))
         H._z = z
         H.box = (np.asarray(lo, float), np.asarray(hi, float))
-        H._undo.clear()
+        H.box_lp.begin()
         return H
-
-    def _add_cols(self, lo, hi) -> NDArray[np.int64]:
-        lo = np.asarray(lo, dtype=np.float64)
-        hi = np.asarray(hi, dtype=np.float64)
-        idx = np.arange(self._n_col, self._n_col + lo.size)
-        # HiGHS sees x = s xi with s a power of two near the column's half range
-        # (exact): its absolute tolerances then apply relative to each variable's
-        # range. Unscaled, a noise factor of range 1e-3 violated its bound by 6e-11
-        # "within tolerance", and on a thin set that moved the optimum by 4e-8.
-        # (At most 2^20 either way: HiGHS drops coefficients below 1e-9, and a
-        # column pinned to a width of 1e-11 scaled to unit range lost all of them.)
-        half = 0.5 * (hi - lo)
-        e = np.clip(np.frexp(np.where(half > 0, half, 1.0))[1], -20, 20)
-        s = np.where(np.isfinite(half), np.ldexp(1.0, e), 1.0)
-        self._lo.append(lo)
-        self._hi.append(hi)
-        self._s.append(s)
-        self._n_col += lo.size
-        self._undo.append(("cols", lo.size))
-        for hs in self._models:
-            hs.addCols(lo.size, np.zeros(lo.size), lo / s, hi / s, 0,
-                       np.zeros(lo.size, np.int32), np.zeros(0, np.int32), np.zeros(0))
-        return idx
-
-    def _add_rows(self, r, c, v, b, berr) -> None:
-        """Rows ``sum_c v x_c = b`` (``r`` absolute row indices, all new)."""
-        keep = v != 0.0
-        r, c, v = r[keep], c[keep], v[keep]
-        nr = b.size
-        self._b.append(np.asarray(b, dtype=np.float64))
-        self._berr.append(np.asarray(berr, dtype=np.float64))
-        self._ent.append((r, c, v))
-        self._undo.append(("rows", nr))
-        if self._models and nr:
-            order = np.lexsort((c, r))
-            r, c, v = r[order], c[order], v[order]
-            v = v * np.concatenate(self._s)[c]
-            starts = np.searchsorted(r, self._n_row + np.arange(nr)).astype(np.int32)
-            ci = c.astype(np.int32)
-            rlo, rhi = self._row_bounds(self._b[-1], self._berr[-1])
-            bb = self._b[-1]
-            for hs, ranged in zip(self._models, self._ranged, strict=True):
-                if ranged:
-                    hs.addRows(nr, rlo, rhi, v.size, starts, ci, v)
-                else:
-                    hs.addRows(nr, bb, bb, v.size, starts, ci, v)
-        self._n_row += nr
-        self._cache = None
 
     def _step_set(self, S: ConstrainedZonotope | None, M: NDArray[np.float64]):
         """``(M G_S, |M G_S| h_S, M c_S, err)`` of a per-step set (cached by identity)."""
@@ -245,7 +181,8 @@ class HistoryLP:
         of its uncertainty sets, the dynamics and the measurement rows."""
         if self.box is None:
             raise InternalError("HistoryLP.push: the last step has no hull yet (call hull)")
-        self._undo = []
+        lp = self.box_lp
+        lp.begin()
         N = self.N
         lo0, hi0 = self.box
         m0 = 0.5 * lo0 + 0.5 * hi0
@@ -285,15 +222,15 @@ class HistoryLP:
         r = r * (1.0 + _PRIOR_SLACK) + _PRIOR_SLACK * (np.abs(c) + r) + _TINY
         zlo, zhi = round_down(c - r), round_up(c + r)
         z_prev = self._z
-        z = self._add_cols(zlo, zhi)
+        z = lp.add_cols(zlo, zhi)
         # dynamics: z+ - A_o z - sum M G sigma = Gamma u + sum M c
-        base = self._n_row
+        base = lp.n_row
         rr = [np.arange(N), np.repeat(np.arange(N), N)]
         cc = [z, np.tile(z_prev, N)]
         vv = [np.ones(N), -self.A_o.ravel()]
         extra_rows = []
         for MG, S in blocks:
-            sig = self._add_cols(-S.h, S.h)
+            sig = lp.add_cols(-S.h, S.h)
             rr.append(np.repeat(np.arange(N), sig.size))
             cc.append(np.tile(sig, N))
             vv.append(-MG.ravel())
@@ -301,8 +238,8 @@ class HistoryLP:
                 extra_rows.append((sig, S))
         # the rhs's own sum (each term's rounding is in err)
         b_err = err + gamma(len(blocks) + 2) * rhs_abs
-        self._add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
-                       rhs, b_err)
+        lp.add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                    rhs, b_err)
         for sig, S in extra_rows:
             self._constraint_rows(sig, S)
         # measurement
@@ -322,122 +259,39 @@ class HistoryLP:
             if V is None:
                 bm, berr_m = ym, yerr
             else:
-                nu = self._add_cols(-V.h, V.h)
+                nu = lp.add_cols(-V.h, V.h)
                 GV = V.G[msk]
                 rr.append(np.repeat(np.arange(nm), nu.size))
                 cc.append(np.tile(nu, nm))
                 vv.append(GV.ravel())
                 bm = ym - V.c[msk]
                 berr_m = yerr + V.c_err[msk] + UNIT_ROUNDOFF * np.abs(bm) * 2.0
-            base = self._n_row
-            self._add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
-                           bm, berr_m)
+            base = lp.n_row
+            lp.add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                        bm, berr_m)
             if V is not None and V.n_con:
                 self._constraint_rows(nu, V)
         self._z_prev, self._z = z_prev, z
         self._box_prev, self.box = self.box, None
-        self._moved = True
         self.steps += 1
 
     def _constraint_rows(self, cols, S: ConstrainedZonotope) -> None:
-        base = self._n_row
+        base = self.box_lp.n_row
         rr = base + np.repeat(np.arange(S.n_con), cols.size)
-        self._add_rows(rr, np.tile(cols, S.n_con), S.A.ravel(), S.b, S.b_err)
+        self.box_lp.add_rows(rr, np.tile(cols, S.n_con), S.A.ravel(), S.b, S.b_err)
 
     def pop(self) -> None:
         """Undo the last :meth:`push` (the model is rebuilt on the next solve)."""
-        for kind, n in reversed(self._undo):
-            if kind == "cols":
-                self._lo.pop()
-                self._hi.pop()
-                self._s.pop()
-                self._n_col -= n
-            else:
-                self._b.pop()
-                self._berr.pop()
-                self._ent.pop()
-                self._n_row -= n
-        self._undo = []
+        self.box_lp.undo()
         self._z, self.box = self._z_prev, self._box_prev
         self.steps -= 1
-        self._models = []
-        self._cache = None
 
     # ------------------------------------------------------------------ solving
-    def _arrays(self):
-        if self._cache is None:
-            lo = np.concatenate(self._lo)
-            hi = np.concatenate(self._hi)
-            b = np.concatenate(self._b) if self._b else np.zeros(0)
-            berr = np.concatenate(self._berr) if self._berr else np.zeros(0)
-            r = np.concatenate([e[0] for e in self._ent])
-            c = np.concatenate([e[1] for e in self._ent])
-            v = np.concatenate([e[2] for e in self._ent])
-            A = sparse.csc_array((v, (r, c)), shape=(self._n_row, self._n_col))
-            A.sum_duplicates()
-            AT = A.T.tocsr()
-            absAT = abs(AT)
-            k = int(np.diff(A.indptr).max(initial=0))
-            self._cache = (lo, hi, b, berr, A, AT, absAT, k)
-        return self._cache
-
-    @staticmethod
-    def _row_bounds(b, berr):
-        """Ranged rows ``b +- b_err`` (the set the certificate covers), for an LP that
-        HiGHS calls infeasible at exactly ``b``: a thin set, carried by the set
-        recursion with its rounding. (Not by default: ranged rows cost 2-7x the
-        simplex iterations.)"""
-        pos = berr > 0
-        return np.where(pos, round_down(b - berr), b), np.where(pos, round_up(b + berr), b)
-
-    def _build(self, w: NDArray[np.float64], ranged: bool = False):
-        """A HiGHS model of the LP with objective ``w`` on the newest state."""
-        from ..geometry.lp import FactorPolytope
-
-        lo, hi, b, berr, A, _, _, _ = self._arrays()
-        s = np.concatenate(self._s)
-        hs = FactorPolytope.new_highs()
-        hs.setOptionValue("simplex_strategy", 1)  # (cold: the dual simplex)
-        cost = np.zeros(self._n_col)
-        cost[self._z] = w
-        As = A @ sparse.diags_array(s)  # (exact: powers of two)
-        lp = highspy.HighsLp()
-        lp.num_col_ = self._n_col
-        lp.num_row_ = self._n_row
-        lp.col_cost_ = cost * s
-        lp.col_lower_ = lo / s
-        lp.col_upper_ = hi / s
-        lp.row_lower_, lp.row_upper_ = self._row_bounds(b, berr) if ranged else (b, b)
-        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = As.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = As.indices.astype(np.int32)
-        lp.a_matrix_.value_ = As.data.astype(np.float64)
-        lp.a_matrix_.num_col_ = self._n_col
-        lp.a_matrix_.num_row_ = self._n_row
-        if hs.passModel(lp) == highspy.HighsStatus.kError:
-            return None
-        return hs
-
     def certify(self, w_cols: NDArray[np.int64], w: NDArray[np.float64],
                 y: NDArray[np.float64]) -> float:
-        """Certified lower bound of ``min w^T x_(w_cols)`` from row multipliers ``y``."""
-        lo, hi, b, berr, _, AT, absAT, k = self._arrays()
-        r = -(AT @ y)
-        r[w_cols] += w
-        s = absAT @ np.abs(y)
-        s[w_cols] += np.abs(w)
-        err = 2.0 * gamma(k + 2) * s
-        terms = np.minimum(r * lo, r * hi)
-        s1 = float(terms.sum())
-        a1 = float(np.abs(terms).sum())
-        s2 = float((err * np.maximum(np.abs(lo), np.abs(hi))).sum())
-        s3 = float(np.abs(y) @ berr)
-        t1 = exact_dot([y], b)
-        n = lo.size + b.size
-        tot = t1 + s1 - s2 - s3
-        bound_err = UNIT_ROUNDOFF * abs(t1) + 2.0 * gamma(n + 4) * (a1 + s2 + s3) + \
-            4.0 * UNIT_ROUNDOFF * (abs(tot) + abs(t1) + a1 + s2 + s3) + 8.0 * n * _TINY
-        return float(round_down(tot - bound_err))
+        """Certified lower bound of ``min w^T x_(w_cols)`` from row multipliers ``y``
+        (:meth:`setobs.lp.boxlp.BoxLP.certify`)."""
+        return self.box_lp.certify(w_cols, w, y)
 
     def hull(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
         """Certified bounds of ``z_k`` and of the objective rows over the exact posterior
@@ -449,75 +303,20 @@ class HistoryLP:
         direction's optimal history at step ``k`` is close to that at ``k - 1``.
         """
         W = self.objectives
-        z = self._z
-        idx = z.astype(np.int32)
-        n_obj = 2 * W.shape[0]
-        if len(self._models) != n_obj:
-            models = [self._build(sign * w) for w in W for sign in (1.0, -1.0)]
-            if any(hs is None for hs in models):
-                return None
-            self._models = models
-            self._warm = [False] * n_obj
-            self._ranged = [False] * n_obj
-            self._moved = False
-        lo = np.empty(W.shape[0])
-        hi = np.empty(W.shape[0])
-        limit = 50 * (self._n_row + self._n_col) + 10_000
-        zs = np.concatenate(self._s)[z]
-        z_prev = self._z_prev.astype(np.int32) if self._moved else None
-        for j, hs in enumerate(self._models):
-            i, sign = j // 2, (1.0 if j % 2 == 0 else -1.0)
-            ws = sign * W[i]
-            if self._moved:  # (the objective moves to the newest state)
-                hs.changeColsCost(z_prev.size, z_prev, np.zeros(z_prev.size))
-                hs.changeColsCost(idx.size, idx, ws * zs)
-            bound = self._solve(j, ws, limit)
-            if bound is None:
-                self._models = []  # (fresh models next time)
-                return None
-            if sign > 0:
-                lo[i] = bound
-            else:
-                hi[i] = -bound
-        self._moved = False
+        signed = np.empty((2 * W.shape[0], W.shape[1]))
+        signed[0::2], signed[1::2] = W, -W
+        mins = self.box_lp.minimize_all(self._z, signed)
+        if mins is None:
+            return None
+        lo, hi = mins[0::2], -mins[1::2]
         self.box = (lo[:self.N].copy(), hi[:self.N].copy())
         return lo, hi
-
-    def _solve(self, j: int, ws: NDArray[np.float64], limit: int) -> float | None:
-        """Certified ``min ws^T z_k`` on model ``j``: from its last optimal basis with
-        the primal simplex (its phase 1 for the step's new rows: 2-8x fewer
-        iterations than the dual here), then the dual simplex, then a fresh model,
-        then a fresh model with ranged rows (:meth:`_row_bounds`); ``None`` if none
-        is optimal with a tight certificate."""
-        opt = highspy.HighsModelStatus.kOptimal
-        for attempt in range(4):
-            if attempt >= 2:  # a fresh model; the last with ranged rows
-                hs = self._build(ws, ranged=attempt == 3)
-                if hs is None:
-                    return None
-                self._models[j] = hs
-                self._ranged[j] = attempt == 3
-            hs = self._models[j]
-            hs.setOptionValue("simplex_strategy", 4 if attempt == 0 and self._warm[j] else 1)
-            hs.setOptionValue("simplex_iteration_limit", limit)
-            hs.run()
-            if hs.getModelStatus() != opt:
-                self.retries += 1
-                continue
-            obj = float(hs.getInfo().objective_function_value)
-            y = np.asarray(hs.getSolution().row_dual, dtype=np.float64)
-            bound = self.certify(self._z, ws, y)
-            if np.isfinite(bound) and obj - bound <= HISTORY_GAP_RTOL * (1.0 + abs(obj)):
-                self._warm[j] = True
-                return bound
-            self.retries += 1
-        return None
 
     # ------------------------------------------------------------------ as a set
     def to_cz(self) -> ConstrainedZonotope:
         """The posterior as a constrained zonotope (every variable a factor, centred
         in its bounds; equal to the exact set up to the certified ``b_err``)."""
-        lo, hi, b, berr, A, _, _, k = self._arrays()
+        lo, hi, b, berr, A, _, k = self.box_lp.arrays()
         m = 0.5 * lo + 0.5 * hi
         rho = round_up(np.maximum(hi - m, m - lo))
         Ad = A.toarray()
@@ -535,7 +334,5 @@ class HistoryLP:
     # ------------------------------------------------------------------ pickling
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        state["_models"] = []  # (HiGHS models do not pickle: rebuilt on demand)
-        state["_cache"] = None
         state["_products"] = {}
         return state

@@ -14,7 +14,7 @@ with ``G = [A_o^s G_S, A_o^(s-1) B_o G_D, ..., B_o G_D]`` and ``A`` stacking
 set's generators and ``s``; the data enter only ``b`` and ``c`` (affinely) and
 the reset box enters only ``c_S`` and ``h_S``. So the LPs of the interval hull
 have a fixed structure and go through
-:class:`setobs.geometry.fastlp.FixedStructureLP`.
+:class:`setobs.lp.fastlp.FixedStructureLP`.
 
 Rounding. ``c`` and ``b`` are affine in the data with coefficient matrices
 computed once (``-C_o A_o^j``, ...). Their rounding errors, and those of
@@ -40,8 +40,8 @@ from .._lazy import lazy_module
 from .._rounding import gamma
 from ..exceptions import InvalidValueError
 from ..geometry import ConstrainedZonotope
-from ..geometry.fastlp import FixedStructureLP, LPState, hull_objectives
 from ..geometry.zonotope import trusted_cz
+from ..lp.fastlp import FixedStructureLP, LPState, hull_objectives
 
 # The compiled assembly (numba) loads on the first window, not on import.
 _kernels = lazy_module("setobs.setmembership._kernels")

@@ -152,7 +152,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         that do not depend on the data, so each structure is set up once per
         process and its interval-hull LPs are solved by a compiled,
         warm-started dual simplex whose bounds are certified exactly as on the
-        HiGHS path (:mod:`setobs.geometry.fastlp`). Any LP the fast path
+        HiGHS path (:mod:`setobs.lp.fastlp`). Any LP the fast path
         cannot solve and certify tightly (infeasible, degenerate beyond its
         tolerances, ambiguous unboundedness), a time-varying increment set,
         the steps after a ``reset="box"`` go to the reference path (the set

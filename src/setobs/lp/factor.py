@@ -1,4 +1,4 @@
-"""LP layer: certified linear optimisation over a factor polytope.
+"""The factor polytope's LP: certified linear optimisation over a constrained zonotope's factors.
 
 Every LP query on a constrained zonotope reduces to optimising a linear
 function over its *factor polytope*
@@ -7,41 +7,21 @@ function over its *factor polytope*
            \\qquad h_j \\in [0, +\\infty].
 
 This module solves those LPs with HiGHS (one model per polytope, built once and
-re-solved with a new objective, warm-started from the previous basis) and turns
-the solver's answer into a **certified** bound.
+re-solved with a new objective, warm-started from the previous basis; set up in
+:mod:`setobs.lp.highs`) or the compiled simplex (:mod:`setobs.lp.fastlp`) and
+turns the solver's answer into a **certified** bound.
 
 Certification
 -------------
-For any multiplier vector ``y`` (weak Lagrangian duality)
-
-.. math::  \\min_{\\xi\\in F} w^\\top\\xi \\;\\ge\\; L(y) = y^\\top b - \\sum_j h_j |r_j|,
-           \\qquad r = w - A^\\top y,
-
-whatever the accuracy of ``y``: the solver's dual only decides how *tight* the
-bound is, never whether it is valid. ``L(y)`` is evaluated in floating point
-with a rigorous forward error term (Higham's ``gamma_k = k u / (1 - k u)``
-bounds for dot products, doubled for the rounding of the error term itself),
-and the result is rounded one ulp further down. So the bound holds for the
-*stored* data regardless of solver tolerances; primal feasibility of the solver's
-point is never relied upon.
-
-An unbounded factor (``h_j = inf``) contributes ``-inf`` unless ``r_j = 0``.
-The solver's ``y`` is refined by a least-squares correction on the unbounded
-columns, after which ``|r_j|`` is at round-off level but rarely exactly zero.
-The bound then holds for every point of ``F`` with ``|xi_j| <= unbounded_radius`` on the
-unbounded factors (the term ``unbounded_radius * (|r_j| + err_j)`` is added); when the
-relative residual stays above ``UNBOUNDED_REDUCED_COST_TOL`` the objective is
-declared unbounded below (``-inf``), which is always an outer answer.
-
-Whether the residual counts as negligible is decided relative to the size of
-the whole reduced-cost computation (``max_j |w_j| + |A_j|^T |y|``), not to the
-unbounded column itself: a column of rounding-level entries (``1e-16`` where
-a model has a structural zero) is then as well determined as any other.
-
-A right-hand side known only to within ``|b - b_stored| <= b_err`` (rounding
-of the operations that formed it, representation error of measured data) is
-covered by the term ``sum_i |y_i| b_err_i``: the bound then holds for every
-such ``b``.
+Every bound is the certificate of :mod:`setobs.lp.certificate` (weak duality
+with its rounding analysis) for the solver's multiplier, over ``lo = -h``,
+``hi = h``: the solver's dual only decides how *tight* the bound is, never
+whether it is valid, and the bound holds for the *stored* data regardless of
+solver tolerances (primal feasibility of the solver's point is never relied
+upon). Unbounded factors (``h_j = inf``) are covered for ``|xi_j| <=
+unbounded_radius`` once their reduced costs are negligible, else the bound is
+``-inf``; a right-hand side known only to ``+- b_err`` (rounding of the
+operations that formed it, representation error of measured data) is covered too.
 
 Infeasibility reported by the solver is never trusted either: emptiness is
 decided by a phase-1 LP whose dual gives a certified lower bound on the
@@ -51,7 +31,7 @@ A solver's bad day never aborts a query: an undecided HiGHS status is retried
 with other settings (a fresh unscaled model, default tolerances with the
 primal simplex, the interior-point method with crossover, a restart with the
 objective perturbed -- certified for the true one), with the compiled simplex of
-:mod:`setobs.geometry.fastlp`, and with the rows as the intervals
+:mod:`setobs.lp.fastlp`, and with the rows as the intervals
 ``[b - b_err, b + b_err]`` the certificate covers (exact for the certified set
 when decided; unbounded factors are pivoted out first, so that rows of an
 unknown initial state of size 1e9 do not reach HiGHS); if every attempt fails,
@@ -71,7 +51,7 @@ from numpy.typing import NDArray
 
 from .._blas import with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
-from .._rounding import UNIT_ROUNDOFF, exact_dot, gamma, round_down, two_prod
+from .._rounding import gamma, round_down, two_prod
 from ..exceptions import EmptySetError
 from ..tolerances import (
     FASTLP_GAP_RTOL,
@@ -81,18 +61,19 @@ from ..tolerances import (
     PRIMAL_RESIDUAL_RTOL,
     RELAXED_EXACT_GAP,
     UNBOUNDED_RADIUS,
-    UNBOUNDED_REDUCED_COST_TOL,
 )
+from . import highs
+from .highs import highspy
 
-__all__ = ["EmptinessReport", "FactorPolytope", "LPResult", "lagrangian_lower_bound"]
+__all__ = ["EmptinessReport", "FactorPolytope", "LPResult"]
 
 _TINY = np.finfo(np.float64).tiny
 _INF = math.inf  # HiGHS's kHighsInf
 
-# HiGHS loads on the first LP, not on ``import setobs``.
-highspy = lazy_module("highspy")
 # the compiled simplex (numba): compiles or loads on the first compiled query
-_simplex = lazy_module("setobs.geometry._simplex")
+_simplex = lazy_module("setobs.lp._simplex")
+# the one certificate (compiled; loads with the first certified bound)
+_certificate = lazy_module("setobs.lp.certificate")
 
 
 @dataclass(frozen=True)
@@ -161,178 +142,21 @@ class EmptinessReport:
     witness: NDArray[np.float64] | None = None
 
 
-def _exact_residual(
-    w: NDArray[np.float64],
-    A: NDArray[np.float64],
-    ys: list[NDArray[np.float64]],
-    w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
-) -> NDArray[np.float64]:
-    """Correctly rounded ``w - A^T (y_1 + y_2 + ...)``, column by column.
-
-    With ``w_pair = (M, v)`` the objective is taken as the exact ``M^T v``
-    instead of ``w``.
-
-    Products are split exactly (Dekker's TwoProduct) and summed with
-    :func:`math.fsum`, so each entry has relative error at most ``u``
-    (barring underflow, covered by an absolute guard in the caller).
-    """
-    neg = []
-    for y in ys:
-        neg.extend(two_prod(A, y))
-    pos = list(two_prod(*w_pair)) if w_pair is not None else []
-    out = np.empty(w.size)
-    for j in range(w.size):
-        terms = [] if w_pair is not None else [w[j]]
-        for block in pos:
-            terms.extend(block[:, j].tolist())
-        for block in neg:
+def _exact_residual(b: NDArray[np.float64], M: NDArray[np.float64],
+                    x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Correctly rounded ``b - M^T x``, entry by entry (Dekker's TwoProduct and
+    :func:`math.fsum`); NaN where the exact sum is beyond double precision."""
+    prods = two_prod(M, x)
+    out = np.empty(b.size)
+    for j in range(b.size):
+        terms = [b[j]]
+        for block in prods:
             terms.extend((-block[:, j]).tolist())
         try:
             out[j] = math.fsum(terms)
-        except (ValueError, OverflowError):  # (inf - inf: beyond double precision)
-            out[j] = np.nan  # (the callers then certify nothing: -inf)
+        except (ValueError, OverflowError):
+            out[j] = np.nan
     return out
-
-
-@np.errstate(over="ignore", invalid="ignore")  # (an overflow gives -inf or NaN: see the end)
-def lagrangian_lower_bound(
-    w: NDArray[np.float64],
-    A: NDArray[np.float64],
-    b: NDArray[np.float64],
-    h: NDArray[np.float64],
-    y: NDArray[np.float64],
-    *,
-    w_err: NDArray[np.float64] | None = None,
-    unbounded_radius: float = UNBOUNDED_RADIUS,
-    unbounded_pinv: NDArray[np.float64] | None = None,
-    w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
-    b_err: NDArray[np.float64] | None = None,
-    exact_residual: bool = False,
-) -> tuple[float, NDArray[np.float64]]:
-    """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any multiplier ``y``.
-
-    Parameters
-    ----------
-    w : ndarray, shape (n_g,)
-        Objective.
-    A, b, h :
-        The factor polytope.
-    y : ndarray, shape (n_c,)
-        Any multiplier vector (typically the solver's row duals).
-    w_err : ndarray, optional
-        Elementwise bound on the error of ``w`` itself (when ``w`` was computed
-        in floating point, e.g. ``G^T d``).
-    unbounded_radius : float
-        Radius on unbounded factors (see module notes).
-    unbounded_pinv : ndarray, optional
-        ``pinv(A[:, unbounded].T)``, used to refine ``y``; computed if omitted.
-    w_pair : (M, v), optional
-        When ``w`` was computed as ``M^T v``, the exact objective on unbounded
-        columns is taken from ``(M[:, unbounded], v)`` (no rounding of ``w``
-        enters the radius term).
-    b_err : ndarray, optional
-        Elementwise bound on the uncertainty of ``b``: the bound then holds for
-        every right-hand side within ``b +- b_err``.
-    exact_residual : bool
-        Evaluate every reduced cost ``r = w - A^T y`` correctly rounded (exact
-        products, :func:`math.fsum`; ``O(n_c n_g)`` Python work) instead of with
-        the forward error bound ``gamma(2 n_c + 2) (|w| + |A|^T |y|)``. With
-        duals of size 1e4 the latter alone opened a gap of 2e-6 on an optimal
-        basis (``y^T b`` and ``sum h |r|`` both 2e4, cancelling to 0.87).
-
-    Returns
-    -------
-    bound : float
-        Certified lower bound (``-inf`` if the unbounded columns' reduced costs
-        cannot be made negligible).
-    y : ndarray
-        The (refined) multiplier used (``y1 + y2`` rounded).
-
-    Notes
-    -----
-    With unbounded factors the multiplier is kept in double-double form
-    ``y1 + y2``: ``y1`` is refined in floating point, then the residual reduced
-    costs on the unbounded columns are evaluated exactly (correctly rounded)
-    and corrected by ``y2``. This brings them to ``O(eps^2)`` relative size, so
-    that the radius term is negligible. ``y^T b`` is evaluated exactly and
-    rounded once, so that a large right-hand side (measurements of size
-    ``1e8`` whose differences carry the information) costs no accuracy.
-    """
-    n_c, n_g = A.shape
-    unb = np.isinf(h)
-    y1 = np.array(y, dtype=np.float64)
-    y2 = np.zeros(n_c)
-    ru = np.zeros(0)
-    if unb.any() and n_c:
-        if unbounded_pinv is None:
-            unbounded_pinv = np.linalg.pinv(A[:, unb].T)
-        Au, wu = A[:, unb], w[unb]
-        pair = (w_pair[0][:, unb], w_pair[1]) if w_pair is not None else None
-        with np.errstate(over="ignore", invalid="ignore"):
-            for _ in range(2):
-                y1 = y1 + unbounded_pinv @ (wu - Au.T @ y1)
-        if not np.isfinite(y1).all():
-            # (a pseudo-inverse beyond double precision: data of extreme dynamic
-            # range) no refinement, no bound: -inf is certified
-            return -np.inf, np.array(y, dtype=np.float64)
-        ru = _exact_residual(wu, Au, [y1, y2], pair)
-        for _ in range(2):
-            if not ru.any():
-                break
-            with np.errstate(over="ignore", invalid="ignore"):
-                y2 = y2 + unbounded_pinv @ ru
-            if not np.isfinite(y2).all():
-                return -np.inf, y1
-            ru = _exact_residual(wu, Au, [y1, y2], pair)
-    elif unb.any():
-        ru = w[unb] if w_pair is None else _exact_residual(
-            w[unb], np.zeros((0, int(unb.sum()))), [], (w_pair[0][:, unb], w_pair[1]))
-    abs_y = np.abs(y1) + np.abs(y2)
-    scale_r = np.abs(w) + (np.abs(A).T @ abs_y if n_c else 0.0)
-    if exact_residual and n_c:
-        # correctly rounded: |true - r| <= u |r| / (1 - u), plus an underflow guard
-        r = _exact_residual(w, A, [y1, y2], w_pair)
-        err_r = 2.0 * UNIT_ROUNDOFF * np.abs(r) + 2.0 * (2 * n_c + 1) * _TINY
-        if w_err is not None and w_pair is None:
-            err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
-    else:
-        r = w - A.T @ y1 - A.T @ y2 if n_c else w.copy()
-        err_r = 2.0 * gamma(2 * n_c + 2) * scale_r
-        if w_err is not None:
-            err_r = err_r + w_err * (1.0 + 4.0 * UNIT_ROUNDOFF)
-    bound_r = np.abs(r) + err_r
-    t2 = 0.0
-    if unb.any():
-        # Correctly rounded residual: |true| <= |ru| / (1 - u), plus an underflow guard.
-        ru_bound = np.abs(ru) / (1.0 - UNIT_ROUNDOFF) + 2.0 * (2 * n_c + 1) * _TINY
-        if w_err is not None and w_pair is None:
-            ru_bound = ru_bound + w_err[unb] * (1.0 + 4.0 * UNIT_ROUNDOFF)
-        # Negligible relative to the whole reduced-cost computation (norm-wise),
-        # not to the unbounded column alone.
-        scale_all = max(float(scale_r.max(initial=0.0)), _TINY)
-        rel = (ru_bound - 2.0 * (2 * n_c + 1) * _TINY) / scale_all
-        if (rel > UNBOUNDED_REDUCED_COST_TOL).any():
-            return -np.inf, y1
-        t2 += unbounded_radius * float(ru_bound.sum()) * (1.0 + gamma(ru_bound.size + 1))
-    fin = ~unb
-    t2 += float(h[fin] @ bound_r[fin])
-    # t1 = y^T b correctly rounded (|error| <= u |t1|, plus an underflow guard)
-    try:
-        t1 = exact_dot([y1, y2], b) if n_c else 0.0
-    except (ValueError, OverflowError):  # (inf - inf: products beyond double precision)
-        return -np.inf, y1 + y2
-    tb = 0.0
-    if b_err is not None and n_c:
-        tb = float(abs_y @ b_err) * (1.0 + gamma(n_c + 2))
-    err = UNIT_ROUNDOFF * abs(t1) + 2.0 * (
-        gamma(n_g + 3) * t2
-        + UNIT_ROUNDOFF * (abs(t1) + t2 + tb)
-        + 4.0 * (2 * n_c + 1) * _TINY
-    )
-    bound = round_down(t1 - t2 - tb - err)
-    if np.isnan(bound):  # (inf - inf of data beyond double precision: nothing certified)
-        bound = -np.inf
-    return bound, y1 + y2
 
 
 #: The LP queries on sets whose data span double precision's range (entries from 1e-300
@@ -350,22 +174,6 @@ def _quiet_overflow(func):
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             return func(*args, **kwargs)
     return wrapper
-
-
-def _simplex_limit(n_rows: int, n_cols: int) -> int:
-    """Simplex iteration limit of a HiGHS solve: generous for a healthy LP of this size."""
-    return 50 * (n_rows + n_cols) + 10_000
-
-
-def _option(hs: highspy.Highs, name: str) -> int:
-    """An integer HiGHS option (``getOptionValue`` returns ``(status, value)`` in
-    recent highspy releases and the value alone in older ones)."""
-    v = hs.getOptionValue(name)
-    return int(v[1] if isinstance(v, tuple) else v)
-
-
-def _status_name(h: highspy.Highs) -> str:
-    return h.modelStatusToString(h.getModelStatus())
 
 
 #: Largest number of constraint rows for which the factor polytope's queries use the
@@ -431,7 +239,7 @@ class FactorPolytope:
     unbounded_radius : float
         Radius on unbounded factors used in certification.
     b_err : ndarray, shape (n_c,), optional
-        Bound on the uncertainty of ``b`` (see :func:`lagrangian_lower_bound`);
+        Bound on the uncertainty of ``b`` (see :mod:`setobs.lp.certificate`);
         every bound and emptiness verdict then holds for all ``b`` within it.
 
     Attributes
@@ -484,6 +292,8 @@ class FactorPolytope:
         self._unb = np.isinf(h)
         self._any_unb = bool(np.count_nonzero(self._unb))
         self._unb_pinv: NDArray[np.float64] | None = None
+        self._csc: tuple | None = None  # (A column by column, for the certificate)
+        self._neg_h = -h
         self._pivot: tuple | None = None  # (see _free_pivot)
         self._model: highspy.Highs | None = None
         self._emptiness: dict[float, EmptinessReport] = {}
@@ -502,94 +312,11 @@ class FactorPolytope:
         self._lock = threading.RLock()
 
     # -- model construction ------------------------------------------------
-    @staticmethod
-    def new_highs() -> highspy.Highs:
-        # highspy's Python class (1.8+) registers its logging callback in __init__,
-        # and HiGHS prints its banner on stdout right there, before any option can
-        # be set; the compiled class underneath prints nothing and is all we use.
-        hs = getattr(highspy, "_Highs", highspy.Highs)()
-        hs.setOptionValue("output_flag", False)
-        hs.setOptionValue("presolve", "off")
-        # No "threads" option: HiGHS keeps one task scheduler per calling thread, sized
-        # by the first solve in that thread, and every later model whose "threads"
-        # differs fails in run() with an error status ("Not Set"). With threads = 1
-        # here, any earlier HiGHS solve at the default size in the same thread (the
-        # old calibration LP, a user's own model, cvxpy's HiGHS) turned every SMFDO LP
-        # into a retry chain ending in "fallback", and records that contradicted
-        # the model were never invalidated. The default (0)
-        # accepts any scheduler; the LPs here run the serial dual simplex anyway.
-        # Tighter than HiGHS's 1e-7 defaults: with them the certified bound sat up
-        # to ~1e-6 (relative) below the optimum on SMFDO sets with constrained
-        # increment sets (the solver's point was infeasible by ~1e-7); with 1e-10
-        # it agrees with the compiled fast path to 1e-8 (tests/geometry/test_fastlp.py).
-        hs.setOptionValue("primal_feasibility_tolerance", 1e-10)
-        hs.setOptionValue("dual_feasibility_tolerance", 1e-10)
-        return hs
-
-    @staticmethod
-    def pass_model(hs: highspy.Highs, A: NDArray[np.float64], lo_c, up_c, lo_r, up_r, cost) -> bool:
-        """Pass ``min cost^T x, lo_r <= A x <= up_r, lo_c <= x <= up_c`` (dense ``A``) to the
-        HiGHS model ``hs``, with the library's iteration limits; ``False`` if HiGHS
-        rejects the model.
-
-        Parameters
-        ----------
-        hs : highspy.Highs
-            A model from :meth:`new_highs`.
-        A : ndarray, shape (m, n)
-            Constraint matrix.
-        lo_c, up_c : ndarray, shape (n,)
-            Column bounds.
-        lo_r, up_r : ndarray, shape (m,)
-            Row bounds.
-        cost : ndarray, shape (n,)
-            Objective.
-        """
-        # Never NaN (or an infinite cost) into HiGHS: it looped for minutes on such a
-        # model, past its own time limit (a NaN objective from a pseudo-inverse of
-        # data of extreme dynamic range). The model is refused: the caller's retries
-        # and certified fallback take over.
-        if not (np.isfinite(A).all() and np.isfinite(cost).all()) or any(
-                np.isnan(v).any() for v in (lo_c, up_c, lo_r, up_r)):
-            return False
-        lp = highspy.HighsLp()
-        n_r, n_col = A.shape
-        lp.num_col_ = n_col
-        lp.num_row_ = n_r
-        lp.col_cost_ = np.ascontiguousarray(cost, dtype=np.float64)
-        lp.col_lower_ = np.ascontiguousarray(lo_c, dtype=np.float64)
-        lp.col_upper_ = np.ascontiguousarray(up_c, dtype=np.float64)
-        lp.row_lower_ = np.ascontiguousarray(lo_r, dtype=np.float64)
-        lp.row_upper_ = np.ascontiguousarray(up_r, dtype=np.float64)
-        mask = A != 0.0
-        counts = mask.sum(axis=0)
-        start = np.zeros(n_col + 1, dtype=np.int32)
-        np.cumsum(counts, out=start[1:])
-        rows, cols = np.nonzero(mask.T)  # column-major order
-        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = start
-        lp.a_matrix_.index_ = cols.astype(np.int32)
-        lp.a_matrix_.value_ = np.ascontiguousarray(A.T[rows, cols])
-        lp.a_matrix_.num_col_ = n_col
-        lp.a_matrix_.num_row_ = n_r
-        # Deterministic iteration limits (a degenerate LP once cycled for minutes):
-        # a solve that hits them is undecided, and the retries / fallback take over.
-        hs.setOptionValue("simplex_iteration_limit",
-                          min(_simplex_limit(n_r, n_col), _option(hs, "simplex_iteration_limit")))
-        hs.setOptionValue("ipm_iteration_limit", min(1000, _option(hs, "ipm_iteration_limit")))
-        return hs.passModel(lp) != highspy.HighsStatus.kError
-
     def _col_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         up = np.where(self._unb, _INF, self.h)
         return -up, up
 
     #: Settings of the retries after an undecided status (see the module notes).
-    _RETRIES: tuple[dict[str, object], ...] = (
-        {"simplex_strategy": 1, "simplex_scale_strategy": 0},
-        {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-7,
-         "dual_feasibility_tolerance": 1e-7},
-        {"solver": "ipm", "run_crossover": "on"},
-    )
     #: Relative size of the objective perturbation of the last HiGHS retry (a
     #: perturbed restart: ties of a degenerate LP broken, the bound certified for
     #: the true objective from the basis found).
@@ -612,12 +339,9 @@ class FactorPolytope:
     def _build(self, row_lo, row_hi, cost, options: dict[str, object] | None = None
                ) -> highspy.Highs | None:
         """A HiGHS model of ``min cost^T xi, row_lo <= A xi <= row_hi, |xi| <= h``."""
-        hs = self.new_highs()
-        hs.setOptionValue("simplex_strategy", 1)  # dual simplex (measured faster)
-        for key, val in (options or {}).items():
-            hs.setOptionValue(key, val)
+        hs = highs.new_model(options)
         lo, up = self._col_bounds()
-        return hs if self.pass_model(hs, self.A, lo, up, row_lo, row_hi, cost) else None
+        return hs if highs.pass_dense(hs, self.A, lo, up, row_lo, row_hi, cost) else None
 
     def highs_model(self) -> highspy.Highs | None:
         if self._model is None:
@@ -650,9 +374,9 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
         exact_residual : bool
-            Reduced costs correctly rounded (see :func:`lagrangian_lower_bound`).
+            Reduced costs correctly rounded (see :mod:`setobs.lp.certificate`).
         """
         return self._certify(w, y, w_err, w_pair, exact_residual)[0]
 
@@ -686,12 +410,14 @@ class FactorPolytope:
 
     def _certify(self, w, y, w_err=None, w_pair=None, exact_residual=False
                  ) -> tuple[float, NDArray[np.float64]]:
-        return lagrangian_lower_bound(
-            w, self.A, self.b, self.h, y, w_err=w_err, unbounded_radius=self.unbounded_radius,
+        if self._csc is None:
+            self._csc = _certificate.csc_of(np.ascontiguousarray(self.A, dtype=np.float64))
+        bound, y, _ = _certificate.certified_lower_bound(
+            w, self.A, self.b, self._neg_h, self.h, y, w_err=w_err,
+            unbounded_radius=self.unbounded_radius,
             unbounded_pinv=self._pinv() if self._any_unb else None, w_pair=w_pair,
-            exact_residual=exact_residual,
-            b_err=self.b_err,
-        )
+            exact_residual=exact_residual, b_err=self.b_err, csc=self._csc)
+        return bound, y
 
     @staticmethod
     def objective_scale(w: NDArray[np.float64]) -> float:
@@ -708,7 +434,8 @@ class FactorPolytope:
         return float(np.ldexp(1.0, np.frexp(m)[1]))
 
     def solve_objective(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
-        """Run HiGHS on objective ``w / scale``; return its model status.
+        """Run HiGHS on objective ``w / scale``; return the outcome
+        (:func:`setobs.lp.highs.status`).
 
         Parameters
         ----------
@@ -721,7 +448,7 @@ class FactorPolytope:
         """
         hs.changeColsCost(self.n_g, np.arange(self.n_g, dtype=np.int32), w / scale)
         hs.run()
-        return hs.getModelStatus()
+        return highs.status(hs)
 
     @_blas_unless_small
     def minimize(
@@ -739,7 +466,7 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
 
         Returns
         -------
@@ -770,7 +497,7 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
         """
         if self.n_c == 0:
             # No constraints: the minimum over the box is analytic and exact.
@@ -785,7 +512,7 @@ class FactorPolytope:
         best = -np.inf  # best certified bound of any multiplier (fallback answer)
         infeasible_claims = 0
         open_gap: LPResult | None = None  # the best "optimal" whose gap stayed open
-        attempts = [None, *self._RETRIES, "perturbed"]
+        attempts = [None, *highs.RETRY_SETTINGS, "perturbed"]
         for i, options in enumerate(attempts):
             perturbed = options == "perturbed"
             hs = self.highs_model() if i == 0 else self._build(
@@ -793,9 +520,9 @@ class FactorPolytope:
             if hs is None:
                 continue
             st = self.solve_objective(hs, self.perturbed_objective(w) if perturbed else w, scale)
-            if perturbed and st == highspy.HighsModelStatus.kUnbounded:
+            if perturbed and st == "unbounded":
                 continue  # (says nothing about the true objective)
-            if st == highspy.HighsModelStatus.kOptimal:
+            if st == "optimal":
                 sol = hs.getSolution()
                 y = np.asarray(sol.row_dual, dtype=np.float64) * scale
                 x = np.asarray(sol.col_value, dtype=np.float64)
@@ -823,10 +550,9 @@ class FactorPolytope:
                         open_gap = LPResult(bound, obj, x, "fallback")
                     continue
                 return LPResult(bound, obj, x, "optimal")
-            if st == highspy.HighsModelStatus.kUnbounded:
+            if st == "unbounded":
                 return LPResult(-np.inf, -np.inf, None, "unbounded")
-            if st in (highspy.HighsModelStatus.kInfeasible,
-                      highspy.HighsModelStatus.kUnboundedOrInfeasible):
+            if st == "infeasible":
                 rep = self.emptiness()
                 if rep.empty:
                     raise EmptySetError(
@@ -885,7 +611,7 @@ class FactorPolytope:
     def minimize_many(self, W: NDArray[np.float64]
                       ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i`` by the compiled
-        simplex (:meth:`FixedStructureLP.bounded <setobs.geometry.fastlp.FixedStructureLP.bounded>`:
+        simplex (:meth:`FixedStructureLP.bounded <setobs.lp.fastlp.FixedStructureLP.bounded>`:
         one dual simplex warm from the previous objective's basis, each multiplier
         certified like the HiGHS path's). For polytopes with every bound finite and
         1 to :data:`COMPILED_MAX_ROWS` rows; elsewhere nothing is solved.
@@ -957,7 +683,7 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
         scale : float
             Power of two the objective is divided by (:meth:`objective_scale`).
         """
@@ -968,10 +694,9 @@ class FactorPolytope:
             out = self._within_b_err_reduced(w, w_err, w_pair)
             if out is not None:
                 return out
-        for options in (None, *self._RETRIES):
+        for options in (None, *highs.RETRY_SETTINGS):
             hs = self._build(self.b - be, self.b + be, np.zeros(self.n_g), options)
-            if hs is None or self.solve_objective(hs, w, scale) != \
-                    highspy.HighsModelStatus.kOptimal:
+            if hs is None or self.solve_objective(hs, w, scale) != "optimal":
                 continue
             sol = hs.getSolution()
             out = self._decided_within_b_err(
@@ -1029,13 +754,11 @@ class FactorPolytope:
         w2 = np.concatenate([w[~unb] - Ab.T @ M, M[pos] * be[pos]])
         ones = np.ones(int(pos.sum()))
         scale = self.objective_scale(w2)
-        hs = self.new_highs()
-        hs.setOptionValue("simplex_strategy", 1)
-        if not self.pass_model(hs, A2, np.concatenate([-hb, -ones]), np.concatenate([hb, ones]),
-                          b2, b2, w2 / scale):
+        hs = highs.new_model()
+        if not highs.pass_dense(hs, A2, np.concatenate([-hb, -ones]), np.concatenate([hb, ones]),
+                                b2, b2, w2 / scale):
             return None
-        hs.run()
-        if hs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+        if highs.solve(hs) != "optimal":
             return None
         sol = hs.getSolution()
         y = M + N @ (np.asarray(sol.row_dual, dtype=np.float64) * scale)
@@ -1065,9 +788,9 @@ class FactorPolytope:
             # that would shift the reduced rows by 1e-4; times xi_u - xi_0 it does not.
             xi0 = Vr @ ((Ur.T @ self.b) / Sr)
             for _ in range(2):
-                r0 = _exact_residual(self.b, Au.T, [xi0])
+                r0 = _exact_residual(self.b, Au.T, xi0)
                 xi0 = xi0 + Vr @ ((Ur.T @ r0) / Sr)
-            r0 = _exact_residual(self.b, Au.T, [xi0])
+            r0 = _exact_residual(self.b, Au.T, xi0)
             pos = be > 0.0  # e_i = b_err_i t_i, |t_i| <= 1 (columns of the data's size)
             A2 = np.hstack([N.T @ Ab, -N.T[:, pos] * be[pos]])
             self._pivot = (Ur, Sr, Vr, N, xi0, r0, A2, N.T @ r0, pos)
@@ -1110,7 +833,7 @@ class FactorPolytope:
     def try_compiled(self, w: NDArray[np.float64], w_err: NDArray[np.float64] | None,
                      w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
                      ) -> LPResult | None:
-        """Last retry: the compiled simplex of :mod:`setobs.geometry.fastlp`, certified here.
+        """Last retry: the compiled simplex of :mod:`setobs.lp.fastlp`, certified here.
 
         Parameters
         ----------
@@ -1119,7 +842,7 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
         """
         from .fastlp import FixedStructureLP
 
@@ -1153,7 +876,7 @@ class FactorPolytope:
         werr2 = None if w_err is None else np.concatenate([w_err, np.zeros(self.n_c)])
         pair2 = None if w_pair is None else (
             np.hstack([w_pair[0], np.zeros((w_pair[0].shape[0], self.n_c))]), w_pair[1])
-        bound, _ = lagrangian_lower_bound(w2, A2, self.b, h2, ys[0], w_err=werr2,
+        bound, _ = _certificate.lagrangian_lower_bound(w2, A2, self.b, h2, ys[0], w_err=werr2,
                                           unbounded_radius=self.unbounded_radius, w_pair=pair2,
                                           b_err=self.b_err)
         if not np.isfinite(bound):
@@ -1167,10 +890,9 @@ class FactorPolytope:
         ``y = 0`` on rows whose slack is basic). Only a candidate multiplier:
         the bound is certified by :meth:`certify` like any other.
         """
-        basis = hs.getBasis()
-        basic = highspy.HighsBasisStatus.kBasic
-        bc = np.flatnonzero([st == basic for st in basis.col_status])
-        nbr = np.flatnonzero([st != basic for st in basis.row_status])
+        basic_col, basic_row = highs.basis(hs)
+        bc = np.flatnonzero(basic_col)
+        nbr = np.flatnonzero(~basic_row)
         if bc.size != nbr.size:
             return None
         M = self.A[np.ix_(nbr, bc)].T
@@ -1216,7 +938,7 @@ class FactorPolytope:
         w_err : ndarray, optional
             Elementwise bound on the rounding error in ``w``.
         w_pair : (M, v), optional
-            ``w`` was computed as ``M^T v`` (see :func:`lagrangian_lower_bound`).
+            ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
         """
         with self._lock:
             rep = self.emptiness()
@@ -1224,15 +946,15 @@ class FactorPolytope:
             delta = self._row_scale() * max(2.0 * found, 2.0 * rep.tol)
             scale = self.objective_scale(w)
             y = None
-            for options in (None, *self._RETRIES):
+            for options in (None, *highs.RETRY_SETTINGS):
                 hs = self._build(self.b - delta, self.b + delta, w / scale, options)
                 if hs is None:
                     continue
                 hs.run()
-                st = hs.getModelStatus()
-                if st == highspy.HighsModelStatus.kUnbounded:
+                st = highs.status(hs)
+                if st == "unbounded":
                     return LPResult(-np.inf, -np.inf, None, "unbounded")
-                if st == highspy.HighsModelStatus.kOptimal:
+                if st == "optimal":
                     y = np.asarray(hs.getSolution().row_dual, dtype=np.float64) * scale
                     x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
                     break
@@ -1301,14 +1023,12 @@ class FactorPolytope:
         lo_c = np.concatenate([lo, np.zeros(2 * n_c)])
         up_c = np.concatenate([up, np.full(2 * n_c, _INF)])
         cost = np.concatenate([np.zeros(n_g), np.ones(2 * n_c)])
-        for options in ({"simplex_strategy": 1}, *self._RETRIES):
-            hs = self.new_highs()
-            for key, val in options.items():
-                hs.setOptionValue(key, val)
-            if not self.pass_model(hs, big, lo_c, up_c, bs, bs, cost):
+        for options in (None, *highs.RETRY_SETTINGS):
+            hs = highs.new_model(options)
+            if not highs.pass_dense(hs, big, lo_c, up_c, bs, bs, cost):
                 continue
             hs.run()
-            if hs.getModelStatus() == highspy.HighsModelStatus.kOptimal:
+            if highs.status(hs) == "optimal":
                 sol = hs.getSolution()
                 return (np.asarray(sol.row_dual, dtype=np.float64),
                         np.asarray(sol.col_value, dtype=np.float64)[:n_g])
@@ -1342,7 +1062,7 @@ class FactorPolytope:
         n_c, n_g = self.n_c, self.n_g
         # Certified bound with the scaled data (exact: power-of-two scales); the
         # objective is zero in xi, so L(y) <= ||y||_1 * min ||As xi - bs||_inf.
-        lower, y = lagrangian_lower_bound(
+        lower, y = _certificate.lagrangian_lower_bound(
             np.zeros(n_g), As, bs, self.h, y, unbounded_radius=self.unbounded_radius,
             unbounded_pinv=np.linalg.pinv(As[:, self._unb].T) if self._any_unb else None,
             b_err=None if self.b_err is None else self.b_err / scale,

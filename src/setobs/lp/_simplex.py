@@ -1,11 +1,12 @@
 """Compiled kernels of the fast LP path (numba): a dense bounded dual simplex (with
 the bound-flipping ratio test and dual steepest-edge pricing), a bounded primal
-simplex for the next objective on the same data, and the certified Lagrangian
-bound of :func:`setobs.geometry.lp.lagrangian_lower_bound`.
+simplex for the next objective on the same data, and calls of the one certificate,
+:func:`setobs.lp.certificate.lower_bound`.
 
-These kernels are private; :class:`setobs.geometry.fastlp.FixedStructureLP` is
+These kernels are private; :class:`setobs.lp.fastlp.FixedStructureLP` is
 the interface. The simplex only *proposes* a multiplier; every bound returned
-to the user is certified by :func:`certify` (valid for any multiplier), exactly
+to the user is certified by :func:`~setobs.lp.certificate.lower_bound` (valid for any
+multiplier), exactly
 as on the HiGHS path, so soundness never depends on the simplex.
 """
 
@@ -17,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..tolerances import FASTLP_PRIMAL_RTOL
+from .certificate import csc_of, lower_bound
 
 _U = np.finfo(np.float64).eps / 2.0
 _TINY = np.finfo(np.float64).tiny
@@ -520,191 +522,6 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
 
 
 @njit(cache=True)
-def _two_prod_terms(a, b, terms, k):
-    """Append the exact pair ``p + e = a * b`` (Dekker) to ``terms`` at ``k``."""
-    p = a * b
-    t = 134217729.0 * a
-    ah = t - (t - a)
-    al = a - ah
-    t = 134217729.0 * b
-    bh = t - (t - b)
-    bl = b - bh
-    e = ((ah * bh - p) + ah * bl + al * bh) + al * bl
-    terms[k] = p
-    terms[k + 1] = e
-    return k + 2
-
-
-@njit(cache=True)
-def _exact_sum_bound(terms, nterms, partials):
-    """Shewchuk's exact summation; returns ``(s, bound, err)`` with ``|sum| <= bound``
-    and ``|sum - s| <= err``.
-
-    The partials are an exact, non-overlapping representation of the sum; ``s``
-    is their floating-point sum and ``bound = |s| + gamma_k sum |partials|``.
-    """
-    npart = 0
-    for t in range(nterms):
-        xv = terms[t]
-        i = 0
-        for k in range(npart):
-            yv = partials[k]
-            if abs(xv) < abs(yv):
-                xv, yv = yv, xv
-            hi = xv + yv
-            lo = yv - (hi - xv)
-            if lo != 0.0:
-                partials[i] = lo
-                i += 1
-            xv = hi
-        partials[i] = xv
-        npart = i + 1
-    s = 0.0
-    sabs = 0.0
-    for k in range(npart):
-        s += partials[k]
-        sabs += abs(partials[k])
-    err = _gamma(npart + 1) * sabs
-    return s, abs(s) + err, err
-
-
-@njit(cache=True)
-def _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials):
-    """``ru = w_U - A_U^T (y1 + y2)`` from exact products, with rigorous bounds on |ru|."""
-    m = A.shape[0]
-    guard = 2.0 * (2 * m + 1) * _TINY  # TwoProduct is exact barring underflow
-    for kk in range(fidx.size):
-        j = fidx[kk]
-        nt = 0
-        terms[nt] = w[j]
-        nt += 1
-        for i in range(m):
-            nt = _two_prod_terms(-A[i, j], y1[i], terms, nt)
-            nt = _two_prod_terms(-A[i, j], y2[i], terms, nt)
-        s, bnd, _ = _exact_sum_bound(terms, nt, partials)
-        ru[kk] = s
-        ru_bound[kk] = bnd + guard
-    return guard
-
-
-@njit(cache=True)
-def _add_pinv(pinvU, v, y):
-    """``y += pinvU @ v`` (refinement step on the unbounded columns)."""
-    for i in range(y.size):
-        s = 0.0
-        for kk in range(v.size):
-            s += pinvU[i, kk] * v[kk]
-        y[i] += s
-
-
-@njit(cache=True)
-def certify(w, A, b, h, y, fidx, pinvU, radius, tol_unb, b_err):
-    """Certified lower bound of ``min {w^T xi : A xi = b, |xi| <= h}`` from any ``y``.
-
-    The same bound and error analysis as
-    :func:`setobs.geometry.lp.lagrangian_lower_bound` (weak duality, Higham's
-    ``gamma`` terms doubled, one ulp outward). ``fidx`` lists the unbounded
-    factors (``h = inf``) and ``pinvU = pinv(A[:, fidx]^T)``; their reduced
-    costs are refined in double-double form and evaluated with exact products
-    and exact (Shewchuk) summation, so the radius term is ``O(eps^2)``.
-    Returns ``-inf`` when those reduced costs cannot be made negligible
-    (residual above ``tol_unb`` relative to ``max_j |w_j| + |A_j|^T |y|``).
-    ``y^T b`` is summed exactly and rounded once; ``b_err`` (zeros for none)
-    bounds the uncertainty of ``b`` and costs ``tb = sum |y_i| b_err_i``. On
-    return ``y`` holds the refined multiplier ``y1 + y2`` (rounded). Returns
-    ``(bound, slack)``: ``slack`` is the part of ``objective - bound`` that
-    precision alone explains (``tb``, the rounding-error terms, and the
-    reduced costs at rounding level, which are zero for an exact optimal
-    multiplier but cannot be below ``eps |A_j|^T |y|`` for a double one).
-    """
-    m, n = A.shape
-    f = fidx.size
-    y1 = y.copy()
-    y2 = np.zeros(m)
-    ru = np.zeros(f)
-    ru_bound = np.zeros(f)
-    guard = 0.0
-    terms = np.empty(4 * m + 1)
-    partials = np.empty(4 * m + 1)
-    if f > 0 and m > 0:
-        res = np.empty(f)
-        for _ in range(2):
-            for kk in range(f):
-                j = fidx[kk]
-                s = w[j]
-                for i in range(m):
-                    s -= A[i, j] * y1[i]
-                res[kk] = s
-            _add_pinv(pinvU, res, y1)
-        guard = _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials)
-        for _ in range(2):
-            nz = False
-            for kk in range(f):
-                if ru[kk] != 0.0:
-                    nz = True
-            if not nz:
-                break
-            _add_pinv(pinvU, ru, y2)
-            guard = _unbounded_residual(w, A, fidx, y1, y2, ru, ru_bound, terms, partials)
-    elif f > 0:
-        for kk in range(f):
-            ru[kk] = w[fidx[kk]]
-            ru_bound[kk] = abs(ru[kk])
-    # r = w - A^T y1 - A^T y2 and its scale |w| + |A|^T (|y1| + |y2|), row by row
-    # (any summation order is covered by the gamma bounds)
-    r = w.copy()
-    sc = np.abs(w)
-    for i in range(m):
-        a1, a2 = y1[i], y2[i]
-        ay = abs(a1) + abs(a2)
-        if ay == 0.0:
-            continue
-        for j in range(n):
-            r[j] -= A[i, j] * a1
-        if a2 != 0.0:
-            for j in range(n):
-                r[j] -= A[i, j] * a2
-        for j in range(n):
-            sc[j] += abs(A[i, j]) * ay
-    g2 = 2.0 * _gamma(2 * m + 2)
-    t2 = 0.0
-    if f > 0:
-        scale_all = _TINY
-        for j in range(n):
-            scale_all = max(scale_all, sc[j])
-        for kk in range(f):
-            rel = (ru_bound[kk] - guard) / scale_all
-            if rel > tol_unb:
-                return -np.inf, np.inf
-        su = 0.0
-        for kk in range(f):
-            su += ru_bound[kk]
-        t2 += radius * su * (1.0 + _gamma(f + 1))
-    slack = t2
-    for j in range(n):
-        if h[j] == np.inf or h[j] == 0.0:
-            continue
-        rj = abs(r[j])
-        t2 += h[j] * (rj + g2 * sc[j])
-        slack += h[j] * (min(rj, 64.0 * _U * sc[j]) + g2 * sc[j])
-    # t1 = y^T b, exact products summed exactly (error <= gamma * sum |partials|)
-    nt = 0
-    for i in range(m):
-        nt = _two_prod_terms(y1[i], b[i], terms, nt)
-        nt = _two_prod_terms(y2[i], b[i], terms, nt)
-    t1, _, t1_err = _exact_sum_bound(terms, nt, partials)
-    t1_err += 4.0 * (m + 1) * _TINY
-    tb = 0.0
-    for i in range(m):
-        tb += (abs(y1[i]) + abs(y2[i])) * b_err[i]
-    tb *= 1.0 + _gamma(m + 2)
-    for i in range(m):
-        y[i] = y1[i] + y2[i]
-    err = t1_err * (1.0 + 4.0 * _U) + 2.0 * (_gamma(n + 3) * t2 + _U * (abs(t1) + t2 + tb))
-    return np.nextafter(t1 - t2 - tb - err, -np.inf), slack + tb + 2.0 * err
-
-
-@njit(cache=True)
 def prepare(b, h, b_err, bidx, S_B, R, Q0, absQ0, absAB, Q2, b_scale, rtol):
     """The reduced LP's data for one set: ``hB = h[bidx] / S_B`` and ``bred = Q2^T (R b)``,
     and whether ``b`` is consistent with the redundant rows: ``|Q0^T (R b)| <= rtol *
@@ -752,8 +569,9 @@ def solve_batch(structure, data, state, params, out):
 
     The arguments are grouped by lifetime (all tuples, in this order):
 
-    * ``structure = (A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``:
-      fixed for a set structure (:class:`~setobs.geometry.fastlp.FixedStructureLP`);
+    * ``structure = (A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``
+      (``csc``: ``A``'s ``(indptr, indices, data)`` for the certificate):
+      fixed for a set structure (:class:`~setobs.lp.fastlp.FixedStructureLP`);
     * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
     * ``state = (bases, upper, binv, npiv, est, iters)``: the warm-start state, updated
       in place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used;
@@ -769,8 +587,12 @@ def solve_batch(structure, data, state, params, out):
     certified bound is finite and within ``gap_rtol (1 + |obj|)`` of the
     simplex objective. ``ys[i]`` receives the certified multiplier.
     """
-    A, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
+    A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
+    indptr, indices, cdata = csc
     b, h, b_err, bred, hB = data
+    neg_h = -h
+    no_err = np.zeros(0)
+    no_pair = np.zeros((0, h.size))
     bases, upper, binv, npiv, est, iters = state
     maxit, radius, tol_unb, gap_rtol = params
     nit = np.zeros(1, np.int64)
@@ -886,12 +708,14 @@ def solve_batch(structure, data, state, params, out):
             for t2 in range(mr):
                 s += Q2[k, t2] * z[t2]
             y[k] = R[k] * s
-        bnd, slack = certify(Wfull[i], A, b, h, y, fidx, pinvU, radius, tol_unb, b_err)
+        bnd, slack = lower_bound(Wfull[i], indptr, indices, cdata, b, neg_h, h, y, fidx,
+                                 pinvU, radius, tol_unb, b_err, no_err, no_pair, no_err,
+                                 False)
         ys[i, :] = y
         bounds[i] = bnd
         objs[i] = obj
         # accepted gap: the tolerance, what precision alone explains (the b_err
-        # term, rounding terms, reduced costs at rounding level: see certify),
+        # term, rounding terms, reduced costs at rounding level: see lower_bound),
         # and the objective's own rounding (large b cancel in it). A wrong basis
         # leaves a gap well above these.
         allowed = gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * _gamma(nb + m + 2) * oabs
@@ -903,7 +727,7 @@ def solve_batch(structure, data, state, params, out):
 
 @njit(cache=True)
 def phase1(As, bs, h, maxit):
-    """The phase-1 LP of :meth:`setobs.geometry.lp.FactorPolytope.emptiness` (every
+    """The phase-1 LP of :meth:`setobs.lp.factor.FactorPolytope.emptiness` (every
     ``h_j`` finite) by the dual simplex: ``min sum(s+ + s-)`` subject to
     ``As xi + s+ - s- = bs``, ``|xi| <= h``, ``s+-`` in ``[0, 2 S]``, written with the
     shifted slacks ``s+- = S + t+-``, ``|t+-| <= S`` (the shifts cancel in the rows),
@@ -950,10 +774,11 @@ def phase1(As, bs, h, maxit):
 @njit(cache=True)
 def emptiness(A, b, h, b_err, radius, maxit):
     """The whole phase-1 emptiness test of
-    :meth:`setobs.geometry.lp.FactorPolytope.emptiness` for every ``h_j`` finite, in one
+    :meth:`setobs.lp.factor.FactorPolytope.emptiness` for every ``h_j`` finite, in one
     call: the rows scaled by powers of two (the smallest at least
     ``max(max_j |A_ij|, |b_i|)``, exact), :func:`phase1`, the certificate
-    (:func:`certify` of the zero objective, ``b_err`` scaled alike) divided by
+    (:func:`~setobs.lp.certificate.lower_bound` of the zero objective, ``b_err`` scaled
+    alike) divided by
     ``||y||_1`` and rounded down, and the phase-1 point clipped to its bounds with
     its largest scaled row violation. Returns ``(code, lower_inf, found, xi)``;
     ``code != OPTIMAL`` means nothing was decided.
@@ -984,8 +809,10 @@ def emptiness(A, b, h, b_err, radius, maxit):
     for i in range(m):
         if not np.isfinite(y[i]):
             return NUMERICAL, 0.0, np.nan, x
-    lower, _ = certify(np.zeros(n), As, bs, h, y, np.zeros(0, np.int64), np.zeros((m, 0)),
-                       radius, 0.0, be)
+    indptr, indices, cdata = csc_of(As)
+    lower, _ = lower_bound(np.zeros(n), indptr, indices, cdata, bs, -h, h, y,
+                           np.zeros(0, np.int64), np.zeros((m, 0)), radius, 0.0, be,
+                           np.zeros(0), np.zeros((0, n)), np.zeros(0), False)
     norm1 = 0.0
     for i in range(m):
         norm1 += abs(y[i])

@@ -13,15 +13,14 @@ window is full; only ``b`` (the data) and ``h`` (the reset box) change.
   LP is unbounded below, decided once per direction); the remaining LP is
   ``min (w_B - A_B^T y_U)^T xi_B`` subject to ``Q2^T A_B xi_B = Q2^T b``,
   ``|xi_B| <= h_B`` with ``Q2`` an orthonormal basis of ``range(A_U)^perp``;
-* **a compiled bounded dual simplex** (:mod:`setobs.geometry._simplex`,
+* **a compiled bounded dual simplex** (:mod:`setobs.lp._simplex`,
   numba) with an explicit basis inverse, **warm-started per direction** from
   the previous optimal basis: with ``A`` and ``w`` fixed that basis stays dual
   feasible whatever ``b`` and ``h`` are, so a new right-hand side typically
   costs zero to three pivots;
 * **the same certificate as the HiGHS path**: the multiplier ``y = y_U + Q2 z``
-  is certified on the original data by the Lagrangian bound of
-  :func:`setobs.geometry.lp.lagrangian_lower_bound` (compiled, same error
-  analysis, exact products and summation for the free factors' reduced costs).
+  is certified on the original data by the one certificate,
+  :func:`setobs.lp.certificate.lower_bound`, called compiled from the kernel.
 
 The structure is immutable once built and can be shared (across SMFDOs,
 processes' caches, threads); the warm-start state (bases, basis inverses,
@@ -33,7 +32,7 @@ The fast path never decides anything it cannot certify: an LP is reported
 solved (``ok``) only if its certified bound is finite and within ``1e-9 (1 +
 |obj|)`` of the simplex objective. Infeasible, iteration-limited, numerically
 delicate and ambiguous cases are flagged so that the caller can hand them to
-the reference path (:class:`setobs.geometry.lp.FactorPolytope`), which decides
+the reference path (:class:`setobs.lp.factor.FactorPolytope`), which decides
 emptiness with a certified phase-1 LP.
 """
 
@@ -61,7 +60,8 @@ from ..tolerances import (
 )
 
 # The compiled simplex (numba) compiles/loads on the first batch, not on import.
-_simplex = lazy_module("setobs.geometry._simplex")
+_simplex = lazy_module("setobs.lp._simplex")
+_certificate = lazy_module("setobs.lp.certificate")
 
 __all__ = ["FixedStructureLP", "LPState", "hull_objectives"]
 
@@ -136,7 +136,7 @@ class FixedStructureLP:
         Factors with ``h = inf`` (fixed); the others must get finite bounds.
     unbounded_radius : float
         Radius on unbounded factors used in certification (see
-        :mod:`setobs.geometry.lp`).
+        :mod:`setobs.lp.factor`).
 
     Attributes
     ----------
@@ -166,6 +166,7 @@ class FixedStructureLP:
     def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
                  free: NDArray[np.bool_], unbounded_radius: float = UNBOUNDED_RADIUS) -> None:
         self.A = np.ascontiguousarray(A, dtype=np.float64)
+        self.csc = _certificate.csc_of(self.A)  # (the certificate's form of A)
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         self.free = np.asarray(free, dtype=bool)
         self.unbounded_radius = float(unbounded_radius)
@@ -294,6 +295,7 @@ class FixedStructureLP:
         Wa = np.zeros((W.shape[0], n + m))
         Wa[:, :n] = W
         self.A, self.W = Aa, Wa
+        self.csc = _certificate.csc_of(Aa)
         self.m, self.n, self.n_lp = m, n + m, Wa.shape[0]
         self.free = np.zeros(n + m, dtype=bool)
         self.unbounded_radius = UNBOUNDED_RADIUS
@@ -428,8 +430,8 @@ class FixedStructureLP:
             return bounds, np.zeros(self.n_lp, dtype=bool)
         if b_err is None:
             berr = np.zeros(self.m)
-        args = ((self.A, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W, self.Wred,
-                 self.yU, self.Q2, self.R, self.dirstat),
+        args = ((self.A, self.csc, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W,
+                 self.Wred, self.yU, self.Q2, self.R, self.dirstat),
                 (b, h, berr, bred, hB),
                 (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
                 (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL,

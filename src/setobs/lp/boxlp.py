@@ -1,0 +1,302 @@
+"""A box-bounded LP grown block by block, solved per objective from its last basis.
+
+.. math::  \\min \\{ w^\\top x_S : A x = b,\\ l \\le x \\le u \\}
+
+with every variable bounded and the right-hand side known to ``+- b_err``. The
+whole-history LP of exact mode (:mod:`setobs.setmembership._history`) is one:
+each step *adds* columns (the step's variables) and rows (its equations), and
+the objective moves to the newest block's columns ``S``. :class:`BoxLP` keeps
+one HiGHS model per objective, grown with the LP and re-solved from its own last
+optimal basis (the direction's optimum at one step is close to that at the
+previous one), and reports each minimum through the one certificate
+(:func:`setobs.lp.certificate.lower_bound`): a bound holds for the stored data
+whatever the solver did; a solve that is not optimal with a tight certificate
+gives ``None``, and the caller decides with a certified test of its own.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._lazy import lazy_module
+from .._rounding import round_down, round_up
+from ..tolerances import HISTORY_GAP_RTOL
+from . import highs
+
+__all__ = ["BoxLP"]
+
+sparse = lazy_module("scipy.sparse")
+_certificate = lazy_module("setobs.lp.certificate")
+
+
+class BoxLP:
+    """An LP ``A x = b (+- b_err), lo <= x <= hi`` that grows by columns and rows.
+
+    Blocks are added with :meth:`add_cols` and :meth:`add_rows`; :meth:`begin` marks
+    the start of a block that :meth:`undo` removes again. :meth:`minimize_all` solves
+    a list of objectives over some columns, each on its own warm HiGHS model.
+    """
+
+    def __init__(self) -> None:
+        self._lo: list[NDArray[np.float64]] = []
+        self._hi: list[NDArray[np.float64]] = []
+        self._s: list[NDArray[np.float64]] = []  # (HiGHS's column scales, powers of two)
+        self._b: list[NDArray[np.float64]] = []
+        self._berr: list[NDArray[np.float64]] = []
+        self._ent: list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]] = []
+        self.n_col = 0
+        self.n_row = 0
+        #: solves that were not optimal with a tight certificate
+        self.retries = 0
+        self._models: list = []
+        self._warm: list[bool] = []
+        self._ranged: list[bool] = []
+        self._cols = np.zeros(0, dtype=np.int64)  # (the columns the objectives are on)
+        self._undo: list[tuple[str, int]] = []
+        self._cache = None
+
+    # ------------------------------------------------------------------ building
+    def begin(self) -> None:
+        """Start a block: :meth:`undo` removes what is added from here on."""
+        self._undo = []
+
+    def add_cols(self, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.int64]:
+        """Add variables with bounds ``[lo, hi]``; return their column indices.
+
+        Parameters
+        ----------
+        lo, hi : ndarray
+            Bounds (finite: the certificate needs every variable bounded).
+
+        Returns
+        -------
+        ndarray of int64
+            The new columns.
+        """
+        lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        idx = np.arange(self.n_col, self.n_col + lo.size)
+        # HiGHS sees x = s xi with s a power of two near the column's half range
+        # (exact): its absolute tolerances then apply relative to each variable's
+        # range. Unscaled, a noise factor of range 1e-3 violated its bound by 6e-11
+        # "within tolerance", and on a thin set that moved the optimum by 4e-8.
+        # (At most 2^20 either way: HiGHS drops coefficients below 1e-9, and a
+        # column pinned to a width of 1e-11 scaled to unit range lost all of them.)
+        half = 0.5 * (hi - lo)
+        e = np.clip(np.frexp(np.where(half > 0, half, 1.0))[1], -20, 20)
+        s = np.where(np.isfinite(half), np.ldexp(1.0, e), 1.0)
+        self._lo.append(lo)
+        self._hi.append(hi)
+        self._s.append(s)
+        self.n_col += lo.size
+        self._undo.append(("cols", lo.size))
+        for hs in self._models:
+            hs.addCols(lo.size, np.zeros(lo.size), lo / s, hi / s, 0,
+                       np.zeros(lo.size, np.int32), np.zeros(0, np.int32), np.zeros(0))
+        self._cache = None
+        return idx
+
+    def add_rows(self, r: NDArray[np.int64], c: NDArray[np.int64], v: NDArray[np.float64],
+                 b: NDArray[np.float64], berr: NDArray[np.float64]) -> None:
+        """Add the rows ``sum_c v x_c = b`` (``+- berr``).
+
+        Parameters
+        ----------
+        r, c, v : ndarray
+            The entries: absolute row indices (all new, from :attr:`n_row` on),
+            columns, values.
+        b, berr : ndarray
+            The new rows' right-hand side and its uncertainty.
+        """
+        keep = v != 0.0
+        r, c, v = r[keep], c[keep], v[keep]
+        nr = b.size
+        self._b.append(np.asarray(b, dtype=np.float64))
+        self._berr.append(np.asarray(berr, dtype=np.float64))
+        self._ent.append((r, c, v))
+        self._undo.append(("rows", nr))
+        if self._models and nr:
+            order = np.lexsort((c, r))
+            r, c, v = r[order], c[order], v[order]
+            v = v * np.concatenate(self._s)[c]
+            starts = np.searchsorted(r, self.n_row + np.arange(nr)).astype(np.int32)
+            ci = c.astype(np.int32)
+            rlo, rhi = self._row_bounds(self._b[-1], self._berr[-1])
+            bb = self._b[-1]
+            for hs, ranged in zip(self._models, self._ranged, strict=True):
+                if ranged:
+                    hs.addRows(nr, rlo, rhi, v.size, starts, ci, v)
+                else:
+                    hs.addRows(nr, bb, bb, v.size, starts, ci, v)
+        self.n_row += nr
+        self._cache = None
+
+    def undo(self) -> None:
+        """Remove the block added since :meth:`begin` (the models are rebuilt on the
+        next solve)."""
+        for kind, n in reversed(self._undo):
+            if kind == "cols":
+                self._lo.pop()
+                self._hi.pop()
+                self._s.pop()
+                self.n_col -= n
+            else:
+                self._b.pop()
+                self._berr.pop()
+                self._ent.pop()
+                self.n_row -= n
+        self._undo = []
+        self._models = []
+        self._cache = None
+
+    # ------------------------------------------------------------------ the data
+    def arrays(self):
+        """``(lo, hi, b, b_err, A, csc, k)``: the bounds, the right-hand side and its
+        uncertainty, ``A`` (a ``scipy.sparse`` CSC array), its ``(indptr, indices,
+        data)`` for the certificate, and the most entries in one column."""
+        if self._cache is None:
+            lo = np.concatenate(self._lo)
+            hi = np.concatenate(self._hi)
+            b = np.concatenate(self._b) if self._b else np.zeros(0)
+            berr = np.concatenate(self._berr) if self._berr else np.zeros(0)
+            r = np.concatenate([e[0] for e in self._ent])
+            c = np.concatenate([e[1] for e in self._ent])
+            v = np.concatenate([e[2] for e in self._ent])
+            A = sparse.csc_array((v, (r, c)), shape=(self.n_row, self.n_col))
+            A.sum_duplicates()
+            csc = (A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data)
+            k = int(np.diff(A.indptr).max(initial=0))
+            self._cache = (lo, hi, b, berr, A, csc, k)
+        return self._cache
+
+    @staticmethod
+    def _row_bounds(b, berr):
+        """Ranged rows ``b +- b_err`` (the set the certificate covers), for an LP that
+        HiGHS calls infeasible at exactly ``b``: a thin set, carried by the set
+        recursion with its rounding. (Not by default: ranged rows cost 2-7x the
+        simplex iterations.)"""
+        pos = berr > 0
+        return np.where(pos, round_down(b - berr), b), np.where(pos, round_up(b + berr), b)
+
+    # ------------------------------------------------------------------ solving
+    def certify(self, cols: NDArray[np.int64], w: NDArray[np.float64],
+                y: NDArray[np.float64]) -> float:
+        """Certified lower bound of ``min w^T x_cols`` from row multipliers ``y``.
+
+        Parameters
+        ----------
+        cols : ndarray of int64
+            The objective's columns.
+        w : ndarray
+            Its coefficients.
+        y : ndarray, shape (n_row,)
+            Any multiplier.
+
+        Returns
+        -------
+        float
+            The bound (:func:`setobs.lp.certificate.lower_bound` over the box).
+        """
+        lo, hi, b, berr, A, csc, _ = self.arrays()
+        wf = np.zeros(lo.size)
+        wf[cols] = w
+        bound, _, _ = _certificate.certified_lower_bound(wf, A, b, lo, hi, y, b_err=berr, csc=csc)
+        return bound
+
+    def _build(self, cols, w: NDArray[np.float64], ranged: bool = False):
+        """A HiGHS model of the LP with objective ``w`` on ``cols``."""
+        lo, hi, b, berr, A, _, _ = self.arrays()
+        s = np.concatenate(self._s)
+        hs = highs.new_model()  # (cold: the dual simplex)
+        cost = np.zeros(self.n_col)
+        cost[cols] = w
+        As = A @ sparse.diags_array(s)  # (exact: powers of two)
+        rlo, rhi = self._row_bounds(b, berr) if ranged else (b, b)
+        if not highs.pass_csc(hs, self.n_row, cost * s, lo / s, hi / s, rlo, rhi,
+                              As.indptr, As.indices, As.data):
+            return None
+        return hs
+
+    def minimize_all(self, cols: NDArray[np.int64], W: NDArray[np.float64]
+                     ) -> NDArray[np.float64] | None:
+        """Certified ``min W[j]^T x_cols`` for every row ``j``, or ``None`` when a solve
+        is not optimal with a tight certificate.
+
+        One HiGHS model per row of ``W``, kept across calls and grown with the LP:
+        when ``cols`` moved since the last call (a new block's columns), each
+        model's objective moves with them and it restarts from its last optimal
+        basis.
+
+        Parameters
+        ----------
+        cols : ndarray of int64
+            The objectives' columns.
+        W : ndarray, shape (n_obj, cols.size)
+            The objectives.
+
+        Returns
+        -------
+        ndarray or None
+            The certified minima.
+        """
+        n_obj = W.shape[0]
+        if len(self._models) != n_obj:
+            models = [self._build(cols, w) for w in W]
+            if any(hs is None for hs in models):
+                return None
+            self._models = models
+            self._warm = [False] * n_obj
+            self._ranged = [False] * n_obj
+            self._cols = cols
+        moved = not np.array_equal(cols, self._cols)
+        idx = cols.astype(np.int32)
+        prev = self._cols.astype(np.int32)
+        scale = np.concatenate(self._s)[cols]
+        limit = highs.simplex_limit(self.n_row, self.n_col)
+        out = np.empty(n_obj)
+        for j, hs in enumerate(self._models):
+            if moved:  # (the objective moves to the new columns)
+                hs.changeColsCost(prev.size, prev, np.zeros(prev.size))
+                hs.changeColsCost(idx.size, idx, W[j] * scale)
+            bound = self._solve(j, cols, W[j], limit)
+            if bound is None:
+                self._models = []  # (fresh models next time)
+                return None
+            out[j] = bound
+        self._cols = cols
+        return out
+
+    def _solve(self, j: int, cols, w: NDArray[np.float64], limit: int) -> float | None:
+        """Certified ``min w^T x_cols`` on model ``j``: from its last optimal basis with
+        the primal simplex (its phase 1 for the new rows: 2-8x fewer iterations than
+        the dual on the whole-history LP), then the dual simplex, then a fresh
+        model, then a fresh model with ranged rows (:meth:`_row_bounds`); ``None``
+        if none is optimal with a tight certificate."""
+        for attempt in range(4):
+            if attempt >= 2:  # a fresh model; the last with ranged rows
+                hs = self._build(cols, w, ranged=attempt == 3)
+                if hs is None:
+                    return None
+                self._models[j] = hs
+                self._ranged[j] = attempt == 3
+            hs = self._models[j]
+            if highs.solve(hs, primal=attempt == 0 and self._warm[j],
+                           iteration_limit=limit) != "optimal":
+                self.retries += 1
+                continue
+            obj = float(hs.getInfo().objective_function_value)
+            y = np.asarray(hs.getSolution().row_dual, dtype=np.float64)
+            bound = self.certify(cols, w, y)
+            if np.isfinite(bound) and obj - bound <= HISTORY_GAP_RTOL * (1.0 + abs(obj)):
+                self._warm[j] = True
+                return bound
+            self.retries += 1
+        return None
+
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_models"] = []  # (HiGHS models do not pickle: rebuilt on demand)
+        state["_cache"] = None
+        return state
