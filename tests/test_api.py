@@ -303,3 +303,35 @@ def test_every_raise_in_the_library_is_a_setobs_error():
     from setobs.cli import CLIError
 
     assert issubclass(CLIError, exceptions.SetobsError)
+
+
+#: Words a shape error's message uses (sizes, dimensions, indices of coordinates).
+SHAPE_WORDS = re.compile(
+    r"shape|rows|columns|length|dimension|components|entries|square|2-D|vector|per row|"
+    r"must have|at least one (row|state|point)|0 x 0|dims|differ|out of range|"
+    r"indices in|component must be in")
+
+
+def dimension_errors_about_values(root: Path) -> list[str]:
+    """``raise DimensionError(...)`` whose message (its string parts) says nothing
+    about a shape: such an error is a value error or an argument error."""
+    bad = []
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not (isinstance(node, ast.Raise) and isinstance(node.exc, ast.Call)
+                    and getattr(node.exc.func, "id", "") == "DimensionError"):
+                continue
+            text = " ".join(c.value for c in ast.walk(node.exc)
+                            if isinstance(c, ast.Constant) and isinstance(c.value, str))
+            if not SHAPE_WORDS.search(text):
+                bad.append(f"{path.relative_to(root)}:{node.lineno}: {text[:60]}")
+    return bad
+
+
+def test_dimension_error_is_only_for_shapes(tmp_path):
+    """``DimensionError`` for shapes only; a value out of range is an
+    ``InvalidValueError``, a wrong kind of argument an ``ArgumentError``."""
+    assert dimension_errors_about_values(SRC) == []
+    (tmp_path / "x.py").write_text(
+        "def f(x):\n    raise DimensionError(f'x must be positive, got {x}')\n")
+    assert dimension_errors_about_values(tmp_path) == ["x.py:2: x must be positive, got "]

@@ -18,7 +18,7 @@ from scipy.optimize import linprog
 import setobs as so
 from setobs.cli import main
 from setobs.exceptions import (
-    DimensionError,
+    InvalidValueError,
     MissingDataWarning,
     ModelInvalidatedError,
     SolverWarning,
@@ -29,7 +29,7 @@ from setobs.tolerances import MISSING_WARN_FRACTION
 # ------------------------------------------------------------------ missing samples
 def test_a_record_with_nothing_measured_is_refused(tmp_path, capsys):
     sys_ = so.examples.chang2006()
-    with pytest.raises(DimensionError, match=r"no measured .* all 50 samples are missing"):
+    with pytest.raises(InvalidValueError, match=r"no measured .* all 50 samples are missing"):
         so.SMFDO(sys_, window=5).run(np.full((50, 2), np.nan))
     rec = tmp_path / "r.csv"
     rec.write_text("t,y\n" + "".join(f"{0.1 * k:.1f},nan\n" for k in range(20)))

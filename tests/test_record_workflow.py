@@ -100,7 +100,7 @@ def test_one_spelling_of_the_columns_in_the_api_and_the_cli(tmp_path, capsys):
     ss2 = control.ss(A, [[0.0, 0.0], [1.0, 1.0]], [[1.0, 0.0]], 0, 0.1)
     s2 = so.LinearSystem.from_statespace(ss2, disturbance_inputs=["u[1]"])
     assert s2.q == 1 and s2.p == 1 and s2.disturbance_names == ("d0",)
-    with pytest.raises(so.DimensionError, match=r"no input named 'w'.*u\[0\]"):
+    with pytest.raises(so.InvalidValueError, match=r"no input named 'w'.*u\[0\]"):
         so.LinearSystem.from_statespace(ss2, disturbance_inputs=["w"])
 
 

@@ -8,7 +8,7 @@ from scipy.signal import cont2discrete
 
 import setobs as so
 from setobs import LinearSystem
-from setobs.exceptions import DimensionError
+from setobs.exceptions import ArgumentError, DimensionError, InvalidValueError
 from tests.printed import has_number
 
 control = pytest.importorskip("control")
@@ -74,16 +74,19 @@ def test_from_matrices_both_ways_of_stating_the_disturbance():
     np.testing.assert_allclose(c.Phi, so.examples.servo_motor().Phi, rtol=1e-12)
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({}, "state which inputs are disturbances"),
-    ({"G": [[1.0], [0.0]], "disturbance_inputs": [0]}, "either G or disturbance_inputs"),
-    ({"disturbance_inputs": ["load"]}, "no input named 'load'"),
-    ({"disturbance_inputs": [0], "D": [[1.0, 0.0]]}, "D columns of the disturbance"),
-    ({"disturbance_inputs": [0], "continuous": True}, "needs the sampling time dt"),
-    ({"disturbance_inputs": [2]}, "index 2 is out of range"),
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({}, ArgumentError, "state which inputs are disturbances"),
+    ({"G": [[1.0], [0.0]], "disturbance_inputs": [0]}, ArgumentError,
+     "either G or disturbance_inputs"),
+    ({"disturbance_inputs": ["load"]}, InvalidValueError, "no input named 'load'"),
+    ({"disturbance_inputs": [0], "D": [[1.0, 0.0]]}, InvalidValueError,
+     "D columns of the disturbance"),
+    ({"disturbance_inputs": [0], "continuous": True}, ArgumentError,
+     "needs the sampling time dt"),
+    ({"disturbance_inputs": [2]}, DimensionError, "index 2 is out of range"),
 ])
-def test_from_matrices_bad_input(kwargs, match):
-    with pytest.raises(DimensionError, match=match):
+def test_from_matrices_bad_input(kwargs, error, match):
+    with pytest.raises(error, match=match):
         LinearSystem.from_matrices(A=np.eye(2), B=np.ones((2, 2)), C=[[1.0, 0.0]], **kwargs)
 
 
@@ -110,11 +113,11 @@ def test_statespace_accepted_wherever_a_system_is_taken():
     np.testing.assert_allclose(p1, so.observers.PIO(sys).run(Y, U).estimate, rtol=1e-9)
     with pytest.raises(TypeError, match=r"say which of its inputs are disturbances"):
         so.analysis.diagnose(ss)
-    with pytest.raises(DimensionError, match=r"continuous-time: give the sampling time.*dt=Ts"):
+    with pytest.raises(ArgumentError, match=r"continuous-time: give the sampling time.*dt=Ts"):
         so.analysis.diagnose(ss, disturbance_inputs=[1])
     with pytest.raises(TypeError, match="already a LinearSystem"):
         so.analysis.diagnose(sys, disturbance_inputs=[0])
-    with pytest.raises(DimensionError, match="differs from the model's sampling time"):
+    with pytest.raises(InvalidValueError, match="differs from the model's sampling time"):
         LinearSystem.from_statespace(dss, [1], dt=0.5)
 
 
@@ -146,7 +149,7 @@ def test_simulate_against_scipy_dlsim():
     _, y_ref, x_ref = dlsim((sys.Phi, B, sys.Xi, Dm, 1.0), np.hstack([U, D]), x0=x0)
     np.testing.assert_allclose(Y, y_ref, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(X, x_ref, rtol=1e-12, atol=1e-14)
-    with pytest.raises(so.DimensionError, match="U is required"):
+    with pytest.raises(so.ArgumentError, match="U is required"):
         sys.simulate(D)
 
 
@@ -162,5 +165,5 @@ def test_augmented_order_two_propagates_x_d_and_the_increment():
     np.testing.assert_allclose(z1, np.concatenate([sys.Phi @ x + sys.G @ d + sys.Gamma @ u,
                                                    d + dd, dd + w]), atol=1e-12)
     np.testing.assert_allclose(aug.C @ np.concatenate([x, d, dd]), sys.Xi @ x, atol=1e-12)
-    with pytest.raises(so.DimensionError, match="order"):
+    with pytest.raises(so.InvalidValueError, match="order"):
         sys.augmented(order=3)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .exceptions import ArgumentError, DimensionError
+from .exceptions import ArgumentError, DimensionError, InvalidValueError
 from .tolerances import MAX_MAGNITUDE
 
 __all__ = ["as_matrix", "as_vector", "check_real_scalar", "readonly"]
@@ -27,22 +27,22 @@ def _to_float(name: str, value: ArrayLike, what: str) -> NDArray[np.float64]:
     if type(value) is np.ndarray and value.dtype == np.float64:
         return value.copy()  # the common case, without the checks below (~2 us)
     if isinstance(value, str | bytes) or value is None:
-        raise DimensionError(f"{name} must be a real numeric {what}, got {value!r}")
+        raise ArgumentError(f"{name} must be a real numeric {what}, got {value!r}")
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:
-        raise DimensionError(f"{name} must be a real numeric {what}: {exc}") from None
+        raise ArgumentError(f"{name} must be a real numeric {what}: {exc}") from None
     if np.iscomplexobj(raw):
         hint = (" (its imaginary part is zero: pass .real)" if not np.any(np.imag(raw) != 0)
                 else "")
-        raise DimensionError(f"{name} must be real, got a complex array{hint}")
+        raise ArgumentError(f"{name} must be real, got a complex array{hint}")
     if raw.dtype.kind not in "biuf":
         if raw.dtype.kind == "O":
             try:
                 return np.array(raw.tolist(), dtype=np.float64, copy=True)
             except (TypeError, ValueError) as exc:
-                raise DimensionError(f"{name} must be a real numeric {what}: {exc}") from None
-        raise DimensionError(f"{name} must be a real numeric {what}, got dtype {raw.dtype}")
+                raise ArgumentError(f"{name} must be a real numeric {what}: {exc}") from None
+        raise ArgumentError(f"{name} must be a real numeric {what}, got dtype {raw.dtype}")
     return np.array(raw, dtype=np.float64, copy=True)
 
 
@@ -54,7 +54,7 @@ def check_real_scalar(name: str, value: object, *, positive: bool = False,
     ------
     TypeError
         If ``value`` is not a real number.
-    DimensionError
+    InvalidValueError
         If it is NaN, infinite, or out of range.
     """
     if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
@@ -62,11 +62,11 @@ def check_real_scalar(name: str, value: object, *, positive: bool = False,
         raise ArgumentError(f"{name} must be a real number, got {value!r}")
     v = float(value)
     if not np.isfinite(v):
-        raise DimensionError(f"{name} must be finite, got {value!r}")
+        raise InvalidValueError(f"{name} must be finite, got {value!r}")
     if positive and not v > 0:
-        raise DimensionError(f"{name} must be positive, got {value!r}")
+        raise InvalidValueError(f"{name} must be positive, got {value!r}")
     if nonnegative and v < 0:
-        raise DimensionError(f"{name} must be nonnegative, got {value!r}")
+        raise InvalidValueError(f"{name} must be nonnegative, got {value!r}")
     return v
 
 
@@ -78,16 +78,16 @@ def _check_finite(name: str, a: NDArray[np.float64], allow_inf: bool,
         return
     if not allow_nan and np.isnan(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isnan(a))[0])
-        raise DimensionError(f"{name} contains NaN (first at index {idx})")
+        raise InvalidValueError(f"{name} contains NaN (first at index {idx})")
     if not allow_inf and np.isinf(a).any():
         idx = tuple(int(i) for i in np.argwhere(np.isinf(a))[0])
-        raise DimensionError(f"{name} contains inf (first at index {idx}); it must be finite")
+        raise InvalidValueError(f"{name} contains inf (first at index {idx}); it must be finite")
     with np.errstate(invalid="ignore"):
         big = np.abs(a) > MAX_MAGNITUDE
     big &= np.isfinite(a)
     if big.any():
         idx = tuple(int(i) for i in np.argwhere(big)[0])
-        raise DimensionError(
+        raise InvalidValueError(
             f"{name} has an entry of {a[idx]:.3g} (first at index {idx}): entries must be at "
             f"most {MAX_MAGNITUDE:.0e} in magnitude (products of such numbers overflow double "
             "precision); rescale the units")
@@ -126,8 +126,11 @@ def as_matrix(
     Raises
     ------
     DimensionError
-        On a wrong number of dimensions, a wrong shape, NaN, inf, complex or
-        non-numeric entries.
+        On a wrong number of dimensions or a wrong shape.
+    InvalidValueError
+        On NaN, inf, or entries above ``MAX_MAGNITUDE``.
+    ArgumentError
+        On complex or non-numeric entries.
     """
     a = _to_float(name, value, "matrix")
     if a.ndim == 1 and a.size == 0 and rows is not None and cols is not None:
@@ -166,8 +169,11 @@ def as_vector(
     Raises
     ------
     DimensionError
-        On a wrong size, more than one non-singleton dimension, NaN, inf, complex
-        or non-numeric entries.
+        On a wrong size or more than one non-singleton dimension.
+    InvalidValueError
+        On NaN, inf, or entries above ``MAX_MAGNITUDE``.
+    ArgumentError
+        On complex or non-numeric entries.
     """
     a = _to_float(name, value, "vector")
     if a.ndim == 0:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .exceptions import InvalidValueError
 from .geometry._draw import plot_set
 from .results import time_axis
 
@@ -128,7 +129,7 @@ def plot_state_band(result: Any, component: int = 0, axes: Any = None, *,
 
     lo_all, hi_all = getattr(result, "state_lo", None), getattr(result, "state_hi", None)
     if lo_all is None or hi_all is None:
-        raise DimensionError("no state bounds in this result: run the SMFDO with "
+        raise InvalidValueError("no state bounds in this result: run the SMFDO with "
                              "state_bounds=True")
     n = lo_all.shape[1]
     if not 0 <= component < n:

@@ -11,7 +11,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from ._validation import as_matrix, as_vector, readonly
-from .exceptions import ArgumentError, DimensionError, ImmutableError, MissingDependencyError
+from .exceptions import (
+    ArgumentError,
+    DimensionError,
+    ImmutableError,
+    InvalidValueError,
+    MissingDependencyError,
+)
 
 __all__ = ["AugmentedSystem", "DisturbanceInputs", "LinearSystem", "require_system"]
 
@@ -102,7 +108,9 @@ class LinearSystem:
     Raises
     ------
     DimensionError
-        On non-square ``Phi``, mismatched ``G``/``Xi``/``Gamma``, NaN or inf.
+        On non-square ``Phi``, mismatched ``G``/``Xi``/``Gamma``.
+    InvalidValueError
+        On NaN or inf.
 
     Notes
     -----
@@ -152,7 +160,7 @@ class LinearSystem:
         if Xi_a.shape[0] == 0:
             raise DimensionError("Xi must have at least one row (one output)")
         if dt is not None and not dt > 0:
-            raise DimensionError(f"dt must be positive, got {dt}")
+            raise InvalidValueError(f"dt must be positive, got {dt}")
         l, p = Xi_a.shape[0], Gamma_a.shape[1]
         if Du is None:
             Du_a = np.zeros((l, p))
@@ -161,7 +169,7 @@ class LinearSystem:
                 Du_a = np.zeros((l, 0))
             else:
                 if p == 0:
-                    raise DimensionError("Du is given but the system has no inputs (Gamma)")
+                    raise ArgumentError("Du is given but the system has no inputs (Gamma)")
                 Du_a = as_matrix("Du", Du, rows=l, cols=p)
         set_ = object.__setattr__
         set_(self, "Du", readonly(Du_a))
@@ -267,7 +275,7 @@ class LinearSystem:
         F_a = as_matrix("F", F, rows=n)
         C_a = as_matrix("C", C, cols=n)
         if not T > 0:
-            raise DimensionError(f"T must be positive, got {T}")
+            raise InvalidValueError(f"T must be positive, got {T}")
         m, q = D_a.shape[1], F_a.shape[1]
         M = np.zeros((n + m + q, n + m + q))
         M[:n, :n] = H_a
@@ -351,18 +359,18 @@ class LinearSystem:
         in_names = None if input_names is None else _names("input_names", "u", input_names, m)
         if G is not None:
             if disturbance_inputs is not None:
-                raise DimensionError("give either G or disturbance_inputs, not both")
+                raise ArgumentError("give either G or disturbance_inputs, not both")
             Gd = as_matrix("G", G, rows=n)
             Bu, Du, u_names = B_a, D_a, in_names
         else:
             if disturbance_inputs is None:
-                raise DimensionError(
+                raise ArgumentError(
                     "state which inputs are disturbances: give G (disturbance input matrix) "
                     "or disturbance_inputs (columns of B)")
             idx = _input_indices("disturbance_inputs", disturbance_inputs, m, in_names)
             rest = [i for i in range(m) if i not in idx]
             if np.any(D_a[:, idx] != 0):
-                raise DimensionError("the D columns of the disturbance inputs must be zero: "
+                raise InvalidValueError("the D columns of the disturbance inputs must be zero: "
                                      "the disturbance has no feedthrough (y = C x + D_u u)")
             Gd, Bu, Du = B_a[:, idx], B_a[:, rest], D_a[:, rest]
             if in_names is not None:
@@ -377,7 +385,7 @@ class LinearSystem:
                  "disturbance_names": disturbance_names, "input_names": u_names}
         if continuous:
             if dt is None:
-                raise DimensionError("a continuous-time model needs the sampling time dt "
+                raise ArgumentError("a continuous-time model needs the sampling time dt "
                                      "to be discretised (zero-order hold)")
             return cls.from_continuous(A_a, Bu, Gd, C_a, dt, Du=Du, **names)
         return cls(A_a, Gd, C_a, Bu, Du=Du, dt=dt, **names)
@@ -420,13 +428,13 @@ class LinearSystem:
         continuous = ss_dt is not None and ss_dt is not True and float(ss_dt) == 0.0
         if continuous:
             if dt is None:
-                raise DimensionError(
+                raise ArgumentError(
                     "the StateSpace model is continuous-time: give the sampling time to "
                     "discretise it (zero-order hold), LinearSystem.from_statespace(ss, "
                     "disturbance_inputs, dt=Ts), or discretise it first (control.c2d)")
         else:
             if dt is not None and ss_dt not in (None, True) and float(ss_dt) != float(dt):
-                raise DimensionError(f"dt = {dt} differs from the model's sampling time "
+                raise InvalidValueError(f"dt = {dt} differs from the model's sampling time "
                                      f"{ss_dt}")
             if dt is None:
                 dt = None if ss_dt in (None, True) else float(ss_dt)
@@ -438,7 +446,7 @@ class LinearSystem:
             if isinstance(items, list | tuple) and any(isinstance(i, str) for i in items):
                 for i in items:
                     if isinstance(i, str) and i not in gen:
-                        raise DimensionError(f"disturbance_inputs: no input named {i!r} "
+                        raise InvalidValueError(f"disturbance_inputs: no input named {i!r} "
                                              f"(inputs {gen})")
                 disturbance_inputs = [gen.index(i) if isinstance(i, str) and i in gen else i
                                       for i in items]
@@ -474,7 +482,7 @@ class LinearSystem:
         Da = as_matrix("D", D, cols=self.q)
         N = Da.shape[0]
         if self.p and U is None:
-            raise DimensionError(f"U is required: the system has {self.p} input(s)")
+            raise ArgumentError(f"U is required: the system has {self.p} input(s)")
         Ua = as_matrix("U", U, rows=N, cols=self.p) if self.p else np.zeros((N, 0))
         x = np.zeros(self.n) if x0 is None else as_vector("x0", x0, size=self.n).copy()
         X = np.empty((N, self.n))
@@ -519,7 +527,7 @@ class LinearSystem:
             Number of disturbance blocks.
         """
         if order not in (1, 2):
-            raise DimensionError(f"order must be 1 or 2, got {order!r}")
+            raise InvalidValueError(f"order must be 1 or 2, got {order!r}")
         n, q, p, l = self.n, self.q, self.p, self.l
         N = n + order * q
         A = np.zeros((N, N))
@@ -576,19 +584,19 @@ def _input_indices(name: str, indices: Any, m: int,
         if isinstance(i, str):
             if labels is None or i not in labels:
                 known = "no input names" if labels is None else f"inputs {list(labels)}"
-                raise DimensionError(f"{name}: no input named {i!r} ({known})")
+                raise InvalidValueError(f"{name}: no input named {i!r} ({known})")
             i = list(labels).index(i)
         if isinstance(i, bool | np.bool_) or not isinstance(i, int | np.integer | float
                                                             | np.floating):
             raise ArgumentError(f"{name} must hold integer input indices, got {i!r}")
         if float(i) != int(i):
-            raise DimensionError(f"{name} must hold integer input indices, got {i!r}")
+            raise ArgumentError(f"{name} must hold integer input indices, got {i!r}")
         j = int(i)
         if not 0 <= j < m:
             raise DimensionError(f"{name}: index {j} is out of range for {m} input(s) "
                                  f"(valid: 0..{m - 1})")
         if j in out:
-            raise DimensionError(f"{name}: index {j} is given twice")
+            raise InvalidValueError(f"{name}: index {j} is given twice")
         out.append(j)
     return out  # (empty: no disturbance, a model for state estimation)
 

@@ -24,6 +24,7 @@ from setobs.analysis import (
     pio_conditions,
     pio_error_poles,
 )
+from setobs.exceptions import InvalidValueError
 from tests.analysis.helpers import (
     block_system,
     diagonal_rescaling,
@@ -43,20 +44,24 @@ L_PIO = [[51.1873, 34.5803], [-21.3249, -10.6399]]
 
 # ------------------------------------------------------------------------ LinearSystem
 @pytest.mark.parametrize(
-    ("args", "match"),
+    ("args", "error", "match"),
     [
-        (dict(Phi=np.ones((2, 3)), G=np.ones((2, 1)), Xi=np.ones((1, 3))), "Phi must be square"),
-        (dict(Phi=np.eye(2), G=np.ones((3, 1)), Xi=np.ones((1, 2))), "G must have 2 rows, got 3"),
-        (dict(Phi=np.eye(2), G=np.ones((2, 1)), Xi=np.ones((1, 3))), "Xi must have 2 columns"),
+        (dict(Phi=np.ones((2, 3)), G=np.ones((2, 1)), Xi=np.ones((1, 3))), DimensionError,
+         "Phi must be square"),
+        (dict(Phi=np.eye(2), G=np.ones((3, 1)), Xi=np.ones((1, 2))), DimensionError,
+         "G must have 2 rows, got 3"),
+        (dict(Phi=np.eye(2), G=np.ones((2, 1)), Xi=np.ones((1, 3))), DimensionError,
+         "Xi must have 2 columns"),
         (dict(Phi=[[1, np.nan], [0, 1]], G=np.ones((2, 1)), Xi=np.ones((1, 2))),
-         "Phi contains NaN"),
-        (dict(Phi=np.eye(2), G=np.ones((2, 1)), Xi=[[1, np.inf]]), "Xi contains inf"),
+         InvalidValueError, "Phi contains NaN"),
+        (dict(Phi=np.eye(2), G=np.ones((2, 1)), Xi=[[1, np.inf]]), InvalidValueError,
+         "Xi contains inf"),
         (dict(Phi=np.eye(2), G=np.ones((2, 1)), Xi=np.ones((1, 2)), Gamma=np.ones((3, 1))),
-         "Gamma must have 2 rows"),
+         DimensionError, "Gamma must have 2 rows"),
     ],
 )
-def test_linear_system_rejects(args, match):
-    with pytest.raises(DimensionError, match=match):
+def test_linear_system_rejects(args, error, match):
+    with pytest.raises(error, match=match):
         LinearSystem(**args)
 
 
@@ -83,7 +88,7 @@ def test_zoh_discretisation_against_quadrature(rng):
     # Closed form for invertible H: int = H^-1 (e^{HT} - I).
     np.testing.assert_allclose(s.G, np.linalg.solve(H, expm(H * T) - np.eye(3)) @ F, atol=1e-11)
     assert s.dt == T
-    with pytest.raises(DimensionError, match="T must be positive"):
+    with pytest.raises(InvalidValueError, match="T must be positive"):
         LinearSystem.from_continuous(H, D, F, C, 0.0)
 
 

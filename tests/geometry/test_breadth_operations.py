@@ -13,7 +13,13 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 from setobs import ConstrainedZonotope
-from setobs.exceptions import DimensionError, EmptySetError, UnboundedSetError
+from setobs.exceptions import (
+    ArgumentError,
+    DimensionError,
+    EmptySetError,
+    InvalidValueError,
+    UnboundedSetError,
+)
 from setobs.geometry import (
     Box,
     convex_hull,
@@ -264,7 +270,7 @@ def test_inner_pontryagin_difference_is_exact_for_matching_generators():
 def test_pontryagin_difference_rejects_sets_with_constraints():
     Z = ConstrainedZonotope.from_box([-2.0, -2.0], [2.0, 2.0])
     T = from_vertices([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    with pytest.raises(DimensionError, match="zonotope or a box"):
+    with pytest.raises(InvalidValueError, match="zonotope or a box"):
         pontryagin_difference(Z, T)
     with pytest.raises(ValueError, match="method must be"):
         pontryagin_difference(Z, Box([0, 0], [1, 1]), method="outer")
@@ -301,7 +307,7 @@ def test_interval_matrix_map_closed_form_of_a_box():
     R = interval_matrix_map(ConstrainedZonotope.from_box([1.0], [2.0]), [[0.5]], [[1.5]])
     box = R.interval_hull()
     assert box.lo[0] == pytest.approx(0.0) and box.hi[0] == pytest.approx(3.0)
-    with pytest.raises(DimensionError, match="M_lo must be"):
+    with pytest.raises(InvalidValueError, match="M_lo must be"):
         interval_matrix_map(ConstrainedZonotope.from_box([1.0], [2.0]), [[1.0]], [[0.0]])
 
 
@@ -349,7 +355,7 @@ def test_reduce_order_can_shrink_sets_converted_from_polytopes():
         R = reduce_order(Z, m)
         assert R.n_gen <= m
         assert all(R.contains(v) for v in V)
-    with pytest.raises(DimensionError, match="at least n"):
+    with pytest.raises(InvalidValueError, match="at least n"):
         reduce_order(Z, 2)
 
 
@@ -417,7 +423,7 @@ def test_empty_set_behaves_in_every_operation():
     Z = ConstrainedZonotope.from_box([0, 0, 0], [1, 1, 1])
     assert (Z + E).is_empty() and (Z & E).is_empty() and (np.eye(3) @ E).is_empty()
     assert (-E).is_empty() and Z.cartesian(E).is_empty()
-    with pytest.raises(DimensionError, match="positive integer"):
+    with pytest.raises(InvalidValueError, match="positive integer"):
         empty_set(0)
 
 
@@ -452,18 +458,18 @@ def test_bad_input_names_the_argument():
 
     Z = ConstrainedZonotope.from_box([0.0, 0.0], [1.0, 1.0])
     cases = [
-        (lambda: intersect_strip(Z, [[1.0, 0.0]], [0.0], -1.0), DimensionError, "radius"),
+        (lambda: intersect_strip(Z, [[1.0, 0.0]], [0.0], -1.0), InvalidValueError, "radius"),
         (lambda: intersect_strip(Z, [[1.0, 0.0]], [0.0, 1.0], 1.0), DimensionError, "y"),
-        (lambda: intersect_polytope(Z, [[1.0, 0.0]], [0.0], E=[[1.0, 0.0]]), DimensionError,
+        (lambda: intersect_polytope(Z, [[1.0, 0.0]], [0.0], E=[[1.0, 0.0]]), ArgumentError,
          "E and f"),
         (lambda: intersect_halfspace(Z, [1.0], 0.0), DimensionError, "a"),
-        (lambda: intersect_halfspace(Z, [1.0, 0.0], np.nan), DimensionError, "beta"),
+        (lambda: intersect_halfspace(Z, [1.0, 0.0], np.nan), InvalidValueError, "beta"),
         (lambda: interval_matrix_map(Z, np.eye(2), np.eye(3)), DimensionError, "M_hi"),
-        (lambda: eliminate_constraints(Z, -1), DimensionError, "max_constraints"),
-        (lambda: sample(Z, -1), DimensionError, "n must be"),
-        (lambda: sample(Z, 3, thin=0), DimensionError, "thin must be"),
+        (lambda: eliminate_constraints(Z, -1), InvalidValueError, "max_constraints"),
+        (lambda: sample(Z, -1), InvalidValueError, "n must be"),
+        (lambda: sample(Z, 3, thin=0), InvalidValueError, "thin must be"),
         (lambda: sample(Z, 3, method="gibbs"), ValueError, "method must be"),
-        (lambda: volume(Z, confidence=1.5), DimensionError, "confidence"),
+        (lambda: volume(Z, confidence=1.5), InvalidValueError, "confidence"),
         (lambda: from_vertices([1.0, 2.0]), DimensionError, "V"),
         (lambda: convex_hull(Z, np.eye(2)), TypeError, "ConstrainedZonotope"),
     ]

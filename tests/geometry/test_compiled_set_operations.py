@@ -27,7 +27,7 @@ import pytest
 
 import setobs.geometry.zonotope as zonotope_module
 from setobs import ConstrainedZonotope
-from setobs.exceptions import DimensionError
+from setobs.exceptions import DimensionError, InvalidValueError
 from setobs.geometry import compiled_set_operations
 from tests.conftest import random_cz, sample_points
 
@@ -188,7 +188,7 @@ def test_inputs_the_compiled_path_leaves_to_numpy():
     np.testing.assert_array_equal((np.array([[2, 0], [0, 1]]) @ Z).c, [2.0, -1.0])
     big_endian = np.array([[0.0, 1.0], [1.0, 0.0]], dtype=">f8")
     np.testing.assert_array_equal((big_endian @ Z).c, [-1.0, 1.0])
-    with pytest.raises(DimensionError):
+    with pytest.raises(InvalidValueError):
         np.array([[np.nan, 0.0], [0.0, 1.0]]) @ Z
     with pytest.raises(DimensionError):
         np.ones((2, 3)) @ Z

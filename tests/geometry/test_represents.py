@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from setobs import ConstrainedZonotope
-from setobs.exceptions import DimensionError
+from setobs.exceptions import InvalidValueError
 from setobs.geometry import represents
 
 
@@ -91,7 +91,7 @@ def test_unbounded_and_bad_input():
     assert not strip.represents("point")
     with pytest.raises(ValueError, match="kind"):
         represents(strip, "ellipsoid")
-    with pytest.raises(DimensionError, match="tol"):
+    with pytest.raises(InvalidValueError, match="tol"):
         strip.represents("point", tol=-1.0)
     with pytest.raises(NotImplementedError, match="corners"):
         ConstrainedZonotope.from_box(-np.ones(13), np.ones(13)).intersect_polytope(

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from setobs import Box, ConstrainedZonotope, DimensionError, SetobsError
+from setobs.exceptions import ArgumentError, InvalidValueError
 from setobs.geometry import reduce_order
 
 nan, inf = np.nan, np.inf
@@ -13,32 +14,38 @@ G2 = np.eye(2)
 
 
 @pytest.mark.parametrize(
-    ("kwargs", "match"),
+    ("kwargs", "error", "match"),
     [
-        ({"G": np.ones((3, 2)), "c": [0, 0]}, r"G must have 2 rows, got 3"),
-        ({"G": np.ones((2, 2, 2)), "c": [0, 0]}, r"G must be a 2-D matrix"),
-        ({"G": G2, "c": [[0, 1], [1, 0]]}, r"c must be a vector, got an array of shape \(2, 2\)"),
-        ({"G": G2, "c": [0, 0], "A": np.ones((1, 3)), "b": [1]}, r"A must have 2 columns, got 3"),
+        ({"G": np.ones((3, 2)), "c": [0, 0]}, DimensionError, r"G must have 2 rows, got 3"),
+        ({"G": np.ones((2, 2, 2)), "c": [0, 0]}, DimensionError, r"G must be a 2-D matrix"),
+        ({"G": G2, "c": [[0, 1], [1, 0]]},
+         DimensionError, r"c must be a vector, got an array of shape \(2, 2\)"),
+        ({"G": G2, "c": [0, 0], "A": np.ones((1, 3)), "b": [1]},
+         DimensionError, r"A must have 2 columns, got 3"),
         ({"G": G2, "c": [0, 0], "A": np.ones((2, 2)), "b": [1]},
-         r"b must have one entry per row of A \(2\), got 1"),
-        ({"G": G2, "c": [0, 0], "A": np.ones((1, 2))}, r"A and b must be given together"),
-        ({"G": G2, "c": [0, 0], "b": [1.0]}, r"A and b must be given together"),
-        ({"G": [[1, nan], [0, 1]], "c": [0, 0]}, r"G contains NaN \(first at index \(0, 1\)\)"),
-        ({"G": [[1, inf], [0, 1]], "c": [0, 0]}, r"G contains inf .* must be finite"),
-        ({"G": G2, "c": [0, nan]}, r"c contains NaN"),
-        ({"G": G2, "c": [inf, 0]}, r"c contains inf"),
-        ({"G": G2, "c": [0, 0], "A": [[nan, 1]], "b": [1]}, r"A contains NaN"),
-        ({"G": G2, "c": [0, 0], "A": [[inf, 1]], "b": [1]}, r"A contains inf"),
-        ({"G": G2, "c": [0, 0], "A": [[1, 1]], "b": [nan]}, r"b contains NaN"),
-        ({"G": G2, "c": [0, 0], "A": [[1, 1]], "b": [inf]}, r"b contains inf"),
-        ({"G": G2, "c": [0, 0], "h": [1, -0.5]}, r"h must be nonnegative \(h\[1\] = -0.5\)"),
-        ({"G": G2, "c": [0, 0], "h": [1, nan]}, r"h contains NaN"),
-        ({"G": G2, "c": [0, 0], "h": [1, 1, 1]}, r"h must have length 2, got 3"),
-        ({"G": G2, "c": ["a", "b"]}, r"c must be a real numeric vector"),
+         DimensionError, r"b must have one entry per row of A \(2\), got 1"),
+        ({"G": G2, "c": [0, 0], "A": np.ones((1, 2))},
+         ArgumentError, r"A and b must be given together"),
+        ({"G": G2, "c": [0, 0], "b": [1.0]}, ArgumentError, r"A and b must be given together"),
+        ({"G": [[1, nan], [0, 1]], "c": [0, 0]},
+         InvalidValueError, r"G contains NaN \(first at index \(0, 1\)\)"),
+        ({"G": [[1, inf], [0, 1]], "c": [0, 0]},
+         InvalidValueError, r"G contains inf .* must be finite"),
+        ({"G": G2, "c": [0, nan]}, InvalidValueError, r"c contains NaN"),
+        ({"G": G2, "c": [inf, 0]}, InvalidValueError, r"c contains inf"),
+        ({"G": G2, "c": [0, 0], "A": [[nan, 1]], "b": [1]}, InvalidValueError, r"A contains NaN"),
+        ({"G": G2, "c": [0, 0], "A": [[inf, 1]], "b": [1]}, InvalidValueError, r"A contains inf"),
+        ({"G": G2, "c": [0, 0], "A": [[1, 1]], "b": [nan]}, InvalidValueError, r"b contains NaN"),
+        ({"G": G2, "c": [0, 0], "A": [[1, 1]], "b": [inf]}, InvalidValueError, r"b contains inf"),
+        ({"G": G2, "c": [0, 0], "h": [1, -0.5]},
+         InvalidValueError, r"h must be nonnegative \(h\[1\] = -0.5\)"),
+        ({"G": G2, "c": [0, 0], "h": [1, nan]}, InvalidValueError, r"h contains NaN"),
+        ({"G": G2, "c": [0, 0], "h": [1, 1, 1]}, DimensionError, r"h must have length 2, got 3"),
+        ({"G": G2, "c": ["a", "b"]}, ArgumentError, r"c must be a real numeric vector"),
     ],
 )
-def test_constructor_rejects(kwargs, match):
-    with pytest.raises(DimensionError, match=match):
+def test_constructor_rejects(kwargs, error, match):
+    with pytest.raises(error, match=match):
         ConstrainedZonotope(**kwargs)
 
 
@@ -65,7 +72,7 @@ def test_support_wrong_length(Z):
 
 
 def test_support_nan_direction(Z):
-    with pytest.raises(DimensionError, match=r"direction contains NaN"):
+    with pytest.raises(InvalidValueError, match=r"direction contains NaN"):
         Z.support([1.0, nan])
 
 
@@ -111,22 +118,23 @@ def test_project_bad_index(Z):
 
 
 def test_one_sided_box_is_not_representable():
-    with pytest.raises(DimensionError, match=r"coordinate 1 has a one-sided infinite bound"):
+    with pytest.raises(InvalidValueError, match=r"coordinate 1 has a one-sided infinite bound"):
         ConstrainedZonotope.from_box([0.0, 0.0], [1.0, inf])
 
 
 def test_box_lo_above_hi():
-    with pytest.raises(DimensionError, match=r"lo must not exceed hi \(index 0"):
+    with pytest.raises(InvalidValueError, match=r"lo must not exceed hi \(index 0"):
         Box([2.0], [1.0])
 
 
 def test_full_space_bad_n():
-    with pytest.raises(DimensionError, match=r"n must be a positive integer"):
+    with pytest.raises(InvalidValueError, match=r"n must be a positive integer"):
         ConstrainedZonotope.full_space(0)
 
 
 def test_reduce_order_too_few(Z):
-    with pytest.raises(DimensionError, match=r"max_generators must be at least n \+ n_unbounded"):
+    with pytest.raises(InvalidValueError,
+                       match=r"max_generators must be at least n \+ n_unbounded"):
         reduce_order(Z, Z.dim - 1)
 
 

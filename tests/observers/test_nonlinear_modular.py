@@ -13,6 +13,7 @@ import pytest
 from scipy.linalg import solve_sylvester
 
 from setobs import LinearSystem
+from setobs.exceptions import InvalidValueError
 from setobs.observers import ModularObserver
 
 sp = pytest.importorskip("sympy")
@@ -178,18 +179,18 @@ def test_refusals_name_the_problem():
     and the way out; order 0 is refused as before."""
     from setobs.analysis.modular import design_modular
     from setobs.examples import modular_example
-    from setobs.exceptions import DesignError, DimensionError
+    from setobs.exceptions import DesignError
 
     sys = modular_example()
     with pytest.raises(DesignError, match=r"A0 has spectral radius 1\.5"):
         design_modular(sys, 1.5, 1.0, 0.6, 1.0, order=5)
     with pytest.raises(DesignError, match="Aw has spectral radius 1 "):
         design_modular(sys, 0.4, 1.0, -1.0, 1.0, order=5)
-    with pytest.raises(DimensionError, match=r"351 monomials.*max_terms = 250"):
+    with pytest.raises(InvalidValueError, match=r"351 monomials.*max_terms = 250"):
         NonlinearModularObserver(sys, 0.4, 1.0, 0.6, 1.0, order=25)
-    with pytest.raises(DimensionError, match="integer >= 1"):
+    with pytest.raises(InvalidValueError, match="integer >= 1"):
         NonlinearModularObserver(sys, 0.4, 1.0, 0.6, 1.0, order=0)
     d = design_modular(sys, 0.4, 1.0, 0.6, 1.0, order=4, max_terms=15)  # C(6, 2) = 15
     assert d.order == 4
-    with pytest.raises(DimensionError, match="21 monomials"):
+    with pytest.raises(InvalidValueError, match="21 monomials"):
         design_modular(sys, 0.4, 1.0, 0.6, 1.0, order=5, max_terms=15)

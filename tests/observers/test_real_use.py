@@ -8,7 +8,7 @@ import pytest
 from scipy.signal import place_poles
 
 import setobs as so
-from setobs.exceptions import DimensionError
+from setobs.exceptions import ArgumentError
 from setobs.observers import (
     MBESO,
     PIO,
@@ -200,8 +200,8 @@ def test_U_is_required_when_the_system_has_inputs():
     sys = so.examples.servo_motor()
     obs = PIO(sys)
     Y = np.zeros((5, 1))
-    with pytest.raises(DimensionError, match=r"U is required: the system has 1 input\(s\) \(tau\)"):
+    with pytest.raises(ArgumentError, match=r"U is required: the system has 1 input\(s\) \(tau\)"):
         obs.run(Y)
-    with pytest.raises(DimensionError, match="u is required"):
+    with pytest.raises(ArgumentError, match="u is required"):
         obs.step(Y[0])
     assert np.isfinite(obs.run(Y, np.zeros((5, 1))).estimate).all()

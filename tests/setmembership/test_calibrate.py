@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import setobs as so
-from setobs.exceptions import DimensionError
+from setobs.exceptions import ArgumentError, DimensionError, InvalidValueError
 from setobs.setmembership import ModelInvalidatedWarning
 from tests.datasets import HSM150, noisy_record
 
@@ -101,11 +101,11 @@ def test_tradeoff_curve_is_monotone_and_consistent_with_calibration():
 
 
 @pytest.mark.parametrize(("kwargs", "exc", "match"), [
-    ({"increment": -1.0}, DimensionError, "nonnegative"),
+    ({"increment": -1.0}, InvalidValueError, "nonnegative"),
     ({"increment": [1.0]}, DimensionError, "increment"),
     ({"increment": "big"}, TypeError, "per-channel radii"),
-    ({"increment": 1.0, "shape": 0.0}, DimensionError, "shape radii must be positive"),
-    ({"increment": 1.0, "shape": so.Box([0, 0], [1, 1])}, DimensionError, "centred at 0"),
+    ({"increment": 1.0, "shape": 0.0}, InvalidValueError, "shape radii must be positive"),
+    ({"increment": 1.0, "shape": so.Box([0, 0], [1, 1])}, InvalidValueError, "centred at 0"),
 ])
 def test_bad_input(kwargs, exc, match):
     with pytest.raises(exc, match=match):
@@ -113,9 +113,9 @@ def test_bad_input(kwargs, exc, match):
 
 
 def test_input_required_and_no_data():
-    with pytest.raises(DimensionError, match="U is required"):
+    with pytest.raises(ArgumentError, match="U is required"):
         so.calibrate_noise(so.examples.servo_motor(), np.zeros((5, 1)), increment=1.0)
-    with pytest.raises(DimensionError, match="no measured"):
+    with pytest.raises(InvalidValueError, match="no measured"):
         so.calibrate_noise(so.examples.chang2006(), np.full((5, 2), np.nan), increment=1.0)
 
 

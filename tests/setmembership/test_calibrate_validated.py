@@ -18,7 +18,7 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 import setobs as so
-from setobs.exceptions import DimensionError, ModelInvalidatedError
+from setobs.exceptions import DimensionError, InvalidValueError, ModelInvalidatedError
 from setobs.setmembership.calibrate import SAFETY_MARGIN
 from tests.datasets import HSM150
 
@@ -265,18 +265,18 @@ def test_a_short_record_may_lose_one_outlier():
 ])
 def test_bad_calibration_options(kwargs, match):
     sys_, Y, U = record(4, N=20)
-    with pytest.raises(DimensionError, match=match):
+    with pytest.raises(InvalidValueError, match=match):
         so.calibrate_noise(sys_, Y, U, increment=INC, **kwargs)
 
 
 def test_bad_ignore_and_skip_fraction():
     sys_, Y, U = record(4, N=20)
     obs = so.SMFDO(sys_, window=5, increment_set=[INC], measurement_noise=0.05)
-    with pytest.raises(DimensionError, match="outside"):
+    with pytest.raises(InvalidValueError, match="outside"):
         obs.run(Y, U, ignore=[25])
     with pytest.raises(DimensionError, match="mask of length N = 20"):
         obs.run(Y, U, ignore=np.zeros(5, dtype=bool))
-    with pytest.raises(DimensionError, match="max_skip_fraction is a fraction"):
+    with pytest.raises(InvalidValueError, match="max_skip_fraction is a fraction"):
         so.SMFDO(sys_, increment_set=[INC], max_skip_fraction=2.0)
 
 

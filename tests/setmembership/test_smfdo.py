@@ -8,6 +8,7 @@ from scipy.optimize import linprog
 
 import setobs as so
 from setobs import ConstrainedZonotope, DimensionError, LinearSystem
+from setobs.exceptions import ArgumentError, InvalidValueError
 from setobs.setmembership import (
     ExistenceError,
     ModelInvalidatedError,
@@ -228,7 +229,7 @@ def test_chebyshev_beats_or_ties_interval_center_on_smfdo_sets():
 def test_window_too_small():
     sys = so.examples.chen_gao_lin_example1()  # mu_o = 5 for the augmented pair
     msg = r"window \(delta\) = 2 is too small: .* >= mu_o - 1 = 4"
-    with pytest.raises(DimensionError, match=msg):
+    with pytest.raises(InvalidValueError, match=msg):
         so.SMFDO(sys, window=2)
 
 
@@ -243,12 +244,12 @@ def test_bad_measurements():
     obs = so.SMFDO(so.examples.chang2006())
     with pytest.raises(DimensionError, match="y must have length 2, got 3"):
         obs.update([0.0, 0.0, 0.0])
-    with pytest.raises(DimensionError, match="y contains inf"):
+    with pytest.raises(InvalidValueError, match="y contains inf"):
         obs.update([np.inf, 0.0])  # (NaN means "not measured")
     with pytest.raises(DimensionError, match="Y must have 2 columns"):
         obs.run(np.zeros((5, 3)))
     sysu = LinearSystem(np.eye(2) * 0.5, [[1.0], [0.0]], [[1.0, 0.0], [0.0, 1.0]], [[0.0], [1.0]])
-    with pytest.raises(DimensionError, match="U is required"):
+    with pytest.raises(ArgumentError, match="U is required"):
         so.SMFDO(sysu, window=3).run(np.zeros((4, 2)))
     with pytest.raises(DimensionError, match="u_prev must have length 1, got 2"):
         o = so.SMFDO(sysu, window=3)
@@ -304,11 +305,11 @@ def test_time_varying_increment_set_matches_history_lp():
 
 def test_increment_set_validation():
     sys = so.examples.chang2006()
-    with pytest.raises(DimensionError, match="increment_set must be bounded"):
+    with pytest.raises(InvalidValueError, match="increment_set must be bounded"):
         so.SMFDO(sys, increment_set=ConstrainedZonotope.full_space(2))
     with pytest.raises(DimensionError, match="increment_set must have dimension 2"):
         so.SMFDO(sys, increment_set=ConstrainedZonotope.from_box([0], [1]))
-    with pytest.raises(DimensionError, match="nonnegative"):
+    with pytest.raises(InvalidValueError, match="nonnegative"):
         so.SMFDO(sys, increment_set=[-1.0, 1.0])
     with pytest.raises(DimensionError, match="initial_state_set must have dimension 3"):
         so.SMFDO(sys, initial_state_set=ConstrainedZonotope.full_space(2))

@@ -72,7 +72,7 @@ def run_windows(sys, Y, U, D, windows, seed, **kwargs):
     for w in windows:
         try:
             obs = so.SMFDO(sys, window=w, **kwargs)
-        except so.DimensionError:  # window below mu_o - 1 for this system
+        except so.InvalidValueError:  # window below mu_o - 1 for this system
             continue
         try:
             res = obs.run(Y, U)
@@ -112,7 +112,7 @@ def _large_initial_state(seed: int) -> tuple[int, int, list[str]]:
     for w, N in ((None, 50), (10, 80)):
         try:
             obs = so.SMFDO(sys, window=w)  # X0 = R^n
-        except so.DimensionError:
+        except so.InvalidValueError:
             continue
         try:
             res = obs.run(Y[:N], None if U is None else U[:N])
@@ -192,7 +192,7 @@ def state_case(seed: int) -> tuple[int, int, list[str]]:
             obs = so.SMFDO(sys, window=win, process_noise=rw, measurement_noise=rv,
                            increment_set=np.full(q, 0.1), state_bounds=True,
                            initial_state_set=X0)
-        except (so.DimensionError, so.ExistenceError):
+        except (so.InvalidValueError, so.ExistenceError):
             continue
         try:
             res = obs.run(Y)

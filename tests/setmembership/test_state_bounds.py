@@ -230,7 +230,7 @@ def test_the_state_band_is_plotted_from_the_certified_bounds():
     plt.close(fig)
     plain = so.SMFDO(so.LinearSystem(PHI3, np.ones((3, 1)), XI3), window=3,
                      measurement_noise=0.05).run(Y)
-    with pytest.raises(so.DimensionError, match="state_bounds=True"):
+    with pytest.raises(so.InvalidValueError, match="state_bounds=True"):
         plain.plot(states=True)
 
 

@@ -413,7 +413,7 @@ def campaign_seed(seed: int) -> dict:
         for w in (3, 10, None):
             try:
                 obs = so.SMFDO(s, window=w, increment_set=rd, measurement_noise=cal.radii)
-            except so.DimensionError:
+            except so.InvalidValueError:
                 continue  # window below Algorithm 1's minimum
             r = obs.run(Y, Ua)
             out["fallback"][str(w)] = int(np.sum(r.status == "fallback"))

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 import setobs as so
+from setobs.exceptions import InvalidValueError
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign, run_one
 
 SPECS = [ObserverSpec("SMFDO d=5", "smfdo", {"window": 5}), ObserverSpec("PIO", "pio"),
@@ -81,13 +82,12 @@ def test_generators(gen):
 
 
 def test_bad_scenarios():
-    from setobs import DimensionError
 
-    with pytest.raises(DimensionError, match="unknown system"):
+    with pytest.raises(InvalidValueError, match="unknown system"):
         Scenario(system="nope")
-    with pytest.raises(DimensionError, match="unknown generator"):
+    with pytest.raises(InvalidValueError, match="unknown generator"):
         Scenario(generator="chirp")
-    with pytest.raises(DimensionError, match="unknown observer kind"):
+    with pytest.raises(InvalidValueError, match="unknown observer kind"):
         ObserverSpec("x", "particle_filter")
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import setobs as so
-from setobs.exceptions import DesignError, DimensionError
+from setobs.exceptions import DesignError, InvalidValueError
 from setobs.studies import (
     ObserverSpec,
     Scenario,
@@ -64,11 +64,11 @@ def test_kalman_baseline_equals_a_textbook_kalman_filter():
 
 def test_pole_clusters_and_bad_input():
     assert np.allclose(cluster_poles(0.5, 5), [0.45, 0.475, 0.5, 0.525, 0.55])
-    with pytest.raises(DimensionError, match="radius must lie"):
+    with pytest.raises(InvalidValueError, match="radius must lie"):
         cluster_poles(0.99, 3)
-    with pytest.raises(DimensionError, match="runs must be"):
+    with pytest.raises(InvalidValueError, match="runs must be"):
         pio_pole_sweep(SC, [0.5], runs=1)
-    with pytest.raises(DimensionError, match="measurement_cov"):
+    with pytest.raises(InvalidValueError, match="measurement_cov"):
         kalman_baseline(SC, measurement_cov=0.0)
 
 
@@ -88,7 +88,7 @@ def test_campaign_states_the_information_and_runs_the_kalman_baseline():
     imp = camp.improvement("SMFDO", "KF")
     assert imp.value == pytest.approx(1 - m["SMFDO"] / m["KF"])
     assert imp.lo <= imp.value <= imp.hi
-    with pytest.raises(DimensionError, match="no observer named"):
+    with pytest.raises(InvalidValueError, match="no observer named"):
         camp.improvement("SMFDO", "nobody")
 
 

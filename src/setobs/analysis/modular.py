@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_sylvester
 
 from .._validation import as_matrix
-from ..exceptions import DesignError, DesignWarning, DimensionError
+from ..exceptions import DesignError, DesignWarning, DimensionError, InvalidValueError
 from ..tolerances import (
     ILL_CONDITIONED_RTOL,
     NEAR_RESONANCE_RTOL,
@@ -378,7 +378,7 @@ class ModularDesign:
             The degree kept (``1 <= order <= self.order``).
         """
         if not 1 <= order <= self.order:
-            raise DimensionError(f"order must be in [1, {self.order}], got {order}")
+            raise InvalidValueError(f"order must be in [1, {self.order}], got {order}")
 
         def cut(C: NDArray[np.float64], basis: Monomials) -> NDArray[np.float64]:
             out = np.array(C, dtype=float)
@@ -673,11 +673,11 @@ def design_modular(system: Any, A0: ArrayLike, B0: ArrayLike | None, Aw: ArrayLi
     A0a, Awa = _as_square("A0", A0, m), _as_square("Aw", Aw, mu)
     B0a, Bwa = _as_gain("B0", B0, m, p), _as_gain("Bw", Bw, mu, p)
     if isinstance(order, bool) or not isinstance(order, int | np.integer) or order < 1:
-        raise DimensionError(f"order (the degree of the power series) must be an integer >= 1, "
+        raise InvalidValueError(f"order (the degree of the power series) must be an integer >= 1, "
                              f"got {order!r}")
     n_terms = math.comb(m + mu + order, order)
     if n_terms > max_terms:
-        raise DimensionError(
+        raise InvalidValueError(
             f"order {order} needs {n_terms} monomials in the {m + mu} variables (x, w), more "
             f"than max_terms = {max_terms}; the design's time grows about with the cube of "
             f"that (351 terms took 51 s on a two-variable plant): lower the order or raise "

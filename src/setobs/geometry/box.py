@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._deprecation import renamed
 from .._validation import as_vector, readonly
-from ..exceptions import DimensionError, ImmutableError
+from ..exceptions import ImmutableError, InvalidValueError
 
 __all__ = ["Box", "box_center", "box_center_radius"]
 
@@ -93,10 +93,11 @@ class Box:
         lo_a = as_vector("lo", lo, allow_inf=True)
         hi_a = as_vector("hi", hi, size=lo_a.size, allow_inf=True)
         if np.isposinf(lo_a).any() or np.isneginf(hi_a).any():
-            raise DimensionError("lo must not be +inf and hi must not be -inf")
+            raise InvalidValueError("lo must not be +inf and hi must not be -inf")
         if (lo_a > hi_a).any():
             i = int(np.argmax(lo_a > hi_a))
-            raise DimensionError(f"lo must not exceed hi (index {i}: lo={lo_a[i]}, hi={hi_a[i]})")
+            raise InvalidValueError(
+                f"lo must not exceed hi (index {i}: lo={lo_a[i]}, hi={hi_a[i]})")
         object.__setattr__(self, "_lo", readonly(lo_a))
         object.__setattr__(self, "_hi", readonly(hi_a))
 

@@ -26,7 +26,6 @@ from .._lazy import optional_import
 from .._rounding import gamma, round_down
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..exceptions import (
-    DimensionError,
     EmptySetError,
     InvalidValueError,
     SolverError,
@@ -151,7 +150,7 @@ def minimize_quadratic(Z: ConstrainedZonotope, P: ArrayLike, q: ArrayLike) -> QP
     n = Z.dim
     P_a = as_matrix("P", P, rows=n, cols=n)
     if not np.allclose(P_a, P_a.T, rtol=1e-12, atol=1e-14 * max(1.0, float(np.abs(P_a).max()))):
-        raise DimensionError("P must be symmetric")
+        raise InvalidValueError("P must be symmetric")
     q_a = as_vector("q", q, size=n)
     if Z.is_empty():
         raise EmptySetError("the set is empty")
@@ -365,7 +364,7 @@ def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None
         :meth:`~ConstrainedZonotope.reduce_exact` first).
     """
     if int(n) != n or n < 0:
-        raise DimensionError(f"n must be a nonnegative integer, got {n!r}")
+        raise InvalidValueError(f"n must be a nonnegative integer, got {n!r}")
     if method not in ("auto", "facets", "lp"):
         raise InvalidValueError(f"method must be 'auto', 'facets' or 'lp', got {method!r}")
     Zs, f = unit_scaled(Z)
@@ -383,7 +382,7 @@ def sample(Z: ConstrainedZonotope, n: int, rng: np.random.Generator | int | None
     if thin is None:
         thin = 5 * B.shape[1]
     if int(thin) != thin or thin < 1:
-        raise DimensionError(f"thin must be a positive integer, got {thin!r}")
+        raise InvalidValueError(f"thin must be a positive integer, got {thin!r}")
     thin = int(thin)
     use_facets = method == "facets" or (method == "auto" and Z.dim <= 3)
     oracle = _FacetChords(Z) if use_facets else LPChords(Z)
@@ -443,7 +442,7 @@ def volume(Z: ConstrainedZonotope, *, n_samples: int = 20_000, confidence: float
     """
     check_real_scalar("confidence", confidence, positive=True)
     if not confidence < 1:
-        raise DimensionError(f"confidence must be in (0, 1), got {confidence}")
+        raise InvalidValueError(f"confidence must be in (0, 1), got {confidence}")
     Zs, f = unit_scaled(Z)
     if Zs is not Z:  # at unit magnitude (exact power-of-two scaling), scaled back
         r = volume(Zs, n_samples=n_samples, confidence=confidence, rng=rng)
@@ -477,7 +476,7 @@ def volume(Z: ConstrainedZonotope, *, n_samples: int = 20_000, confidence: float
             v = 0.0  # flat: fewer than 4 affinely independent vertices
         return VolumeResult(v, v, v, "qhull")
     if int(n_samples) != n_samples or n_samples < 1:
-        raise DimensionError(f"n_samples must be a positive integer, got {n_samples!r}")
+        raise InvalidValueError(f"n_samples must be a positive integer, got {n_samples!r}")
     from scipy.stats import beta
 
     gen = np.random.default_rng(rng)

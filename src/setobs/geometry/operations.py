@@ -82,7 +82,7 @@ def empty_set(n: int) -> ConstrainedZonotope:
     (3, True)
     """
     if int(n) != n or n < 1:
-        raise DimensionError(f"n must be a positive integer, got {n!r}")
+        raise InvalidValueError(f"n must be a positive integer, got {n!r}")
     n = int(n)
     return trusted_cz(np.zeros((n, 1)), np.zeros(n), np.ones((1, 1)), np.array([2.0]),
                       np.ones(1))
@@ -143,7 +143,7 @@ def intersect_strip(Z: ConstrainedZonotope, C: ArrayLike, y: ArrayLike,
     r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (m,)).copy() \
         if np.ndim(radius) == 0 else as_vector("radius", radius, size=m)
     if not np.isfinite(r).all() or (r < 0).any():
-        raise DimensionError(f"radius must be finite and nonnegative, got {r}")
+        raise InvalidValueError(f"radius must be finite and nonnegative, got {r}")
     lo = np.nextafter(y_a - r, -np.inf)
     hi = np.nextafter(y_a + r, np.inf)
     return Z.intersect(ConstrainedZonotope.from_box(lo, hi), C_a)
@@ -228,7 +228,7 @@ def intersect_polytope(Z: ConstrainedZonotope, H: ArrayLike, k: ArrayLike,
     H_a = as_matrix("H", H, cols=Z.dim)
     k_a = as_vector("k", k, size=H_a.shape[0])
     if (E is None) != (f is None):
-        raise DimensionError("E and f must be given together (or both omitted)")
+        raise ArgumentError("E and f must be given together (or both omitted)")
     if E is not None:
         Z = Z.intersect_affine(E, f)
     lower = np.empty(H_a.shape[0])
@@ -380,11 +380,11 @@ def _zonotope_data(W: ConstrainedZonotope | Box) -> tuple[NDArray[np.float64], N
         raise ArgumentError("the subtrahend must be a ConstrainedZonotope (a zonotope) or a Box, "
                             f"got {type(W).__name__}")
     if W.n_con or W.has_unbounded_factors:
-        raise DimensionError("the subtrahend must be a zonotope or a box (no constraints, "
+        raise InvalidValueError("the subtrahend must be a zonotope or a box (no constraints, "
                              "bounded factors); for a general set use an outer zonotope of it "
                              "(an inner approximation of the difference results)")
     if W.c_err.any():
-        raise DimensionError("the subtrahend carries centre rounding (c_err); pass its "
+        raise InvalidValueError("the subtrahend carries centre rounding (c_err); pass its "
                              "enclosing box instead")
     keep = (W.h > 0) & W.G.any(axis=0)
     return W.G[:, keep] * W.h[keep], W.c
@@ -411,7 +411,7 @@ def _zonotope_vertices(D: NDArray[np.float64], c: NDArray[np.float64]) -> NDArra
             pts.append(pts[-1] - 2.0 * Dp[:, j])
         return np.array(pts)
     if m > 16:
-        raise DimensionError(f"the exact difference enumerates the subtrahend's vertices; "
+        raise InvalidValueError(f"the exact difference enumerates the subtrahend's vertices; "
                              f"2^{m} sign patterns is too many: use method='inner'")
     signs = np.array(np.meshgrid(*([[-1.0, 1.0]] * m), indexing="ij")).reshape(m, -1)
     return (c[:, None] + D @ signs).T
@@ -456,6 +456,8 @@ def pontryagin_difference(Z: ConstrainedZonotope, W: ConstrainedZonotope | Box |
     Raises
     ------
     DimensionError
+        If the dimensions differ.
+    InvalidValueError
         For a subtrahend with constraints, or too many generators for
         ``"exact"``.
 
@@ -568,7 +570,7 @@ def interval_matrix_map(Z: ConstrainedZonotope, M_lo: ArrayLike, M_hi: ArrayLike
     lo = as_matrix("M_lo", M_lo, cols=Z.dim)
     hi = as_matrix("M_hi", M_hi, rows=lo.shape[0], cols=Z.dim)
     if (lo > hi).any():
-        raise DimensionError("M_lo must be elementwise <= M_hi")
+        raise InvalidValueError("M_lo must be elementwise <= M_hi")
     Mc, Mr = box_center_radius(lo, hi)  # elementwise: |M - Mc| <= Mr for every M in [lo, hi]
     box, _ = hull_with_status(Z)
     zmax = np.maximum(np.abs(box.lo), np.abs(box.hi))

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import qr
 
 from .._rounding import UNIT_ROUNDOFF, gamma
-from ..exceptions import DimensionError, EmptySetError, InvalidValueError
+from ..exceptions import EmptySetError, InvalidValueError
 from ..lp.factor import COMPILED_MAX_ROWS
 from ..tolerances import (
     ELIMINATION_ERR_RTOL,
@@ -159,7 +159,7 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
 
     Raises
     ------
-    DimensionError
+    InvalidValueError
         If ``max_generators`` is below ``n + (number of unbounded factors)``,
         the fewest a reduction of this kind can reach in general.
 
@@ -171,14 +171,15 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     ``max_generators - n - n_unbounded``.
     """
     if int(max_generators) != max_generators or max_generators < 0:
-        raise DimensionError(f"max_generators must be a nonnegative integer, got {max_generators}")
+        raise InvalidValueError(
+            f"max_generators must be a nonnegative integer, got {max_generators}")
     if Z.n_gen <= max_generators:
         return Z
     n, n_c = Z.dim, Z.n_con
     unb = np.isinf(Z.h)
     n_unb = int(unb.sum())
     if max_generators < n + n_unb:
-        raise DimensionError(
+        raise InvalidValueError(
             f"max_generators must be at least n + n_unbounded = {n + n_unb}, got {max_generators}"
         )
     if max_generators < n + n_c + n_unb:
@@ -189,7 +190,7 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
         unb = np.isinf(Z.h)
         n_unb = int(unb.sum())
         if max_generators < n + n_c + n_unb:
-            raise DimensionError(
+            raise InvalidValueError(
                 f"could not eliminate enough constraints to reach {max_generators} generators "
                 f"(n = {n}, n_c = {n_c} left, {n_unb} unbounded factors)")
     bnd = np.flatnonzero(~unb)
@@ -789,7 +790,7 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
     (0, True)
     """
     if int(max_constraints) != max_constraints or max_constraints < 0:
-        raise DimensionError(
+        raise InvalidValueError(
             f"max_constraints must be a nonnegative integer, got {max_constraints!r}")
     if method not in ("auto", "fast", "lp"):
         raise InvalidValueError(f"method must be 'auto', 'fast' or 'lp', got {method!r}")

@@ -126,7 +126,7 @@ def is_subset_of_polytope(Z: ConstrainedZonotope, H: ArrayLike, k: ArrayLike,
     H_a = as_matrix("H", H, cols=Z.dim)
     k_a = as_vector("k", k, size=H_a.shape[0])
     if (E is None) != (f is None):
-        raise DimensionError("E and f must be given together (or both omitted)")
+        raise ArgumentError("E and f must be given together (or both omitted)")
     if E is not None:
         E_a = as_matrix("E", E, cols=Z.dim)
         f_a = as_vector("f", f, size=E_a.shape[0])

@@ -18,6 +18,7 @@ from ..exceptions import (
     DimensionError,
     EmptySetError,
     ImmutableError,
+    InvalidValueError,
     MagnitudeError,
     SolverError,
     SolverWarning,
@@ -220,8 +221,11 @@ class ConstrainedZonotope:
     Raises
     ------
     DimensionError
-        On inconsistent shapes, NaN, inf in ``G``, ``c``, ``A``, ``b``, or
-        negative/NaN entries of ``h``.
+        On inconsistent shapes.
+    InvalidValueError
+        On NaN, inf in ``G``, ``c``, ``A``, ``b``, or negative/NaN entries of ``h``.
+    ArgumentError
+        On ``A`` without ``b`` (or the reverse), complex or non-numeric data.
 
     Notes
     -----
@@ -278,7 +282,7 @@ class ConstrainedZonotope:
             G_a = as_matrix("G", G, rows=n)
         n_g = G_a.shape[1]
         if (A is None) != (b is None):
-            raise DimensionError("A and b must be given together (or both omitted)")
+            raise ArgumentError("A and b must be given together (or both omitted)")
         if A is None:
             A_a = np.zeros((0, n_g))
             b_a = np.zeros(0)
@@ -297,9 +301,9 @@ class ConstrainedZonotope:
             h_a = as_vector("h", h, size=n_g, allow_inf=True)
             if (h_a < 0).any():
                 j = int(np.argmax(h_a < 0))
-                raise DimensionError(f"h must be nonnegative (h[{j}] = {h_a[j]})")
+                raise InvalidValueError(f"h must be nonnegative (h[{j}] = {h_a[j]})")
         if not unbounded_radius > 0:
-            raise DimensionError(f"unbounded_radius must be positive, got {unbounded_radius}")
+            raise InvalidValueError(f"unbounded_radius must be positive, got {unbounded_radius}")
         for name, val in (("_G", G_a), ("_c", c_a), ("_A", A_a), ("_b", b_a), ("_h", h_a)):
             object.__setattr__(self, name, readonly(val))
         object.__setattr__(self, "unbounded_radius", float(unbounded_radius))
@@ -376,7 +380,7 @@ class ConstrainedZonotope:
 
         Raises
         ------
-        DimensionError
+        InvalidValueError
             If a coordinate has exactly one infinite bound (not representable:
             see the class notes), or ``lo > hi``.
         """
@@ -385,7 +389,7 @@ class ConstrainedZonotope:
         one_sided = np.isinf(lo_a) != np.isinf(hi_a)
         if one_sided.any():
             i = int(np.argmax(one_sided))
-            raise DimensionError(
+            raise InvalidValueError(
                 f"coordinate {i} has a one-sided infinite bound [{lo_a[i]}, {hi_a[i]}]; "
                 "an extended constrained zonotope is a polytope plus a subspace, so "
                 "a coordinate is either bounded on both sides or free (-inf, +inf)"
@@ -430,7 +434,7 @@ class ConstrainedZonotope:
             Dimension.
         """
         if int(n) != n or n < 1:
-            raise DimensionError(f"n must be a positive integer, got {n!r}")
+            raise InvalidValueError(f"n must be a positive integer, got {n!r}")
         n = int(n)
         return cls._trusted(np.eye(n), np.zeros(n), np.zeros((0, n)), np.zeros(0),
                             np.full(n, np.inf))
@@ -600,7 +604,7 @@ class ConstrainedZonotope:
             if err is not None:
                 e = as_vector("err", err, size=self.dim)
                 if (e < 0).any():
-                    raise DimensionError("err must be nonnegative")
+                    raise InvalidValueError("err must be nonnegative")
                 cerr = _add(cerr, e)
             return self._same_factors(self._G, c, cerr, "Minkowski sum with a vector")
         if err is not None:
@@ -727,7 +731,7 @@ class ConstrainedZonotope:
         if y_err is not None:
             ye = as_vector("y_err", y_err, size=C_a.shape[0])
             if (ye < 0).any():
-                raise DimensionError("y_err must be nonnegative")
+                raise InvalidValueError("y_err must be nonnegative")
         return ConstrainedZonotope._owned(
             self._G, self._c,
             np.vstack([self._A, C_a @ self._G]),

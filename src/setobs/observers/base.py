@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._deprecation import renamed
 from .._validation import as_matrix, as_vector
-from ..exceptions import DesignError, DimensionError, NotSupportedError
+from ..exceptions import ArgumentError, DesignError, DimensionError, NotSupportedError
 from ..results import error_summary, time_axis, time_index
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 
@@ -174,7 +174,7 @@ class PointObserver:
         yv = as_vector("y", y, size=self.sys.l)
         if self.sys.p:
             if u is None:
-                raise DimensionError(f"u is required: the system has {self.sys.p} input(s) "
+                raise ArgumentError(f"u is required: the system has {self.sys.p} input(s) "
                                      "(pass zeros explicitly if none was applied)")
             uv = as_vector("u", u, size=self.sys.p)
         else:
@@ -216,7 +216,7 @@ class PointObserver:
         N = Ya.shape[0]
         Ua = None
         if self.sys.p and U is None:
-            raise DimensionError(f"U is required: the system has {self.sys.p} input(s) "
+            raise ArgumentError(f"U is required: the system has {self.sys.p} input(s) "
                                  f"({', '.join(self.sys.input_names)}); pass zeros explicitly "
                                  "if none was applied")
         if U is not None:
@@ -225,7 +225,7 @@ class PointObserver:
                 raise DimensionError(f"U must have at least {N} rows, got {Ua.shape[0]}")
         if self.sys.p and np.any(self.sys.Du != 0):
             if Ua is None:
-                raise DimensionError("U is required: the system has a feedthrough Du "
+                raise ArgumentError("U is required: the system has a feedthrough Du "
                                      "(y = Xi x + Du u)")
             Ya = Ya - Ua[:N] @ self.sys.Du.T
         self.reset()

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, check_real_scalar
 from ..analysis.modular import ModularDesign, design_modular
-from ..exceptions import ArgumentError, DimensionError, InvalidValueError
+from ..exceptions import ArgumentError, InvalidValueError
 from ..tolerances import TRUST_TOL
 from .base import ObserverResult, PointObserver
 
@@ -185,7 +185,7 @@ class NonlinearModularObserver(PointObserver):
             The nonlinear system has no known inputs.
         """
         if u is not None and np.size(u):
-            raise DimensionError("the nonlinear modular observer takes no inputs")
+            raise ArgumentError("the nonlinear modular observer takes no inputs")
         yv = as_vector("y", y, size=self.sys.l)
         d, sys = self.design, self.sys
         w_out = self.w_hat.copy()
@@ -305,7 +305,7 @@ class NonlinearModularObserver(PointObserver):
             (a ``RuntimeWarning`` says how many).
         """
         if U is not None and np.size(U):
-            raise DimensionError("the nonlinear modular observer takes no inputs")
+            raise ArgumentError("the nonlinear modular observer takes no inputs")
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
         self.reset()

@@ -82,7 +82,7 @@ def check_window(window: object) -> int | None:
                             f"got {window!r}")
     w = float(window)
     if not np.isfinite(w) or w != int(w) or w < 1:
-        raise DimensionError(f"window must be a positive integer or None (exact mode), "
+        raise InvalidValueError(f"window must be a positive integer or None (exact mode), "
                              f"got {window!r}")
     return int(w)
 
@@ -113,7 +113,7 @@ def noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
     if isinstance(value, Box | ConstrainedZonotope):
         value = as_set(name, value, dim)
         if not value.is_bounded:
-            raise DimensionError(
+            raise InvalidValueError(
                 f"{name} must be bounded (an output that is not measured at a step is "
                 "NaN in Y, not unbounded noise)")
         return value
@@ -125,7 +125,7 @@ def noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
         r = np.full(dim, check_real_scalar(name, value, nonnegative=True))
     r = as_vector(name, r, size=dim)
     if (r < 0).any():
-        raise DimensionError(f"{name} radii must be nonnegative, got {r}")
+        raise InvalidValueError(f"{name} radii must be nonnegative, got {r}")
     return ConstrainedZonotope.from_box(-r, r)
 
 
@@ -286,13 +286,13 @@ class ModelSetup:
         if isinstance(spec, Box | ConstrainedZonotope):
             spec = as_set("increment_set", spec, q)
             if not spec.is_bounded:
-                raise DimensionError("increment_set must be bounded")
+                raise InvalidValueError("increment_set must be bounded")
             return spec
         if callable(spec):
             return None
         r = as_vector("increment_set", spec, size=q)
         if (r < 0).any():
-            raise DimensionError("increment_set bounds must be nonnegative")
+            raise InvalidValueError("increment_set bounds must be nonnegative")
         return ConstrainedZonotope.from_box(-r, r)
 
     def _increment(self, k: int) -> ConstrainedZonotope:
@@ -341,20 +341,20 @@ class ModelSetup:
             uv = as_vector("u_prev", u_prev, size=p)
         elif p and self.k >= 0:
             if self._u_pending is None:
-                raise DimensionError(
+                raise ArgumentError(
                     f"u_prev (length {p}) is required after the first step of a "
                     "system with inputs")
             uv = self._u_pending
         uk = None
         if u is not None:
             if not p:
-                raise DimensionError("u is given but the system has no inputs")
+                raise ArgumentError("u is given but the system has no inputs")
             uk = as_vector("u", u, size=p)
         k = self.k + 1
         yerr = None
         if self._Du is not None:
             if uk is None:
-                raise DimensionError(
+                raise ArgumentError(
                     "u (the input at this step) is required: the system has a "
                     "feedthrough D_u (y = Xi x + D_u u)")
             Du = self._Du
@@ -407,7 +407,7 @@ class ModelSetup:
         self.decomposition = dec
         self.mu_o = dec.report.index
         if window is not None and window < self.mu_o - 1:
-            raise DimensionError(
+            raise InvalidValueError(
                 f"window (delta) = {window} is too small: Algorithm 1 needs "
                 f"delta >= mu_o - 1 = {self.mu_o - 1} (mu_o = observability index "
                 "of the augmented pair)")

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._deprecation import renamed
 from .._validation import as_matrix, as_vector
-from ..exceptions import DimensionError
+from ..exceptions import DimensionError, InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..results import error_summary, time_axis, time_index
 
@@ -220,7 +220,7 @@ class SMFDOResult:
         if not states:
             return plot_estimate_band(self, truth=truth, component=component, ax=ax)
         if self.state_lo is None or self.state_hi is None:
-            raise DimensionError("no state bounds in this result: run the SMFDO with "
+            raise InvalidValueError("no state bounds in this result: run the SMFDO with "
                                  "state_bounds=True")
         lo, hi = self.state_lo, self.state_hi
         with np.errstate(invalid="ignore"):

@@ -27,7 +27,13 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix, as_vector, check_real_scalar
-from ..exceptions import ArgumentError, DimensionError, SolverError, SolverWarning
+from ..exceptions import (
+    ArgumentError,
+    DimensionError,
+    InvalidValueError,
+    SolverError,
+    SolverWarning,
+)
 from ..geometry import Box
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import (
@@ -272,7 +278,7 @@ def _radii(name: str, value: Any, dim: int) -> NDArray[np.float64]:
     """Per-channel radii from a scalar, a vector or a symmetric Box."""
     if isinstance(value, Box):
         if not (np.allclose(value.lo, -value.hi) and np.isfinite(value.hi).all()):
-            raise DimensionError(f"{name}: calibration takes boxes centred at 0; got "
+            raise InvalidValueError(f"{name}: calibration takes boxes centred at 0; got "
                                  f"[{value.lo}, {value.hi}]")
         value = value.hi
     if value is None or isinstance(value, str | bytes) or callable(value) or hasattr(value, "G"):
@@ -283,7 +289,7 @@ def _radii(name: str, value: Any, dim: int) -> NDArray[np.float64]:
         r = np.full(dim, float(r))
     r = as_vector(name, r, size=dim)
     if (r < 0).any() or not np.isfinite(r).all():
-        raise DimensionError(f"{name} radii must be finite and nonnegative, got {r}")
+        raise InvalidValueError(f"{name} radii must be finite and nonnegative, got {r}")
     return r
 
 
@@ -333,7 +339,7 @@ class _RecordLP:
         spread = float(np.max(np.abs(yout))) if yout.size else 0.0
         self.sigma = spread if spread > 0.0 and np.isfinite(spread) else 1.0
         if not np.isfinite(self.sigma) or not np.isfinite(bu).all():
-            raise DimensionError("the record's outputs or inputs are too large to calibrate "
+            raise InvalidValueError("the record's outputs or inputs are too large to calibrate "
                                  "in double precision")
         self.yout = yout / self.sigma
         self.bu = bu.reshape(-1) / self.sigma
@@ -699,17 +705,17 @@ def _prepare(sys, Y, U, disturbance_inputs):
     Ya = as_matrix("Y", Y, cols=sys.l, allow_nan=True)
     Ua = None
     if not sys.p and U is not None and np.size(U):
-        raise DimensionError("U is given but the system has no inputs (no Gamma): pass "
+        raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
                              "U=None, or build the system with its input matrix")
     if sys.p:
         if U is None:
-            raise DimensionError(f"U is required: the system has {sys.p} input(s)")
+            raise ArgumentError(f"U is required: the system has {sys.p} input(s)")
         Ua = as_matrix("U", U, cols=sys.p)
         if Ua.shape[0] < Ya.shape[0] - 1 or (np.any(sys.Du != 0) and Ua.shape[0] < Ya.shape[0]):
             raise DimensionError(f"U must have N = {Ya.shape[0]} rows (N - 1 without a "
                                  f"feedthrough), got {Ua.shape[0]}")
     if not np.isfinite(Ya).any():
-        raise DimensionError("Y has no measured (finite) entry")
+        raise InvalidValueError("Y has no measured (finite) entry")
     return sys, Ya, Ua
 
 
@@ -855,7 +861,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         Yf = Ya if split is None else Ya[:split]
         Yf = np.where(ignored[:Yf.shape[0], None], np.nan, Yf)
         if not np.isfinite(Yf).any():
-            raise DimensionError("no measured sample is left in the calibrated part")
+            raise InvalidValueError("no measured sample is left in the calibrated part")
         Uf = Ua if (Ua is None or split is None) else Ua[:split]
         lp = _RecordLP(sys, Yf, Uf, w)
         sol = lp.solve(inc, r_v, per_channel, limit)
@@ -877,7 +883,7 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
             trial[k] = True
             try:
                 cand = fit(trial)
-            except DimensionError:
+            except InvalidValueError:  # (no measured sample left in the calibrated part)
                 continue
             if best is None or objective(cand[2]) < objective(best[1][2]):
                 best = (k, cand)
@@ -984,14 +990,14 @@ def _split(Y: NDArray[np.float64], holdout: float) -> int | None:
     """The first held-out row for ``holdout`` (a fraction in ``[0, 1)``), or ``None``."""
     h = check_real_scalar("holdout", holdout, nonnegative=True)
     if h >= 1.0:
-        raise DimensionError(f"holdout must be a fraction in [0, 1), got {holdout!r}")
+        raise InvalidValueError(f"holdout must be a fraction in [0, 1), got {holdout!r}")
     if h == 0.0:
         return None
     N = Y.shape[0]
     split = max(1, min(int(np.ceil((1.0 - h) * N)), N - 1))  # (both parts nonempty)
     meas = np.isfinite(Y).any(axis=1)
     if N < 2 or not meas[:split].any() or not meas[split:].any():
-        raise DimensionError(
+        raise InvalidValueError(
             f"holdout={holdout!r} leaves no measured sample in one of the parts of a "
             f"{N}-sample record (calibrated: rows 0-{split - 1}); use a longer record or "
             "holdout=0 (no validation)")
@@ -1000,14 +1006,14 @@ def _split(Y: NDArray[np.float64], holdout: float) -> int | None:
 
 def _max_outliers(value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
-        raise DimensionError(f"max_outliers must be a nonnegative integer, got {value!r}")
+        raise InvalidValueError(f"max_outliers must be a nonnegative integer, got {value!r}")
     return int(value)
 
 
 def _shape(shape: Any, l: int) -> NDArray[np.float64]:
     r_v = np.ones(l) if shape is None else _radii("shape", shape, l)
     if (r_v <= 0).any():
-        raise DimensionError(f"shape radii must be positive, got {r_v}")
+        raise InvalidValueError(f"shape radii must be positive, got {r_v}")
     return r_v
 
 
@@ -1019,7 +1025,7 @@ PADDING_WARN = 1e-3
 def _time_limit(value: float) -> float:
     t = float(value)
     if not (t > 0.0):
-        raise DimensionError(f"time_limit must be positive (seconds), got {value!r}")
+        raise InvalidValueError(f"time_limit must be positive (seconds), got {value!r}")
     return t
 
 
@@ -1058,7 +1064,7 @@ def noise_tradeoff(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None, 
     sys, lp, inc, r_v = _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs)
     b = np.logspace(-3, 3, 13) if betas is None else np.asarray(betas, dtype=float).reshape(-1)
     if b.size == 0 or (b < 0).any() or not np.isfinite(b).all():
-        raise DimensionError(f"betas must be finite and nonnegative, got {b}")
+        raise InvalidValueError(f"betas must be finite and nonnegative, got {b}")
     wmax = float(np.max(r_v))
     order = np.argsort(b, kind="stable")
     alpha = np.empty(b.size)

@@ -242,8 +242,10 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
     ExistenceError
         If Theorem 1 fails (carries the analysis report).
     DimensionError
-        If ``window < mu_o - 1`` (observability index of the augmented pair),
-        on badly shaped sets or out-of-range parameters.
+        On badly shaped sets.
+    InvalidValueError
+        If ``window < mu_o - 1`` (observability index of the augmented pair), or on
+        out-of-range parameters.
     TypeError
         On arguments of the wrong kind (e.g. a ``control.StateSpace``: convert
         it with :meth:`LinearSystem.from_statespace`).
@@ -320,7 +322,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self.max_skip_fraction = check_real_scalar("max_skip_fraction", max_skip_fraction,
                                                    nonnegative=True)
         if self.max_skip_fraction > 1.0:
-            raise DimensionError(f"max_skip_fraction is a fraction in [0, 1], got "
+            raise InvalidValueError(f"max_skip_fraction is a fraction in [0, 1], got "
                                  f"{max_skip_fraction!r}")
         window = check_window(window)
         if reset is not None:
@@ -350,7 +352,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         self.restart = restart
         self.restart_depth = int(restart_depth)
         if self.data_rtol > 1e-6:
-            raise DimensionError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
+            raise InvalidValueError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
                                  f"{data_rtol!r}; bound measurement noise with a set")
         self._prepare_model(
             sys, window, on_inconsistent, increment_set, initial_state_set,
@@ -639,7 +641,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         if Ya.size:
             missing = float(np.isnan(Ya).mean())
             if missing == 1.0 and self.k < 0:
-                raise DimensionError(
+                raise InvalidValueError(
                     f"Y has no measured (finite) entry: all {N} samples are missing (NaN), "
                     "so every band would be the prior's; check the record's columns and "
                     "its missing-value marker")
@@ -651,11 +653,11 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
                     "predictions", MissingDataWarning, stacklevel=3)
         Ua = None
         if not self.sys.p and U is not None and np.size(U):
-            raise DimensionError("U is given but the system has no inputs (no Gamma): pass "
+            raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
                                  "U=None, or build the system with its input matrix")
         if self.sys.p:
             if U is None:
-                raise DimensionError(f"U is required: the system has {self.sys.p} input(s)")
+                raise ArgumentError(f"U is required: the system has {self.sys.p} input(s)")
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] not in (N, N - 1):
                 raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
@@ -736,10 +738,10 @@ def _ignore_mask(ignore: ArrayLike, N: int) -> NDArray[np.bool_]:
                                  f"indices, got a mask of shape {a.shape}")
         return a
     if a.size and (a.dtype.kind not in "iu" or a.ndim != 1):
-        raise DimensionError("ignore must be a boolean mask of length N or a 1-D array of "
+        raise ArgumentError("ignore must be a boolean mask of length N or a 1-D array of "
                              f"sample indices, got {a.dtype} of shape {a.shape}")
     if a.size and (a.min() < 0 or a.max() >= N):
-        raise DimensionError(f"ignore holds sample indices outside [0, {N - 1}]")
+        raise InvalidValueError(f"ignore holds sample indices outside [0, {N - 1}]")
     m = np.zeros(N, dtype=bool)
     m[a.astype(np.int64)] = True
     return m

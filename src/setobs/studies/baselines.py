@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..exceptions import DimensionError
+from ..exceptions import InvalidValueError
 from ..tolerances import KALMAN_MEASUREMENT_FLOOR
 from .scenarios import Scenario, rng_for_run
 
@@ -68,7 +68,7 @@ def kalman_baseline(scenario: Scenario, sys: Any = None, *, information: str = "
         measurement_cov = (scenario.noise_std ** 2 if scenario.noise_std > 0
                            else KALMAN_MEASUREMENT_FLOOR * r * r)
     if not measurement_cov > 0:
-        raise DimensionError(f"measurement_cov must be positive, got {measurement_cov}")
+        raise InvalidValueError(f"measurement_cov must be positive, got {measurement_cov}")
     obs = PIO(sys, design="lqe", increment_cov=r * r / 3.0, measurement_cov=measurement_cov,
               information=information)
     obs.name = "Kalman filter"
@@ -88,7 +88,7 @@ def cluster_poles(radius: float, count: int, spread: float = 0.05) -> NDArray[np
         Half-width of the cluster.
     """
     if not spread < radius < 1.0 - spread:
-        raise DimensionError(f"radius must lie in ({spread}, {1.0 - spread}), got {radius}")
+        raise InvalidValueError(f"radius must lie in ({spread}, {1.0 - spread}), got {radius}")
     if count == 1:
         return np.array([float(radius)])
     return np.linspace(radius - spread, radius + spread, int(count))
@@ -182,12 +182,12 @@ def pio_pole_sweep(scenario: Scenario, radii: Sequence[float], runs: int = 20, *
     from ..observers import PIO
 
     if int(runs) != runs or runs < 2:
-        raise DimensionError(f"runs must be an integer >= 2, got {runs!r}")
+        raise InvalidValueError(f"runs must be an integer >= 2, got {runs!r}")
     if not 0 < confidence < 1:
-        raise DimensionError(f"confidence must be in (0, 1), got {confidence}")
+        raise InvalidValueError(f"confidence must be in (0, 1), got {confidence}")
     radii = [float(r) for r in radii]
     if not radii:
-        raise DimensionError("radii must not be empty")
+        raise InvalidValueError("radii must not be empty")
     sys = scenario.build_system()
     observers = [PIO(sys, poles=cluster_poles(r, sys.n + sys.q, spread), information=information)
                  for r in radii]

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._lazy import progress_bar
-from ..exceptions import ArgumentError, DimensionError
+from ..exceptions import ArgumentError, InvalidValueError
 from .scenarios import Scenario, rng_for_run
 
 __all__ = ["FILTERED_KINDS", "OBSERVER_KINDS", "SMFDO_PARAMS", "CampaignResult", "Improvement",
@@ -94,9 +94,9 @@ class ObserverSpec:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
-            raise DimensionError(f"an observer needs a non-empty name, got {self.name!r}")
+            raise InvalidValueError(f"an observer needs a non-empty name, got {self.name!r}")
         if self.kind not in OBSERVER_KINDS:
-            raise DimensionError(f"unknown observer kind {self.kind!r}; choose from "
+            raise InvalidValueError(f"unknown observer kind {self.kind!r}; choose from "
                                  f"{list(OBSERVER_KINDS)}")
         if not isinstance(self.params, dict):
             raise ArgumentError(f"params of observer {self.name!r} must be a mapping, got "
@@ -104,7 +104,7 @@ class ObserverSpec:
         accepted = _accepted_params(self.kind)
         unknown = sorted(set(self.params) - set(accepted))
         if unknown:
-            raise DimensionError(
+            raise InvalidValueError(
                 f"observer {self.name!r} ({self.kind}): unknown parameter(s) {unknown}; "
                 f"accepted: {list(accepted) or 'none'}")
         if self.kind == "smfdo" and "window" in self.params:
@@ -113,7 +113,7 @@ class ObserverSpec:
             try:
                 check_window(self.params["window"])
             except (TypeError, ValueError) as exc:
-                raise DimensionError(f"observer {self.name!r}: {exc}") from None
+                raise InvalidValueError(f"observer {self.name!r}: {exc}") from None
 
 
 def _point_observer(spec: ObserverSpec, sys, scenario: Scenario | None = None):
@@ -128,7 +128,7 @@ def _point_observer(spec: ObserverSpec, sys, scenario: Scenario | None = None):
         from .baselines import kalman_baseline
 
         if scenario is None:
-            raise DimensionError("the Kalman baseline needs the scenario (its covariances)")
+            raise InvalidValueError("the Kalman baseline needs the scenario (its covariances)")
         return kalman_baseline(scenario, sys, **params)
     return _point_ctor(spec.kind)(sys, **params)
 
@@ -323,9 +323,9 @@ class CampaignResult:
         names = set(t["observer"])
         for nm in (better, baseline):
             if nm not in names:
-                raise DimensionError(f"no observer named {nm!r} in the campaign")
+                raise InvalidValueError(f"no observer named {nm!r} in the campaign")
         if not 0 < confidence < 1:
-            raise DimensionError(f"confidence must be in (0, 1), got {confidence}")
+            raise InvalidValueError(f"confidence must be in (0, 1), got {confidence}")
         per = t.groupby(["observer", "run"])[metric].mean()
         a = per.loc[better].to_numpy()
         b = per.loc[baseline].to_numpy()
@@ -367,11 +367,11 @@ def _check_resume(out: Path, request: dict[str, Any]) -> None:
         stored = json.loads(req_file.read_text())
         if stored != request:
             diff = sorted(k for k in request if stored.get(k) != request.get(k))
-            raise DimensionError(
+            raise InvalidValueError(
                 f"{out} holds runs of a different campaign (different {', '.join(diff)}); "
                 "use another out_dir, or delete it to start over")
     elif any(out.glob("run_*.csv")):
-        raise DimensionError(f"{out} holds runs without a record of their campaign "
+        raise InvalidValueError(f"{out} holds runs without a record of their campaign "
                              "(request.json); use another out_dir")
     else:
         req_file.write_text(json.dumps(request, indent=2) + "\n")
@@ -445,15 +445,15 @@ def run_campaign(
 
     if (isinstance(runs, bool) or not isinstance(runs, int | np.integer | float)
             or int(runs) != runs or runs < 1):
-        raise DimensionError(f"runs must be a positive integer, got {runs!r}")
+        raise InvalidValueError(f"runs must be a positive integer, got {runs!r}")
     runs = int(runs)
     specs = list(specs)
     if not specs:
-        raise DimensionError("at least one observer is needed")
+        raise InvalidValueError("at least one observer is needed")
     names = [s.name for s in specs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise DimensionError(f"observer names must be distinct (their rows are keyed by "
+        raise InvalidValueError(f"observer names must be distinct (their rows are keyed by "
                              f"name); repeated: {dup}")
     # Build every observer once on the scenario's system: bad parameters fail here,
     # before any run is dispatched.

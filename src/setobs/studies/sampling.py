@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from ..exceptions import DimensionError
+from ..exceptions import InvalidValueError
 from ..systems import LinearSystem
 
 __all__ = ["ErrorOrders", "error_orders"]
@@ -101,7 +101,7 @@ def error_orders(H: ArrayLike, F: ArrayLike, C: ArrayLike,
 
     Raises
     ------
-    DimensionError
+    InvalidValueError
         If fewer than two periods are given, a period is not positive, or
         ``t_steady >= tmax``.
     """
@@ -110,12 +110,12 @@ def error_orders(H: ArrayLike, F: ArrayLike, C: ArrayLike,
     if observers is None:
         observers = {"PIO": PIO, "HO": HigherOrderObserver}
     if not observers:
-        raise DimensionError("observers: at least one observer factory")
+        raise InvalidValueError("observers: at least one observer factory")
     Ts = np.asarray(periods, dtype=float)
     if Ts.ndim != 1 or Ts.size < 2 or not np.all(Ts > 0):
-        raise DimensionError("periods: at least two positive sampling periods")
+        raise InvalidValueError("periods: at least two positive sampling periods")
     if not 0 <= t_steady < tmax:
-        raise DimensionError(f"t_steady={t_steady} must lie in [0, tmax={tmax})")
+        raise InvalidValueError(f"t_steady={t_steady} must lie in [0, tmax={tmax})")
     Hm = np.asarray(H, dtype=float)
     Fm = np.asarray(F, dtype=float)
     Cm = np.asarray(C, dtype=float)

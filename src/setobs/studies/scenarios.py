@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import examples
-from ..exceptions import ArgumentError, DimensionError, InvalidValueError
+from ..exceptions import ArgumentError, InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..systems import LinearSystem
 
@@ -153,17 +153,17 @@ class Scenario:
             raise ArgumentError(f"system must be an example name, a model file or a LinearSystem, "
                                 f"got {type(self.system).__name__}")
         elif self.system not in EXAMPLE_SYSTEMS and not Path(self.system).is_file():
-            raise DimensionError(f"unknown system {self.system!r}: neither an example "
+            raise InvalidValueError(f"unknown system {self.system!r}: neither an example "
                                  f"({', '.join(sorted(EXAMPLE_SYSTEMS))}) nor a model file")
         if self.generator not in GENERATORS:
-            raise DimensionError(f"unknown generator {self.generator!r}; choose from "
+            raise InvalidValueError(f"unknown generator {self.generator!r}; choose from "
                                  f"{list(GENERATORS)}")
         if int(self.horizon) != self.horizon or self.horizon < 1:
-            raise DimensionError(f"horizon must be a positive integer, got {self.horizon!r}")
+            raise InvalidValueError(f"horizon must be a positive integer, got {self.horizon!r}")
         if not self.increment > 0:
-            raise DimensionError(f"increment must be positive, got {self.increment}")
+            raise InvalidValueError(f"increment must be positive, got {self.increment}")
         if self.noise_std < 0:
-            raise DimensionError(f"noise_std must be nonnegative, got {self.noise_std}")
+            raise InvalidValueError(f"noise_std must be nonnegative, got {self.noise_std}")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (for metadata files); a :class:`LinearSystem` becomes its
