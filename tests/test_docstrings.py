@@ -66,6 +66,35 @@ def _callables():
                         yield f"{obj.__module__}.{name}.{attr}", func, False
 
 
+_DELEGATE = re.compile(r"see\s+:func:`(setobs(?:\.\w+)+)`")
+
+
+def delegate_of(obj):
+    """The function a thin method hands its arguments to: its docstring has no
+    Parameters section and names one function as ``see :func:`setobs....```; the
+    method's parameters must be among that function's, which documents them."""
+    doc = inspect.getdoc(obj) or ""
+    m = _DELEGATE.search(doc)
+    if m is None or documented(doc)["Parameters"]:
+        return None
+    modname, _, name = m.group(1).rpartition(".")
+    return getattr(importlib.import_module(modname), name, None)
+
+
+def delegated_gaps(obj, target) -> list[str]:
+    """Parameters of a thin method that its delegate does not take, position by
+    position (an instance method's first argument goes to the delegate's first), or
+    does not document."""
+    mine = [p.name for p in inspect.signature(obj).parameters.values()]
+    theirs = list(inspect.signature(target).parameters)
+    if mine and mine[0] == "self":
+        mine, theirs = mine[1:], theirs[1:]
+    elif mine and mine[0] == "cls":
+        mine = mine[1:]
+    docs = documented(inspect.getdoc(target) or "")["Parameters"]
+    return [p for i, p in enumerate(mine) if i >= len(theirs) or theirs[i] not in docs]
+
+
 def audit() -> tuple[set[str], set[str]]:
     """(undocumented parameters, documented names that are not parameters)."""
     missing, extra = set(), set()
@@ -73,6 +102,10 @@ def audit() -> tuple[set[str], set[str]]:
         try:
             sig = inspect.signature(obj)
         except (TypeError, ValueError):
+            continue
+        target = None if is_class else delegate_of(obj)
+        if target is not None:  # ("see :func:`...`": the delegate's parameters)
+            missing |= {f"{qual}({p})" for p in delegated_gaps(obj, target)}
             continue
         doc = documented(inspect.getdoc(obj) or "")
         known = doc["Parameters"] | (doc["Attributes"] if is_class else set())
@@ -111,6 +144,26 @@ def test_documented_parameters_exist():
 def test_every_parameter_is_documented():
     missing, _ = audit()
     assert sorted(missing) == [], f"{len(missing)} undocumented parameter(s)"
+
+
+def test_a_delegate_must_take_the_method_s_parameters():
+    """The "see :func:`...`" form is accepted only when the named function takes (and
+    documents) every parameter of the method, position by position."""
+    def method(self, tol):
+        """Summary; see :func:`setobs.geometry.reduction.remove_redundancy`."""
+
+    def wrong(self, tolerance):
+        """Summary; see :func:`setobs.geometry.reduction.remove_redundancy`."""
+
+    def too_many(self, tol, extra):
+        """Summary; see :func:`setobs.geometry.reduction.remove_redundancy`."""
+
+    from setobs.geometry.reduction import remove_redundancy
+
+    assert delegate_of(method) is remove_redundancy
+    assert delegated_gaps(method, remove_redundancy) == []
+    assert delegated_gaps(wrong, remove_redundancy) == []  # (by position: tol)
+    assert delegated_gaps(too_many, remove_redundancy) == ["extra"]
 
 
 def test_audit_sees_an_undocumented_parameter():

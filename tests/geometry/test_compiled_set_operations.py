@@ -244,3 +244,29 @@ def test_no_reference_or_memory_leak(rng):
     tracemalloc.stop()
     assert [sys.getrefcount(x) for x in shared] == before
     assert second - first < 20_000  # 2000 rounds of ~10 kB of arrays each, none kept
+
+
+@pytest.mark.skipif(not compiled_set_operations(), reason="no compiled extension")
+def test_a_slot_the_extension_does_not_write_is_refused():
+    """The extension writes the class's slots by offset: a class with one more slot (or a
+    ``__dict__``, or a slot missing) is refused at binding, and the binding in force
+    is unchanged (sets built by the extension keep every slot set)."""
+    from setobs.geometry import _setops
+
+    names = ConstrainedZonotope.__slots__
+    extra = type("WithExtra", (), {"__slots__": (*names, "_extra")})
+    missing = type("Missing", (), {"__slots__": tuple(n for n in names if n != "_cache")})
+    with_dict = type("WithDict", (), {"__slots__": (*names, "__dict__")})
+    with pytest.raises(TypeError, match="slot _extra"):
+        _setops.bind(extra, 1e150)
+    with pytest.raises(AttributeError):
+        _setops.bind(missing, 1e150)
+    with pytest.raises(TypeError, match="__dict__"):
+        _setops.bind(with_dict, 1e150)
+    # the real class still binds, and a compiled sum sets every slot
+    _setops.bind(ConstrainedZonotope, 1e150)
+    Z = ConstrainedZonotope([[1.0, 0.5], [0.0, 1.0]], [0.0, 1.0], A=[[1.0, 1.0]], b=[0.5])
+    S = Z + Z
+    for name in names:
+        getattr(S, name)  # (AttributeError if the extension left a slot unset)
+    np.testing.assert_array_equal(S.c, [0.0, 2.0])

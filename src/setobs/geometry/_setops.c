@@ -536,6 +536,12 @@ fail:
 }
 
 /* ------------------------------------------------------------------ binding */
+/* bind(cls, MAX_MAGNITUDE): the offsets of the slots this module writes, after checking
+   that they are exactly the class's object slots. A slot the class has and this module
+   does not know would be left unset (NULL) in every set built here, silently; so would
+   a slot added to __slots__ in Python without a rebuild. Such a class is refused
+   (TypeError), and the Python side then runs its NumPy code. Nothing is changed unless
+   the whole layout matches. */
 static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
     PyObject *cls = nargs == 2 ? args[0] : NULL;
     if (cls == NULL || !PyType_Check(cls) || !PyFloat_Check(args[1])) {
@@ -543,7 +549,8 @@ static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
                         "bind(ConstrainedZonotope, MAX_MAGNITUDE) expects the class and a float");
         return NULL;
     }
-    max_mag = PyFloat_AS_DOUBLE(args[1]);
+    PyTypeObject *tp = (PyTypeObject *)cls;
+    Py_ssize_t found[NSLOTS];
     for (int i = 0; i < NSLOTS; i++) {
         PyObject *d = PyObject_GetAttrString(cls, slot_names[i]);
         if (d == NULL) return NULL;
@@ -553,9 +560,37 @@ static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
             PyErr_Format(PyExc_TypeError, "%s is not an object slot", slot_names[i]);
             return NULL;
         }
-        offsets[i] = ((PyMemberDescrObject *)d)->d_member->offset;
+        found[i] = ((PyMemberDescrObject *)d)->d_member->offset;
         Py_DECREF(d);
     }
+    /* every object slot of the class (its own and its bases') is one of ours */
+    Py_ssize_t n_members = 0;
+    for (PyTypeObject *t = tp; t != NULL && t != &PyBaseObject_Type; t = t->tp_base) {
+        for (PyMemberDef *m = t->tp_members; m != NULL && m->name != NULL; m++) {
+            if (m->type != T_OBJECT_EX) continue;
+            int known = 0;
+            for (int i = 0; i < NSLOTS; i++) {
+                if (strcmp(m->name, slot_names[i]) == 0) known = 1;
+            }
+            if (!known) {
+                PyErr_Format(PyExc_TypeError,
+                             "the class has a slot %s that the compiled set operations do "
+                             "not write (rebuild the extension after changing __slots__)",
+                             m->name);
+                return NULL;
+            }
+            n_members++;
+        }
+    }
+    if (n_members != NSLOTS || tp->tp_dictoffset != 0) {
+        PyErr_Format(PyExc_TypeError,
+                     "the class's layout (%zd object slots%s) is not the %d the compiled set "
+                     "operations write", n_members,
+                     tp->tp_dictoffset != 0 ? " and a __dict__" : "", NSLOTS);
+        return NULL;
+    }
+    max_mag = PyFloat_AS_DOUBLE(args[1]);
+    for (int i = 0; i < NSLOTS; i++) offsets[i] = found[i];
     Py_XSETREF(cz_type, (PyTypeObject *)Py_NewRef(cls));
     Py_RETURN_NONE;
 }

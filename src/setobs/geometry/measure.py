@@ -17,7 +17,6 @@
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -32,6 +31,7 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..lp import highs
+from .results import DistanceResult, QPResult, VolumeResult
 from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
@@ -41,73 +41,6 @@ from .zonotope import (
 
 __all__ = ["DistanceResult", "QPResult", "VolumeResult", "distance", "minimize_quadratic",
            "nearest_point", "sample", "volume"]
-
-
-@dataclass(frozen=True)
-class QPResult:
-    """Solution of :func:`minimize_quadratic`.
-
-    Attributes
-    ----------
-    point : ndarray, shape (n,)
-        The minimiser ``z`` (in the set up to the solver's feasibility tolerance).
-    value : float
-        The objective at ``point``.
-    status : str
-        Clarabel's status (``"Solved"`` or ``"AlmostSolved"``).
-    """
-
-    point: NDArray[np.float64]
-    value: float
-    status: str
-
-
-@dataclass(frozen=True)
-class DistanceResult:
-    """Euclidean distance from a point to a set.
-
-    Attributes
-    ----------
-    distance : float
-        ``||p - z*||`` for the computed nearest point ``z*`` (an upper bound of
-        the distance up to the solver's feasibility tolerance).
-    lower : float
-        Certified lower bound of the distance (``0`` when ``p`` is inside or
-        no positive bound could be certified).
-    point : ndarray
-        The nearest point ``z*``.
-    """
-
-    distance: float
-    lower: float
-    point: NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class VolumeResult:
-    """Volume of a set (Lebesgue measure in its ambient dimension).
-
-    Attributes
-    ----------
-    value : float
-        The volume (exact methods) or its Monte Carlo estimate.
-    lower, upper : float
-        Confidence interval (equal to ``value`` for exact methods).
-    method : str
-        ``"interval"`` (1-D), ``"polygon"`` (2-D), ``"qhull"`` (3-D) or
-        ``"monte-carlo"``.
-    n_samples : int
-        Number of Monte Carlo samples (0 for exact methods).
-    confidence : float
-        Confidence level of ``[lower, upper]`` (1 for exact methods).
-    """
-
-    value: float
-    lower: float
-    upper: float
-    method: str
-    n_samples: int = 0
-    confidence: float = 1.0
 
 
 def _clarabel():

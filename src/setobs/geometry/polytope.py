@@ -11,8 +11,6 @@ generators (CORA's randomized intersection test).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -21,6 +19,7 @@ from .._validation import as_matrix, as_vector
 from ..exceptions import DimensionError, EmptySetError, SolverError, UnboundedSetError
 from ..tolerances import VERTEX_RTOL
 from .box import box_center_radius
+from .results import HRep
 from .zonotope import (
     ConstrainedZonotope,
     hull_with_status,
@@ -30,38 +29,6 @@ from .zonotope import (
 )
 
 __all__ = ["HRep", "cz_from_hpolytope", "polygon_2d", "to_hrep", "vertices"]
-
-
-@dataclass(frozen=True)
-class HRep:
-    """H-representation ``{x : H x <= k, E x = f}``.
-
-    Attributes
-    ----------
-    H, k : ndarray
-        Inequalities ``H x <= k`` (facets).
-    E, f : ndarray
-        Equalities ``E x = f`` (the affine hull when the set is flat).
-    """
-
-    H: NDArray[np.float64]
-    k: NDArray[np.float64]
-    E: NDArray[np.float64]
-    f: NDArray[np.float64]
-
-    def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool:
-        """Whether ``x`` satisfies all inequalities and equalities within ``tol``.
-
-        Parameters
-        ----------
-        x : array_like, shape (n,)
-            The point.
-        tol : float
-            Allowed violation of each inequality and equality.
-        """
-        xv = np.asarray(x, dtype=float)
-        return bool((self.H @ xv <= self.k + tol).all() and
-                    (np.abs(self.E @ xv - self.f) <= tol).all())
 
 
 #: ``SolverError.status`` of a vertex enumeration stopped at its budget of LPs or

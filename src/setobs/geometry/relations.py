@@ -20,8 +20,6 @@ decided up to :data:`~setobs.tolerances.CONTAINMENT_RTOL`:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -36,48 +34,10 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..tolerances import CONTAINMENT_RTOL, FEASIBILITY_TOL
+from .results import ContainmentResult
 from .zonotope import ConstrainedZonotope, magnitude, scaled_by, support_unwarned, unit_scaled
 
 __all__ = ["ContainmentResult", "is_equal", "is_subset", "is_subset_of_polytope", "represents"]
-
-
-@dataclass(frozen=True)
-class ContainmentResult:
-    """Three-valued answer of a set relation.
-
-    Attributes
-    ----------
-    holds : bool or None
-        ``True`` (certified up to the tolerance), ``False`` (with a witness) or
-        ``None`` (undecided).
-    witness : ndarray or None
-        With ``holds=False``: a point of the first set outside the second.
-    method : str
-        How it was decided (``"supports"``, ``"facets"``, ``"matching"``, ...).
-    margin : float
-        The largest certified excess of a support value over its offset
-        (``<= tol`` when ``holds`` is ``True``); ``nan`` where no offsets apply.
-    tol : float
-        The largest tolerance used.
-
-    Notes
-    -----
-    ``bool(result)`` is ``holds`` when it is decided and raises
-    :class:`ValueError` when it is ``None``, so that ``if Z.is_subset(W):``
-    never reads an undecided answer as ``False``.
-    """
-
-    holds: bool | None
-    witness: NDArray[np.float64] | None = None
-    method: str = ""
-    margin: float = float("nan")
-    tol: float = field(default=0.0)
-
-    def __bool__(self) -> bool:
-        if self.holds is None:
-            raise InvalidValueError("the relation is undecided (holds=None); read .holds "
-                                    "explicitly")
-        return self.holds
 
 
 def _tolerances(k: NDArray[np.float64]) -> NDArray[np.float64]:

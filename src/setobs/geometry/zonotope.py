@@ -27,6 +27,7 @@ from ..exceptions import (
 from ..lp.factor import EmptinessReport, FactorPolytope, LPResult
 from ..tolerances import FEASIBILITY_TOL, MAX_MAGNITUDE, UNBOUNDED_RADIUS
 from .box import Box, box_center_radius, trusted_box
+from .results import ContainmentResult, DistanceResult, HRep, VolumeResult
 
 try:  # the optional compiled construction of +, @ and intersect (setup.py)
     from . import _setops as compiled_ops
@@ -37,7 +38,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.patches import Patch
 
-    from .polytope import HRep
 
 __all__ = ["ConstrainedZonotope", "compiled_set_operations"]
 
@@ -441,13 +441,7 @@ class ConstrainedZonotope:
 
     @classmethod
     def empty(cls, n: int) -> ConstrainedZonotope:
-        """The empty set of ``R^n``; see :func:`setobs.geometry.operations.empty_set`.
-
-        Parameters
-        ----------
-        n : int
-            Dimension.
-        """
+        """The empty set of ``R^n``; see :func:`setobs.geometry.operations.empty_set`."""
         from .operations import empty_set
 
         return empty_set(n)
@@ -455,13 +449,7 @@ class ConstrainedZonotope:
     @classmethod
     def from_vertices(cls, V: ArrayLike) -> ConstrainedZonotope:
         """The convex hull of points (exact); see
-        :func:`setobs.geometry.operations.from_vertices`.
-
-        Parameters
-        ----------
-        V : array_like, shape (m, n)
-            The points, one per row.
-        """
+        :func:`setobs.geometry.operations.from_vertices`."""
         from .operations import from_vertices
 
         return from_vertices(V)
@@ -482,17 +470,8 @@ class ConstrainedZonotope:
 
     @classmethod
     def from_hpolytope(cls, H: ArrayLike, k: ArrayLike) -> ConstrainedZonotope:
-        """The bounded polytope ``{x : H x <= k}`` (Scott et al. 2016, Theorem 1).
-
-        See :func:`setobs.geometry.polytope.cz_from_hpolytope`.
-
-        Parameters
-        ----------
-        H : array_like, shape (m, n)
-            Half-space normals.
-        k : array_like, shape (m,)
-            Offsets: the polytope is ``{x : H x <= k}`` (bounded).
-        """
+        """The bounded polytope ``{x : H x <= k}`` (Scott et al. 2016, Theorem 1); see
+        :func:`setobs.geometry.polytope.cz_from_hpolytope`."""
         from .polytope import cz_from_hpolytope
 
         return cz_from_hpolytope(H, k)
@@ -1031,15 +1010,7 @@ class ConstrainedZonotope:
     # ------------------------------------------------------------------ more operations
     def intersect_halfspace(self, a: ArrayLike, beta: float) -> ConstrainedZonotope:
         """``{z in Z : a^T z <= beta}`` (exact); see
-        :func:`setobs.geometry.operations.intersect_halfspace`.
-
-        Parameters
-        ----------
-        a : array_like, shape (n,)
-            Normal.
-        beta : float
-            Offset.
-        """
+        :func:`setobs.geometry.operations.intersect_halfspace`."""
         from .operations import intersect_halfspace
 
         return intersect_halfspace(self, a, beta)
@@ -1047,17 +1018,7 @@ class ConstrainedZonotope:
     def intersect_strip(self, C: ArrayLike, y: ArrayLike, radius: ArrayLike
                         ) -> ConstrainedZonotope:
         """``{z in Z : |C z - y| <= radius}`` (exact); see
-        :func:`setobs.geometry.operations.intersect_strip`.
-
-        Parameters
-        ----------
-        C : array_like, shape (m, n)
-            Strip normals.
-        y : array_like, shape (m,)
-            Strip centres.
-        radius : array_like, shape (m,) or float
-            Half-widths.
-        """
+        :func:`setobs.geometry.operations.intersect_strip`."""
         from .operations import intersect_strip
 
         return intersect_strip(self, C, y, radius)
@@ -1065,161 +1026,81 @@ class ConstrainedZonotope:
     def intersect_polytope(self, H: ArrayLike, k: ArrayLike, E: ArrayLike | None = None,
                            f: ArrayLike | None = None) -> ConstrainedZonotope:
         """``{z in Z : H z <= k, E z = f}`` (exact); see
-        :func:`setobs.geometry.operations.intersect_polytope`.
-
-        Parameters
-        ----------
-        H : array_like, shape (m, n)
-            Inequality normals.
-        k : array_like, shape (m,)
-            Inequality offsets.
-        E : array_like, shape (p, n), optional
-            Equality rows.
-        f : array_like, shape (p,), optional
-            Equality right-hand sides.
-        """
+        :func:`setobs.geometry.operations.intersect_polytope`."""
         from .operations import intersect_polytope
 
         return intersect_polytope(self, H, k, E, f)
 
     def convex_hull(self, other: ConstrainedZonotope) -> ConstrainedZonotope:
         """Convex hull with ``other`` (exact); see
-        :func:`setobs.geometry.operations.convex_hull`.
-
-        Parameters
-        ----------
-        other : ConstrainedZonotope
-            The second set.
-        """
+        :func:`setobs.geometry.operations.convex_hull`."""
         from .operations import convex_hull
 
         return convex_hull(self, other)
 
     def pontryagin_difference(self, other: Any, method: str = "exact") -> ConstrainedZonotope:
         """``{z : z + other subset Z}``; see
-        :func:`setobs.geometry.operations.pontryagin_difference`.
-
-        Parameters
-        ----------
-        other : ConstrainedZonotope, Box or array_like
-            A zonotope, a box or a vector.
-        method : {"exact", "inner"}
-            Exact (vertex intersection) or inner (generator matching).
-        """
+        :func:`setobs.geometry.operations.pontryagin_difference`."""
         from .operations import pontryagin_difference
 
         return pontryagin_difference(self, other, method)
 
     def interval_matrix_map(self, M_lo: ArrayLike, M_hi: ArrayLike) -> ConstrainedZonotope:
         """Outer bound of ``{M z : M_lo <= M <= M_hi, z in Z}``; see
-        :func:`setobs.geometry.operations.interval_matrix_map`.
-
-        Parameters
-        ----------
-        M_lo, M_hi : array_like, shape (m, n)
-            Elementwise bounds of the matrix.
-        """
+        :func:`setobs.geometry.operations.interval_matrix_map`."""
         from .operations import interval_matrix_map
 
         return interval_matrix_map(self, M_lo, M_hi)
 
     def quad_map(self, Q: ArrayLike) -> ConstrainedZonotope:
         """Outer bound of ``{(z^T Q_i z)_i : z in Z}`` (CORA's ``quadMap``); see
-        :func:`setobs.geometry.operations.quad_map`.
-
-        Parameters
-        ----------
-        Q : array_like, shape (m, n, n)
-            The matrices ``Q_i``.
-        """
+        :func:`setobs.geometry.operations.quad_map`."""
         from .operations import quad_map
 
         return quad_map(self, Q)
 
-    def is_subset(self, other: ConstrainedZonotope) -> Any:
+    def is_subset(self, other: ConstrainedZonotope) -> ContainmentResult:
         """Whether ``Z subset other`` (three-valued); see
-        :func:`setobs.geometry.relations.is_subset`.
-
-        Parameters
-        ----------
-        other : ConstrainedZonotope
-            The container.
-        """
+        :func:`setobs.geometry.relations.is_subset`."""
         from .relations import is_subset
 
         return is_subset(self, other)
 
-    def is_equal(self, other: ConstrainedZonotope, tol: float = 0.0) -> Any:
-        """Whether the two sets are equal (three-valued), up to the Hausdorff distance
-        ``tol`` (infinity norm); see :func:`setobs.geometry.relations.is_equal`.
-
-        Parameters
-        ----------
-        other : ConstrainedZonotope
-            The other set.
-        tol : float
-            Distance up to which the sets count as equal (default 0).
-        """
+    def is_equal(self, other: ConstrainedZonotope, tol: float = 0.0) -> ContainmentResult:
+        """Whether the two sets are equal (three-valued), up to the Hausdorff distance ``tol``
+        (infinity norm); see :func:`setobs.geometry.relations.is_equal`."""
         from .relations import is_equal
 
         return is_equal(self, other, tol)
 
     def represents(self, kind: str, tol: float | None = None) -> bool:
-        """Whether the set is (up to ``tol``) empty, a point, the origin, a box or a
-        zonotope (CORA's ``representsa``); see :func:`setobs.geometry.relations.represents`.
-
-        Parameters
-        ----------
-        kind : {"empty", "point", "origin", "box", "zonotope"}
-            The kind.
-        tol : float, optional
-            Absolute tolerance in the set's units.
-        """
+        """Whether the set is (up to ``tol``) empty, a point, the origin, a box or a zonotope
+        (CORA's ``representsa``); see :func:`setobs.geometry.relations.represents`."""
         from .relations import represents
 
         return represents(self, kind, tol)
 
     def nearest_point(self, p: ArrayLike) -> NDArray[np.float64]:
         """Euclidean projection of ``p`` onto the set; see
-        :func:`setobs.geometry.measure.nearest_point`.
-
-        Parameters
-        ----------
-        p : array_like, shape (n,)
-            The point.
-        """
+        :func:`setobs.geometry.measure.nearest_point`."""
         from .measure import nearest_point
 
         return nearest_point(self, p)
 
-    def distance(self, p: ArrayLike) -> Any:
+    def distance(self, p: ArrayLike) -> DistanceResult:
         """Distance from ``p`` with a certified lower bound; see
-        :func:`setobs.geometry.measure.distance`.
-
-        Parameters
-        ----------
-        p : array_like, shape (n,)
-            The point.
-        """
+        :func:`setobs.geometry.measure.distance`."""
         from .measure import distance
 
         return distance(self, p)
 
     def sample(self, n: int, rng: np.random.Generator | int | None = None) -> NDArray[np.float64]:
-        """Uniform random points by hit-and-run; see :func:`setobs.geometry.measure.sample`.
-
-        Parameters
-        ----------
-        n : int
-            Number of points.
-        rng : numpy.random.Generator, int or None
-            Random source.
-        """
+        """Uniform random points by hit-and-run; see :func:`setobs.geometry.measure.sample`."""
         from .measure import sample
 
         return sample(self, n, rng)
 
-    def volume(self) -> Any:
+    def volume(self) -> VolumeResult:
         """Volume (exact up to 3-D, Monte Carlo with a CI above); see
         :func:`setobs.geometry.measure.volume`."""
         from .measure import volume
@@ -1229,14 +1110,7 @@ class ConstrainedZonotope:
     # ------------------------------------------------------------------ reduction
     def remove_redundancy(self, tol: float | None = None) -> ConstrainedZonotope:
         """Remove zero/duplicate/dependent constraints and unused factors; see
-        :func:`setobs.geometry.reduction.remove_redundancy`.
-
-        Parameters
-        ----------
-        tol : float, optional
-            Rank tolerance (default that of
-            :func:`setobs.geometry.reduction.remove_redundancy`).
-        """
+        :func:`setobs.geometry.reduction.remove_redundancy`."""
         from .reduction import remove_redundancy
 
         return remove_redundancy(self) if tol is None else remove_redundancy(self, tol=tol)
@@ -1258,28 +1132,13 @@ class ConstrainedZonotope:
     def eliminate_constraints(self, max_constraints: int, method: str = "auto"
                               ) -> ConstrainedZonotope:
         """Outer constraint elimination (Scott et al. 2016, Sec. 4.2); see
-        :func:`setobs.geometry.reduction.eliminate_constraints`.
-
-        Parameters
-        ----------
-        max_constraints : int
-            Largest number of constraints of the result.
-        method : {"auto", "fast", "lp"}
-            Overshoots by interval propagation (``"fast"``) or certified LPs (``"lp"``);
-            ``"auto"`` takes the fast mode for large sets.
-        """
+        :func:`setobs.geometry.reduction.eliminate_constraints`."""
         from .reduction import eliminate_constraints
 
         return eliminate_constraints(self, max_constraints, method)
 
     def reduce_order(self, max_generators: int) -> ConstrainedZonotope:
-        """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`.
-
-        Parameters
-        ----------
-        max_generators : int
-            Largest number of generators of the result.
-        """
+        """Outer generator-order reduction; see :func:`setobs.geometry.reduction.reduce_order`."""
         from .reduction import reduce_order
 
         return reduce_order(self, max_generators)
@@ -1298,17 +1157,7 @@ class ConstrainedZonotope:
         return to_hrep(self)
 
     def plot(self, ax: Axes | None = None, dims: Sequence[int] = (0, 1), **kwargs: Any) -> Patch:
-        """Plot the projection onto ``dims``; see :func:`setobs.plotting.plot_set`.
-
-        Parameters
-        ----------
-        ax : matplotlib Axes, optional
-            Where to draw (default the current axes).
-        dims : sequence of two int
-            The coordinates of the projection.
-        **kwargs
-            Passed to :class:`matplotlib.patches.Polygon`.
-        """
+        """Plot the projection onto ``dims``; see :func:`setobs.plotting.plot_set`."""
         from ._draw import plot_set
 
         return plot_set(self, ax=ax, dims=dims, **kwargs)
@@ -1335,7 +1184,15 @@ def compiled_set_operations() -> bool:
 
 
 if compiled_ops is not None:
-    compiled_ops.bind(ConstrainedZonotope, float(MAX_MAGNITUDE))
+    # (the extension checks that the slots it writes are exactly the class's: a slot
+    # added in Python without a rebuild would be left unset in every set it builds)
+    try:
+        compiled_ops.bind(ConstrainedZonotope, float(MAX_MAGNITUDE))
+    except TypeError as exc:  # pragma: no cover - a stale build
+        import warnings
+
+        warnings.warn(f"compiled set operations disabled: {exc}", RuntimeWarning, stacklevel=1)
+        compiled_ops = None
 
 
 # ---------------------------------------------------------------- package-internal access
