@@ -16,6 +16,7 @@ import re
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import setobs as so
@@ -335,3 +336,43 @@ def test_dimension_error_is_only_for_shapes(tmp_path):
     (tmp_path / "x.py").write_text(
         "def f(x):\n    raise DimensionError(f'x must be positive, got {x}')\n")
     assert dimension_errors_about_values(tmp_path) == ["x.py:2: x must be positive, got "]
+
+
+def test_setmembership_is_composed_not_inherited():
+    """No class in ``setmembership/`` has more than one base, and :class:`setobs.SMFDO`
+    (the loop over its engines, the public interface) stays under 400 lines."""
+    bad, smfdo_lines = [], None
+    for path in sorted((SRC / "setmembership").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef):
+                if len(node.bases) > 1:
+                    bad.append(f"{path.name}: {node.name}")
+                if node.name == "SMFDO":
+                    smfdo_lines = node.end_lineno - node.lineno + 1
+    assert bad == []
+    assert smfdo_lines is not None and smfdo_lines < 400
+
+
+def test_the_smfdo_model_is_frozen_and_steps_leave_it_alone():
+    """A run changes the state, never the model: every attribute of the model is the
+    same object before and after, and assigning one raises."""
+    from setobs.exceptions import ImmutableError
+
+    sys_ = so.examples.chang2006()
+    obs = so.SMFDO(sys_, window=5, measurement_noise=0.05, state_bounds=True)
+    before = dict(vars(obs.model))
+    rng = np.random.default_rng(3)
+    x = np.zeros(sys_.n)
+    Y = []
+    for k in range(30):
+        Y.append(sys_.Xi @ x + rng.uniform(-0.05, 0.05, sys_.l))
+        x = sys_.Phi @ x + sys_.G @ np.array([np.sin(0.2 * k)] * sys_.q)
+    obs.run(np.array(Y))
+    assert obs.k == 29 and obs.stats["fast"] + obs.stats["reference"] == 30
+    after = vars(obs.model)
+    assert after.keys() == before.keys()
+    assert all(after[key] is before[key] for key in before)
+    with pytest.raises(ImmutableError):
+        obs.model.window = 3
+    with pytest.raises(AttributeError):
+        obs.window = 3  # (read-only on the observer too)

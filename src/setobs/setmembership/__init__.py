@@ -1,5 +1,6 @@
 """Set-membership disturbance observation: the SMFDO and worst-case-optimal estimates."""
 
+from ..exceptions import SkipLimitError
 from .calibrate import NoiseCalibration, NoiseTradeoff, calibrate_noise, noise_tradeoff
 from .estimates import PointEstimate, chebyshev_center, interval_center
 from .smfdo import (
@@ -7,7 +8,6 @@ from .smfdo import (
     ExistenceError,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
-    SkipLimitError,
     SMFDOResult,
     SMFDOStep,
 )

@@ -1,4 +1,5 @@
-"""Exact mode of the SMFDO: the H-representation recursion (:mod:`._hrep`) driven step by step."""
+"""The exact-mode engines of the SMFDO: the H-representation recursion (:mod:`._hrep`) without
+noise, the whole-history LP (:mod:`._history`) with noise."""
 
 from __future__ import annotations
 
@@ -21,11 +22,12 @@ from ._hrep import (
     tidy_vertices,
     vertices_match,
 )
-from ._setup import MODEL_CACHE, Entry
+from ._setup import MODEL_CACHE, Entry, SMFDOModel
+from ._state import Outcome, SMFDOState
 from ._window import WindowModel
 
 __all__ = ["HISTORY_RETRY", "H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS",
-           "H_MAX_VERTICES", "ExactSteps"]
+           "H_MAX_VERTICES", "HRepEngine", "HistoryEngine"]
 
 #: LP budget of converting a bounded posterior to the H-representation of exact
 #: mode (a beneath-beyond vertex enumeration); beyond it the set recursion goes on.
@@ -54,12 +56,36 @@ HISTORY_RETRY = 4
 H_LAX_SIZE_FACTOR = 1e3
 
 
-class ExactSteps:
-    """Exact-mode steps of the SMFDO (a mixin of :class:`~setobs.SMFDO`): conversion of
-    a bounded posterior to an H-representation and one certified step of it."""
+class HRepEngine:
+    """Exact mode without noise: a bounded posterior converted to a certified
+    H-representation and advanced one step at a time (:mod:`._hrep`); it declines
+    (``None``) before the posterior is bounded, for sets too complex for it, and
+    when an LP is not certified (backing off before converting again).
+
+    It keeps the model's derived data it needs (the uncertainty sets' vertices in
+    ``z``, the H-representations of the measurement-noise set per missing-sample
+    pattern), computed on first use.
+    """
+
+    def __init__(self) -> None:
+        self._h_images: list[NDArray[np.float64]] | None = None
+        self._h_floor_value: float | None = None
+        self._h_noise: dict[bytes, list] = {}
+
+    def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
+                 e: Entry) -> Outcome | None:
+        """The step's :class:`~._state.Outcome` by the H-representation, or ``None``."""
+        if k == 0:
+            return None
+        out = self._hrep_step(m, s, e)
+        if out is None:
+            return None
+        s.stats["fast"] += 1
+        hst, box, box_o, Zd, box_x = out
+        return Outcome(hst, box, box_o, Zd, box_x, "ok", 0, e)
 
     # ------------------------------------------------------------------ exact mode
-    def _to_hstate(self, Z: ConstrainedZonotope) -> HState | None:
+    def _to_hstate(self, m: SMFDOModel, s: SMFDOState, Z: ConstrainedZonotope) -> HState | None:
         """The H-representation of a bounded posterior (certified facets and box,
         :func:`setobs.geometry.polytope.to_hrep`'s construction), or ``None``."""
         from ..exceptions import SetobsError
@@ -81,7 +107,7 @@ class ExactSteps:
                 # excess of that size, absolute, outlives a later contraction of
                 # the set. Not while the set is far larger than one step's
                 # uncertainty (the transient before the data bound it).
-                if float(np.max(box.hi - box.lo)) > H_LAX_SIZE_FACTOR * self._h_floor():
+                if float(np.max(box.hi - box.lo)) > H_LAX_SIZE_FACTOR * self._h_floor(m):
                     raise
                 V, F, gF, flats = verified_facets(Z, max_lps=H_CONVERSION_LPS,
                                                   max_facets=4 * H_MAX_NORMALS)
@@ -92,7 +118,7 @@ class ExactSteps:
         # Flat only where the data make it so (the measured rows without noise): a
         # set whose width is below the enumeration's tolerance relative to its
         # coordinates (growing states) is left to the set recursion.
-        n_flat = int((~np.isnan(self._last_y)).sum()) if self._V_fixed is None else 0
+        n_flat = int((~np.isnan(s.last_y)).sum()) if m.V_fixed is None else 0
         if flats.shape[0] > n_flat:
             return None
         H = np.vstack([F, flats, -flats])
@@ -102,42 +128,42 @@ class ExactSteps:
             return None
         return HState(H, g, box.lo, box.hi, V)
 
-    def _h_floor(self) -> float:
+    def _h_floor(self, m: SMFDOModel) -> float:
         """Largest width of one step's uncertainty in ``z_o`` (``B_o`` times the
         increment set, with ``E_o`` times the process noise)."""
         if self._h_floor_value is None:
-            w = hull_with_status(self._B_step @ self._step_set)[0]
+            w = hull_with_status(m.B_step @ m.step_set)[0]
             self._h_floor_value = float(np.max(w.hi - w.lo, initial=0.0))
         return self._h_floor_value
 
-    def _h_setup(self) -> list[NDArray[np.float64]]:
+    def _h_setup(self, m: SMFDOModel) -> list[NDArray[np.float64]]:
         """Vertices of the increment (and process-noise) sets mapped into the state."""
         if self._h_images is None:
             from ..geometry.polytope import vertices
 
             # (no disturbance, q = 0: the point {0}, neutral in the Minkowski sum)
-            images = [vertices(self._inc_fixed) @ self.B_o.T if self.sys.q
-                      else np.zeros((1, self.A_o.shape[0]))]
-            if self._W_fixed is not None:
-                images.append(vertices(self._W_fixed) @ self._E_o.T)
+            images = [vertices(m.inc_fixed) @ m.B_o.T if m.sys.q
+                      else np.zeros((1, m.A_o.shape[0]))]
+            if m.W_fixed is not None:
+                images.append(vertices(m.W_fixed) @ m.E_o.T)
             self._h_images = images
         return self._h_images
 
-    def _h_clips(self, y: NDArray[np.float64], m: NDArray[np.bool_]) -> list:
+    def _h_clips(self, m: SMFDOModel, y: NDArray[np.float64], mask: NDArray[np.bool_]) -> list:
         """The measurement of eq. (21) as hyperplanes (no noise) or half-spaces of
         ``y - F_b V`` (its H-representation on the measured rows, computed once
         per missing-sample pattern)."""
-        C = self.C_o[m]
-        ym = y[m]
-        V = self._V_fixed
+        C = m.C_o[mask]
+        ym = y[mask]
+        V = m.V_fixed
         if V is None:
             return [(C[i], float(ym[i]), True) for i in range(C.shape[0])]
-        key = m.tobytes()
+        key = mask.tobytes()
         hr = self._h_noise.get(key)
         if hr is None:
             from ..geometry.polytope import to_hrep
 
-            hr = self._h_noise[key] = to_hrep(V.project(np.flatnonzero(m).tolist()))
+            hr = self._h_noise[key] = to_hrep(V.project(np.flatnonzero(mask).tolist()))
         # v = y - C z in V_m:  H_v (y - C z) <= k_v,  E_v (y - C z) = f_v
         out = [(-(hv @ C), float(kv - hv @ ym), False) for hv, kv in zip(hr.H, hr.k,
                                                                          strict=True)]
@@ -145,76 +171,76 @@ class ExactSteps:
                                                                         strict=True)]
         return out
 
-    def _h_back_off(self, step: int) -> None:
+    def _h_back_off(self, s: SMFDOState, step: int) -> None:
         """After a failed conversion or step: the next conversion is tried at
         ``step + 2^fails`` (at most 64 steps later)."""
-        self._h_fails += 1
-        self._h_retry_at = step + min(2 ** self._h_fails, 64)
+        s.h_fails += 1
+        s.h_retry_at = step + min(2 ** s.h_fails, 64)
 
-    def _hrep_step(self, e: Entry):
+    def _hrep_step(self, m: SMFDOModel, s: SMFDOState, e: Entry):
         """One exact step by the H-representation recursion (:mod:`._hrep`), or
         ``None`` (the reference path decides it)."""
-        st = self._Z_src
+        st = s.Z_src
         if not isinstance(st, HState):
-            if not isinstance(st, ConstrainedZonotope) or self.k + 1 < self._h_retry_at:
+            if not isinstance(st, ConstrainedZonotope) or s.k + 1 < s.h_retry_at:
                 return None
-            st = self._to_hstate(st)
+            st = self._to_hstate(m, s, st)
             if st is None:  # not bounded yet, or the conversion failed
-                self._h_back_off(self.k + 1)
+                self._h_back_off(s, s.k + 1)
                 return None
-            self._h_fails = 0
-            self._Z_src = st
-        N = self.A_o.shape[0]
+            s.h_fails = 0
+            s.Z_src = st
+        N = m.A_o.shape[0]
         y = e.y
-        m = ~np.isnan(y)
+        mask = ~np.isnan(y)
         shift = np.zeros(N)
-        if self.sys.p and e.u is not None:
-            shift = self.Gamma_o @ e.u
+        if m.sys.p and e.u is not None:
+            shift = m.Gamma_o @ e.u
         flat_cand = None
-        if self._V_fixed is None and m.any():
-            Cm = self.C_o[m]
+        if m.V_fixed is None and mask.any():
+            Cm = m.C_o[mask]
             flat_cand = Cm / np.linalg.norm(Cm, axis=1)[:, None]
-        geo = step_geometry(st.V, self.A_o, shift, self._h_setup(),
-                            self._h_clips(y, m) if m.any() else [], flat_cand)
+        geo = step_geometry(st.V, m.A_o, shift, self._h_setup(m),
+                            self._h_clips(m, y, mask) if mask.any() else [], flat_cand)
         if geo is None or geo[0].shape[0] > H_MAX_VERTICES or geo[1].shape[0] > H_MAX_NORMALS:
             # too complex, or the approximate geometry sees no consistent point: the
             # set recursion decides this step; back off before converting again
-            self._h_back_off(self.k + 2)
+            self._h_back_off(s, s.k + 2)
             return None
         V_new, H_new = geo
         H_new = snap_normals(H_new, st.H)
-        inc, B_step, Vn = self._step_set, self._B_step, self._V_fixed
+        inc, B_step, Vn = m.step_set, m.B_step, m.V_fixed
         # rows beyond z: P (unless it selects coordinates), the state map (state
         # bounds, unless it selects coordinates), then the new facet normals
-        P_ext = np.vstack([self._hull_rows, H_new])
-        mkey = m.tobytes()
+        P_ext = np.vstack([m.hull_rows, H_new])
+        mkey = mask.tobytes()
         key = ("hrep", st.H.shape, st.H.tobytes(), H_new.shape, H_new.tobytes(), mkey)
         H_prev = st.H
 
         def build() -> WindowModel:
             mp = H_prev.shape[0]
             G_S = np.hstack([np.eye(N), np.zeros((N, mp))])
-            return WindowModel(self.A_o, B_step, self.C_o, self.Gamma_o, increment=inc,
+            return WindowModel(m.A_o, B_step, m.C_o, m.Gamma_o, increment=inc,
                                G_S=G_S, A_S=structure_A(H_prev),
                                free_S=np.zeros(N + mp, dtype=bool), s=1,
                                first_posterior=False, P=P_ext,
                                unbounded_radius=min(UNBOUNDED_RADIUS, inc.unbounded_radius),
-                               noise=Vn, masks=[m])
+                               noise=Vn, masks=[mask])
 
-        model = MODEL_CACHE.get((self._digest, *key), build)
+        model = MODEL_CACHE.get((m.digest, *key), build)
         if not model.usable:
             return None
-        state = self._states.get(key)
+        state = s.states.get(key)
         if state is None:
-            if len(self._states) > 64:
-                self._retire_states()
-            state = self._states[key] = model.new_state()
+            if len(s.states) > 64:
+                s.retire_states()
+            state = s.states[key] = model.new_state()
         c_S, b_S, h_S, b_S_err = st.start()
-        U = (e.u if e.u is not None else np.zeros(self.sys.p))[None, :] if self.sys.p \
+        U = (e.u if e.u is not None else np.zeros(m.sys.p))[None, :] if m.sys.p \
             else np.zeros((1, 0))
         Y_err = None if e.yerr is None else e.yerr[None, :]
         c, b, h, c_err, b_err, y_scale = model.assemble(
-            c_S, b_S, h_S, y[None, :], U, b_S_err=b_S_err, data_rtol=self.data_rtol,
+            c_S, b_S, h_S, y[None, :], U, b_S_err=b_S_err, data_rtol=m.data_rtol,
             Y_err=Y_err)
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
@@ -222,9 +248,9 @@ class ExactSteps:
         lo, hi = out
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return None
-        box_o, box, box_x, at = self.split_hull(lo, hi)
+        box_o, box, box_x, at = m.split_hull(lo, hi)
         g = hi[at:]
-        Zd = self.P @ model.to_cz(c, b, h, c_err, b_err) if self.keep_sets else None
+        Zd = m.P @ model.to_cz(c, b, h, c_err, b_err) if m.keep_sets else None
         # The carried set covers the rounding of the objectives' products with the
         # generators (P_ext G, the model's G = [A_o, 0, B_o G_D]), which the LP
         # certificate takes as given: gamma-bounded, on the factor ranges. (Not the
@@ -240,74 +266,89 @@ class ExactSteps:
             # The normals from the approximate geometry miss a facet: carrying
             # {H z <= g} would be an outer set from the next step on. This step's
             # bounds are exact (its LPs ran over the exact set); carry that set.
-            self._h_back_off(self.k + 1)
+            self._h_back_off(s, s.k + 1)
             return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x
         return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x
 
-    # ------------------------------------------------------------------ with noise
-    def _history_kw(self) -> dict:
-        return dict(A_o=self.A_o, Gamma_o=self.Gamma_o, C_o=self.C_o, B_o=self.B_o,
-                    E_o=self._E_o, rows=self._hull_rows, data_rtol=self.data_rtol)
 
-    def _history_start(self, k: int) -> HistoryLP | None:
-        """Exact mode's whole-history LP (:mod:`._history`) from the current posterior,
-        once it is bounded; ``None`` before (the set recursion goes on)."""
-        from ..exceptions import SetobsError
-        from ..geometry.reduction import reduce_exact
+class HistoryEngine:
+    """Exact mode with noise: the whole-history LP (:mod:`._history`), grown by one
+    block per step and certified by the one certificate; it declines (``None``) until
+    the posterior is bounded, and hands a step it cannot decide (an infeasible LP:
+    the data may contradict the model; a numerical failure) to the reference engine,
+    from the exact posterior, then goes on with the step as that decided it.
 
-        box = self._box_o_last
-        if k < self._hist_retry_at or box is None or not (
-                np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
+    Parameters
+    ----------
+    reference : ReferenceEngine
+        The engine that decides the steps the LP does not.
+    """
+
+    def __init__(self, reference) -> None:
+        self.reference = reference
+
+    def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
+                 e: Entry) -> Outcome | None:
+        """The step's :class:`~._state.Outcome` on the whole-history LP, or ``None``."""
+        if k == 0:
             return None
-        Z = self._Z
-        if Z is None:
-            return None
-        try:
-            if np.isinf(Z.h).any():  # (X0 = R^n: its factors pivoted out, exactly)
-                Z = reduce_exact(Z)
-            H = HistoryLP.start(Z, box.lo, box.hi, **self._history_kw())
-        except SetobsError:
-            H = None
-        if H is None:
-            self._hist_retry_at = k + HISTORY_RETRY
-        return H
-
-    def _history_step(self, k: int, mode: str, e: Entry):
-        """One exact step with noise on the whole-history LP, or ``None`` (not started:
-        the set recursion decides)."""
-        H = self._Z_src
+        H = s.Z_src
         if not isinstance(H, HistoryLP):
-            H = self._history_start(k)
+            H = self._start(m, s, k)
             if H is None:
                 return None
         H.push(e)
         out = H.hull()
         if out is None:
             H.pop()
-            return self._history_fallback(k, mode, e, H)
-        box_o, box, box_x, _ = self.split_hull(*out)
-        self.stats["fast"] += 1
-        self._depth = 0
-        return self._commit(k, mode, H, box, box_o, None, e, "ok", box_x)
+            return self._fallback(m, s, k, mode, e, H)
+        box_o, box, box_x, _ = m.split_hull(*out)
+        s.stats["fast"] += 1
+        return Outcome(H, box, box_o, None, box_x, "ok", 0, e)
 
-    def _history_fallback(self, k: int, mode: str, e: Entry, H: HistoryLP):
-        """A step the history LP did not decide (infeasible: the data may contradict
-        the model; a numerical failure): the set recursion decides it from the exact
-        posterior (:meth:`HistoryLP.to_cz`), with its certified emptiness test and
-        retries; the history then goes on with the step as that decided it."""
+    @staticmethod
+    def _start(m: SMFDOModel, s: SMFDOState, k: int) -> HistoryLP | None:
+        """Exact mode's whole-history LP from the current posterior, once it is
+        bounded; ``None`` before (the set recursion goes on)."""
+        from ..exceptions import SetobsError
+        from ..geometry.reduction import reduce_exact
+
+        box = s.box_o_last
+        if k < s.hist_retry_at or box is None or not (
+                np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
+            return None
+        Z = s.posterior()
+        if Z is None:
+            return None
+        try:
+            if np.isinf(Z.h).any():  # (X0 = R^n: its factors pivoted out, exactly)
+                Z = reduce_exact(Z)
+            H = HistoryLP.start(Z, box.lo, box.hi, A_o=m.A_o, Gamma_o=m.Gamma_o, C_o=m.C_o,
+                                B_o=m.B_o, E_o=m.E_o, rows=m.hull_rows, data_rtol=m.data_rtol)
+        except SetobsError:
+            H = None
+        if H is None:
+            s.hist_retry_at = k + HISTORY_RETRY
+        return H
+
+    def _fallback(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, e: Entry,
+                  H: HistoryLP) -> Outcome:
+        """The reference engine's step from the exact posterior
+        (:meth:`HistoryLP.to_cz`), with its certified emptiness test and retries; the
+        history goes on with the step as that decided it."""
         from ..exceptions import ModelInvalidatedError
 
-        self._Z_src = H.to_cz()
-        self._depth = 0
+        s.Z_src = H.to_cz()
+        s.depth = 0
         try:
-            step = self._reference_step(k, mode, e)
+            out = self.reference.try_step(m, s, k, mode, e)
         except ModelInvalidatedError:
-            self._Z_src = H  # (the observer is left as before the step)
+            s.Z_src = H  # (the observer is left as before the step)
             raise
-        box = self._box_o_last
-        if step.status in ("ok", "fallback", "skipped") and box is not None and \
+        box = out.box_o
+        if out.status in ("ok", "fallback", "skipped") and box is not None and \
                 np.isfinite(box.lo).all() and np.isfinite(box.hi).all():
-            H.push(e.skipped() if step.status == "skipped" else e)
+            H.push(out.entry)  # (a skipped step's measurement dropped)
             H.box = (box.lo.copy(), box.hi.copy())
-            self._Z_src = H
-        return step
+            out = out.with_posterior(H)
+        return out

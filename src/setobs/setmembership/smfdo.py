@@ -1,10 +1,109 @@
-"""The set-membership filter-based disturbance observer (Li-Cong-Dong, Algorithm 1)."""
+"""The set-membership filter-based disturbance observer (Li-Cong-Dong, Algorithm 1).
+
+:class:`SMFDO` holds a frozen model (:class:`._setup.SMFDOModel`: what its arguments
+determine), a mutable state (:class:`._state.SMFDOState`) and its engines, each of
+which answers a step or declines: the H-representation recursion and the
+whole-history LP of exact mode (:mod:`._exact`), the window's closed form
+(:mod:`._windowed`), and the reference set recursion, which always answers and owns
+the ``on_inconsistent`` policy (:mod:`._recursion`). :meth:`SMFDO.update` runs them in
+that order and commits the first answer (:func:`._commit.commit`).
+
+Notes
+-----
+Implementation of Algorithm 1 in observable coordinates of the augmented
+system (9)-(14). The coordinates are those of an orthogonal observability
+staircase of a *balanced* realisation (diagonal power-of-two scaling of
+states and outputs, :func:`setobs.analysis.observability_decomposition`
+with ``balance=True``): ``z_o = T_o D^-1 z``. For a well-scaled model
+(the paper's example) ``D = I``; for a badly scaled one (entries from
+``1e-9`` to ``1e7``) the LPs stay well conditioned. Then:
+
+* line 2: ``Z_0^- = T_o D^-1 ([[x_0]] x [[d_0]])``;
+* line 3: ``P T_o D^-1 = [0 I]`` on the observable part, so
+  ``P = [0 I] D T_o^T`` (verified);
+* lines 5-11, eqs. (20)-(21): prior
+  ``Z_k^- = A_o Z_(k-1) + B_o Z_(k-1)^Delta + Gamma_o u_(k-1)`` and posterior
+  ``Z_k = Z_k^- ∩ {z : C_o z = y_k}``;
+* lines 12-13, eq. (24): for ``k >= delta``, the same ``delta`` steps re-run
+  from the interval hull of ``Z_(k-delta)``. One deviation, needed for the
+  documented minimum ``delta = mu_o - 1``: while that hull is unbounded
+  (``Z_j`` is bounded only from ``j = mu_o - 1`` on), the recursion keeps
+  running from ``Z_0^-`` (the exact set, tighter than any restart), so the
+  window restarts only from a bounded hull;
+* lines 14-15: ``Z_k^d = P Z_k``, estimate = centre of its interval hull.
+
+*Coordinates of the restart box.* The window restarts from an interval
+hull, and a box is not invariant under a change of state coordinates: the
+windowed sets (and estimates) depend on the coordinates of the model, the
+exact mode (``window=None``) does not. The library restarts in the
+internal coordinates ``z_o`` above, which for a fully observable,
+well-scaled model are the model's own ``[x; d]``: the disturbance stays a
+coordinate (so its hull is not widened by a rotation), and the model's
+state coordinates are usually the physical ones in which independent
+bounds are natural. Measured on the paper example (notebook 03, pinned by
+``tests/setmembership/test_window_coordinates.py``): in the model's
+coordinates the mean error is 1.47 with ``window=3``, in five random
+rotations of ``x`` 1.55 to 1.62; with ``window=10`` 1.050 to 1.059
+(one rotation slightly better than the model's); exact mode 1.018 in all.
+
+*Exact mode.* Once the posterior is bounded it is carried as a certified
+H-representation (facets and box) and advanced one step at a time
+(:mod:`setobs.setmembership._hrep`), so a step costs what the *set's* complexity
+costs, not ``k`` (about 3 ms on the paper example at any ``k``). With process or
+measurement noise the exact set gains facets at every step; exact mode then keeps
+the whole-history LP itself, sparse, in HiGHS, warm-started from step to step and
+certified by the one certificate (:mod:`setobs.setmembership._history`; about one
+whole-history LP solved from scratch per step on 4-state plants,
+``benchmarks/exact_noise.py``). Without noise, sets of growing complexity (more
+than ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets), time-varying
+increment sets, ``keep_sets`` with noise and ``fast=False`` keep the whole history
+in one constrained zonotope instead. Either way the cost grows with ``k``, except
+on the H-representation.
+
+*The engines.* The closed form of the recursion (the window's (24), or the
+history from ``Z_0^-`` before the window is full) has a constraint matrix and
+generators that do not depend on the data, so each structure is set up once per
+process and its interval-hull LPs are solved by a compiled, warm-started dual
+simplex whose bounds are certified exactly as on the HiGHS path
+(:mod:`setobs.lp.fastlp`). Any LP it cannot solve and certify tightly
+(infeasible, degenerate beyond its tolerances, ambiguous unboundedness), a
+time-varying increment set, and the steps after a reset go to the reference
+engine (the set operations plus HiGHS, with retries). In exact mode the fast
+engines are the H-representation recursion (its LPs through the same compiled
+simplex) and, with noise, the whole-history LP (each step adds its variables and
+rows, each bound re-solves from its own last optimal basis), unless
+``keep_sets``; a step that LP does not decide (data that may contradict the model)
+goes to the reference engine, from the exact posterior.
+
+*The window's restart.* ``restart="polytope"`` cuts the box of eq. (24) by rows
+whose normals are the coordinate axes carried back through the dynamics (rows of
+``A_o^-j``), with ranges from the hulls of the ``restart_depth - 1`` earlier
+steps. It is an outer bound of the exact set at ``k - delta`` whatever the data,
+and keeps its shape: on a lightly damped 4-state plant with noise
+(``benchmarks/state_estimation.py``), window 10 ends 1.04 times as wide as the
+exact set on average (box: 3.3), window 3 1.1 (box: 23); on the HSM150 servo
+record window 10 is the exact set to 0.1 % in the median (box: more than twice as
+wide); where the box restart is already nearly exact (the paper example at window
+10) the two agree. Its LPs are larger (about 3 to 10 times the box restart's time
+per step). It is used with fixed uncertainty sets and an invertible,
+well-conditioned ``A_o``; otherwise (callables, a pure delay) the window restarts
+from the box. With ``restart="auto"`` the box restart is computed too every
+``AUTO_PROBE = 16`` window steps on the fast path, and the polytope stays in use
+while it is narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of the
+width in some coordinate (where the shape does not matter the step keeps the box
+restart's cost); on a probe step the narrower one is reported; the reference path
+(``fast=False``) keeps the polytope. With the polytope, the first restart waits for
+its depth (up to ``restart_lags`` steps beyond the window, while the whole history
+is no larger an LP than the window's); until then each step is the whole history
+from the initial set, the exact set (a shallow polytope was up to 27 % wider than
+it on the 4-state plant).
+"""
+
 
 from __future__ import annotations
 
 import numbers
 import warnings
-from collections import deque
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -16,31 +115,27 @@ from ..exceptions import (
     ArgumentError,
     DimensionError,
     ExistenceError,
+    ImmutableError,
+    InternalError,
     InvalidValueError,
     MissingDataWarning,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
-    SkipLimitError,
 )
 from ..geometry import Box, ConstrainedZonotope
 from ..systems import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, MISSING_WARN_FRACTION
-from ._exact import ExactSteps
-from ._history import HistoryLP
+from ._commit import commit
+from ._exact import HistoryEngine, HRepEngine
 from ._hrep import HState
-from ._recursion import ON_INCONSISTENT, SetRecursion
-from ._restart import DEFAULT_RESTART_DEPTH, RestartPolytope
+from ._recursion import ON_INCONSISTENT, ReferenceEngine
+from ._restart import DEFAULT_RESTART_DEPTH
 from ._setup import MODEL_CACHE as MODEL_CACHE  # (re-exported: one cache per process)
-from ._setup import (
-    Entry,
-    IncrementSpec,
-    ModelSetup,
-    NoiseSpec,
-    check_window,
-)
+from ._setup import IncrementSpec, NoiseSpec, SMFDOModel, check_window
+from ._state import SMFDOState
 from ._steps import STEP_STATUSES, SMFDOResult, SMFDOStep
 from ._window import WindowModel
-from ._windowed import WindowedSteps
+from ._windowed import WindowEngine, start_mode
 
 __all__ = [
     "SMFDO",
@@ -53,7 +148,23 @@ __all__ = [
 ]
 
 
-class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
+class _Delegated:
+    """A read-only attribute of the SMFDO that lives on its model or its state."""
+
+    def __init__(self, where: str, name: str) -> None:
+        self.where, self.name = where, name
+
+    def __get__(self, obj: object, owner: type | None = None) -> object:
+        if obj is None:
+            return self
+        return getattr(getattr(obj, self.where), self.name)
+
+    def __set__(self, obj: object, value: object) -> None:
+        raise ImmutableError(f"SMFDO.{self.name} is fixed (build a new SMFDO, or "
+                             "reset_state() to start again)")
+
+
+class SMFDO:
     """Set-membership filter-based disturbance observer (Li-Cong-Dong, Algorithm 1).
 
     Parameters
@@ -63,20 +174,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
     window : int or None
         Filtering interval ``delta``. ``None`` selects the **exact mode**: no
         reset, so the posterior is exactly ``[[d_k | u_0:k-1, y_0:k]]`` when the
-        uncertainty sets are exact (Theorem 3). Once the posterior is bounded
-        it is carried as a certified H-representation (facets and box) and
-        advanced one step at a time (:mod:`setobs.setmembership._hrep`), so a
-        step costs what the *set's* complexity costs, not ``k`` (about 3 ms on
-        the paper example at any ``k``). With process or measurement noise the
-        exact set gains facets at every step; exact mode then keeps the
-        whole-history LP itself, sparse, in HiGHS, warm-started from step to step
-        and certified by weak duality (:mod:`setobs.setmembership._history`;
-        about one whole-history LP solved from scratch per step on 4-state
-        plants). Without noise, sets of growing complexity (more than
-        ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets), time-varying
-        increment sets, ``keep_sets`` with noise and ``fast=False`` keep the
-        whole history in one constrained zonotope instead. Either way the cost
-        grows with ``k``, except on the H-representation.
+        uncertainty sets are exact (Theorem 3); how its steps are computed, and
+        what they cost, is in the module notes (*Exact mode*).
     increment_set : ConstrainedZonotope, Box, array_like, callable or None
         Bounded set containing ``dd_k``: a CZ, a :class:`Box`, a vector ``r``
         meaning the box ``|dd_i| <= r_i``, or a callable ``k -> CZ`` for a
@@ -146,78 +245,32 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
     keep_sets : bool
         Store ``P Z_k`` in each step result.
     fast : bool
-        Use the fast exact path in windowed mode (default). The closed form of
-        the recursion (the window's (24), or the history from ``Z_0^-`` before
-        the window is full) has a constraint matrix and generators
-        that do not depend on the data, so each structure is set up once per
-        process and its interval-hull LPs are solved by a compiled,
-        warm-started dual simplex whose bounds are certified exactly as on the
-        HiGHS path (:mod:`setobs.lp.fastlp`). Any LP the fast path
-        cannot solve and certify tightly (infeasible, degenerate beyond its
-        tolerances, ambiguous unboundedness), a time-varying increment set,
-        the steps after a ``reset="box"`` go to the reference path (the set
-        operations plus HiGHS, with retries). In exact mode the fast path is
-        the H-representation recursion (see ``window``; its LPs go through the
-        same compiled simplex); with process or measurement noise, whose exact
-        set grows in complexity at every step, it is the whole-history LP kept
-        in HiGHS and warm-started from step to step
-        (:mod:`setobs.setmembership._history`: each step adds its variables and
-        rows, each bound re-solves from its own last optimal basis, and the
-        bounds are certified by weak duality; about one whole-history LP solved
-        from scratch per step on 4-state plants, ``benchmarks/exact_noise.py``),
-        unless ``keep_sets``. A step that LP does not decide (data that may
-        contradict the model) goes to the reference path, from the exact
-        posterior. ``False`` forces the reference path (the whole-history set
-        recursion in exact mode). ``stats`` counts the steps of each path.
+        Use the fast engines (default): the window's closed form, and in exact
+        mode the H-representation or the whole-history LP (module notes: *The
+        engines*). Any step they cannot solve and certify tightly goes to the
+        reference set recursion; ``False`` forces it. ``stats`` counts the steps
+        of each path.
     disturbance_inputs : sequence of int or str, optional
         When ``sys`` is a ``control.StateSpace``: the columns of its ``B`` (indices or input
         names) that are disturbances; the others are control inputs.
     state_bounds : bool
         Also give the certified interval hull of the consistent states ``x_k`` at
         every step (``step.state_lo``, ``step.state_hi``; ``result.state_lo``,
-        ``result.state_hi``, ``N x n``): the same sets, the same certified LPs (in
-        windowed mode extra rows of the fast path's warm-started LPs). With a
-        system without disturbances (``q = 0``: ``G`` with no columns) the SMFDO
-        is a set-membership state observer: the worst-case-optimal state set in
-        exact mode, an outer bound of it with a window. A state that depends on
-        the unobservable part of the augmented pair is bounded through that part's
-        dynamics from ``initial_state_set`` (a zonotope driven by the observable
-        part's hull, the noise and the inputs;
-        :mod:`setobs.setmembership._unobservable`) when that set bounds it, and
-        reported unbounded otherwise. In
-        exact mode the state map is extra rows of the H-representation path's
-        LPs as well.
+        ``result.state_hi``, ``N x n``), from the same sets and LPs. With no
+        disturbance (``q = 0``) the SMFDO is a set-membership state observer: the
+        worst-case-optimal state set in exact mode, an outer bound of it with a
+        window. A state on the unobservable part of the augmented pair is bounded
+        from ``initial_state_set`` when that set bounds it
+        (:mod:`setobs.setmembership._unobservable`), else reported unbounded.
     restart : {"auto", "polytope", "box"}
         The set each window restarts from (windowed mode). ``"box"``: the
-        interval hull of ``Z_(k-delta)``, eq. (24) of Li-Cong-Dong literally (it
-        forgets every correlation of the state). ``"polytope"``: that
-        box cut by ``(restart_depth - 1) N_o`` rows whose normals are the
-        coordinate axes carried back through the dynamics (rows of
-        ``A_o^-j``), with ranges from the hulls of the ``restart_depth - 1``
-        earlier steps (:mod:`setobs.setmembership._restart`, soundness proof
-        there). It is an outer bound of the exact set at ``k - delta`` whatever
-        the data, and keeps its shape: on a lightly damped 4-state plant with
-        noise (``benchmarks/state_estimation.py``), window 10 ends 1.04 times as
-        wide as the exact set on average (box: 3.3), window 3 1.1 (box: 23); on
-        the HSM150 servo record window 10 is the exact set to 0.1 % in the median
-        (box: more than twice as wide); where the box restart is already nearly exact (the
-        paper example at window 10) the two agree. Its LPs are larger (about 3
-        to 10 times the box restart's time per step). Used with fixed
-        uncertainty sets and an invertible, well-conditioned ``A_o``; otherwise
-        (callables, a pure delay) the window restarts from the box. ``"auto"``
-        (default): the polytope, and every ``AUTO_PROBE = 16`` window steps on the
-        fast path the box restart too; the polytope stays in use while it is
-        narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of the
-        width in some coordinate, else the box is used until the next probe
-        (where the shape does not matter, e.g. the paper example at window 10,
-        the step keeps the box restart's cost). Either way the bounds are
-        certified; on a probe step the narrower one is reported. The probes run
-        on the fast path; the reference path (``fast=False``) keeps the polytope.
-        With the polytope (``"polytope"``, ``"auto"``), the first restart waits
-        for the polytope's depth (up to ``restart_lags`` steps beyond the window,
-        while the whole history is no larger an LP than the window's); until then
-        each step is the whole history from the initial set, the exact set (a
-        shallow polytope was up to 27 % wider than it on the 4-state plant).
+        interval hull of ``Z_(k-delta)``, eq. (24) of Li-Cong-Dong literally.
+        ``"polytope"``: that box cut by ``(restart_depth - 1) N_o`` rows carried
+        back through the dynamics (:mod:`setobs.setmembership._restart`, soundness
+        proof there). ``"auto"`` (default): the polytope while it is narrower than
+        the box by more than ``AUTO_GAIN`` somewhere, checked every ``AUTO_PROBE``
+        window steps. Both are certified; the module notes (*The window's
+        restart*) give the measured widths and costs.
     restart_depth : int
         ``m >= 1``: the hull at ``k - delta`` and up to ``m - 1`` earlier ones
         (default 30; at most ``120 // N_o`` earlier ones, so that a large state
@@ -252,41 +305,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
 
     Notes
     -----
-    Implementation of Algorithm 1 in observable coordinates of the augmented
-    system (9)-(14). The coordinates are those of an orthogonal observability
-    staircase of a *balanced* realisation (diagonal power-of-two scaling of
-    states and outputs, :func:`setobs.analysis.observability_decomposition`
-    with ``balance=True``): ``z_o = T_o D^-1 z``. For a well-scaled model
-    (the paper's example) ``D = I``; for a badly scaled one (entries from
-    ``1e-9`` to ``1e7``) the LPs stay well conditioned. Then:
-
-    * line 2: ``Z_0^- = T_o D^-1 ([[x_0]] x [[d_0]])``;
-    * line 3: ``P T_o D^-1 = [0 I]`` on the observable part, so
-      ``P = [0 I] D T_o^T`` (verified);
-    * lines 5-11, eqs. (20)-(21): prior
-      ``Z_k^- = A_o Z_(k-1) + B_o Z_(k-1)^Delta + Gamma_o u_(k-1)`` and posterior
-      ``Z_k = Z_k^- ∩ {z : C_o z = y_k}``;
-    * lines 12-13, eq. (24): for ``k >= delta``, the same ``delta`` steps re-run
-      from the interval hull of ``Z_(k-delta)``. One deviation, needed for the
-      documented minimum ``delta = mu_o - 1``: while that hull is unbounded
-      (``Z_j`` is bounded only from ``j = mu_o - 1`` on), the recursion keeps
-      running from ``Z_0^-`` (the exact set, tighter than any restart), so the
-      window restarts only from a bounded hull;
-    * lines 14-15: ``Z_k^d = P Z_k``, estimate = centre of its interval hull.
-
-    *Coordinates of the restart box.* The window restarts from an interval
-    hull, and a box is not invariant under a change of state coordinates: the
-    windowed sets (and estimates) depend on the coordinates of the model, the
-    exact mode (``window=None``) does not. The library restarts in the
-    internal coordinates ``z_o`` above, which for a fully observable,
-    well-scaled model are the model's own ``[x; d]``: the disturbance stays a
-    coordinate (so its hull is not widened by a rotation), and the model's
-    state coordinates are usually the physical ones in which independent
-    bounds are natural. Measured on the paper example (notebook 03, pinned by
-    ``tests/setmembership/test_window_coordinates.py``): in the model's
-    coordinates the mean error is 1.47 with ``window=3``, in five random
-    rotations of ``x`` 1.55 to 1.62; with ``window=10`` 1.050 to 1.059
-    (one rotation slightly better than the model's); exact mode 1.018 in all.
+    The coordinates, the lines of Algorithm 1 and the window's restart box are
+    described in the module notes (:mod:`setobs.setmembership.smfdo`).
 
     One SMFDO is not meant to be used from two threads at once; different
     SMFDOs (of the same system or not) run safely in different threads: each
@@ -319,52 +339,25 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         max_skip_fraction: float = 0.01,
     ) -> None:
         sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
-        self.max_skip_fraction = check_real_scalar("max_skip_fraction", max_skip_fraction,
-                                                   nonnegative=True)
-        if self.max_skip_fraction > 1.0:
-            raise InvalidValueError(f"max_skip_fraction is a fraction in [0, 1], got "
-                                 f"{max_skip_fraction!r}")
         window = check_window(window)
-        if reset is not None:
-            if reset not in ("raise", "box"):
-                raise InvalidValueError(f"reset must be 'raise' or 'box', got {reset!r}")
-            if on_inconsistent != "raise":
-                raise InvalidValueError("give on_inconsistent only (reset is its deprecated "
-                                        "spelling)")
-            warnings.warn("SMFDO(reset=...) is deprecated: use on_inconsistent='raise' | "
-                          "'skip' | 'reset'", DeprecationWarning, stacklevel=2)
-            on_inconsistent = "reset" if reset == "box" else "raise"
-        if on_inconsistent not in ON_INCONSISTENT:
-            raise InvalidValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
-                                    f"{on_inconsistent!r}")
-        self.reset_inflation = check_real_scalar("reset_inflation", reset_inflation,
-                                                 positive=True)
-        self.margin = check_real_scalar("margin", margin, nonnegative=True)
-        if not isinstance(state_bounds, bool | np.bool_):
-            raise ArgumentError(f"state_bounds must be True or False, got {state_bounds!r}")
-        self.state_bounds = bool(state_bounds)
-        self.data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
-        if restart not in ("auto", "polytope", "box"):
-            raise InvalidValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
-        if isinstance(restart_depth, bool) or not isinstance(restart_depth, numbers.Integral) \
-                or restart_depth < 1:
-            raise InvalidValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
-        self.restart = restart
-        self.restart_depth = int(restart_depth)
-        if self.data_rtol > 1e-6:
-            raise InvalidValueError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
-                                 f"{data_rtol!r}; bound measurement noise with a set")
-        self._prepare_model(
+        on_inconsistent = _policy(on_inconsistent, reset)
+        opts = _options(max_skip_fraction, reset_inflation, margin, state_bounds, data_rtol,
+                        restart, restart_depth)
+        self.model = SMFDOModel(
             sys, window, on_inconsistent, increment_set, initial_state_set,
             initial_disturbance_set, measurement_noise, process_noise,
-            measurement_noise_matrix, process_noise_matrix, keep_sets, fast)
-        self._restart_poly: RestartPolytope | None = None
-        if (window is not None and restart != "box" and self._step_set is not None
-                and not self._noise_varies and self.restart_depth > 1):
-            self._restart_poly = RestartPolytope(
-                self.A_o, self.Gamma_o, self._B_step, self._step_set, self.restart_depth,
-                self.data_rtol)
-        self._restart_lags = 0 if self._restart_poly is None else self._restart_poly.lags
+            measurement_noise_matrix, process_noise_matrix, keep_sets, fast,
+            **opts)
+        m = self.model
+        # The engines, tried in this order until one answers (the reference recursion
+        # always does): the H-representation (exact mode without noise), the
+        # whole-history LP (exact mode with noise), the window's closed form.
+        reference = ReferenceEngine()
+        self._engines = tuple(eng for eng in (
+            HRepEngine() if m.hrep_on else None,
+            HistoryEngine(reference) if m.history_on else None,
+            WindowEngine(), reference) if eng is not None)
+        self._state: SMFDOState | None = None
         self.reset_state()
 
     def __copy__(self) -> SMFDO:
@@ -378,54 +371,8 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
 
     def reset_state(self) -> None:
         """Forget all data and start again at ``k = 0``."""
-        self.k = -1
-        win = self.window
-        # hulls of Z_(k-delta) .. Z_(k-1): the restart boxes of eq. (24)
-        # (with the polytope restart also the restart_depth - 1 hulls before, and the
-        # inputs entering each of them)
-        keep = (win or 1) + self._restart_lags
-        self._hulls: deque[Box] = deque(maxlen=keep)
-        self._hull_u: deque[NDArray[np.float64]] = deque(maxlen=keep)
-        # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
-        # runs from Z_0^-) or of the last delta steps (once the window restarts)
-        self._hist: list[Entry] = []
-        # the posterior, either a set or (model, c, b, h, c_err, b_err) of the fast path
-        self._Z_src: object = None
-        self._from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
-        self._windowing = False  # the window has restarted from a hull at least once
-        self._u_pending: NDArray[np.float64] | None = None
-        self._states: dict[tuple, object] = {}  # LP warm-start states, one per structure
-        self._retired_iterations = np.zeros(2, dtype=np.int64)  # (of dropped states)
-        self._mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
-        self._depth = 0  # recursion steps since the start set of the current posterior
-        self.first_inconsistent: int | None = None
-        self._last_y = np.zeros(0)  # the last step's measurement (balanced units)
-        self._ubar_prev = None  # (the hull of Z_(k-1): the tracker's input)
-        self._startup_Z = None  # the start-up's joint set of (z_o, zbar) (see _unobservable)
-        self._startup_steps = 0
-        self._skipped = 0  # skipped steps since k = 0 (max_skip_fraction)
-        self._run_length = 0  # the record length run() is processing (0: update() alone)
-        self._auto_poly = True  # restart="auto": the polytope restart is in use
-        self._auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
-        self._set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
-        self._h_fails = 0  # failed conversions to the H-representation in a row
-        self._h_retry_at = 0  # first step at which the next conversion is tried
-        self._hist_retry_at = 0  # (the same for exact mode's whole-history LP)
-        self._box_o_last: Box | None = None  # certified hull of the last posterior
-        self._warned_inconsistent = False
-        self._in_run = False
-        self._blas_small = False  # the last step's window is small (see update)
-
-    @property
-    def _Z(self) -> ConstrainedZonotope | None:
-        src = self._Z_src
-        if isinstance(src, HState | HistoryLP):
-            return src.to_cz()
-        if isinstance(src, tuple):
-            model, c, b, h, c_err, b_err = src
-            src = model.to_cz(c, b, h, c_err, b_err)
-            self._Z_src = src
-        return src  # type: ignore[return-value]
+        m = self.model
+        self._state = SMFDOState(m.window, m.restart_lags, m.ubar, previous=self._state)
 
     @property
     def posterior_set(self) -> ConstrainedZonotope | None:
@@ -435,7 +382,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         ``None`` before the first measurement. A fast-path step's set is
         built from its closed form on first access.
         """
-        return self._Z
+        return self._state.posterior()
 
     @property
     def exact_representation(self) -> HState | None:
@@ -446,7 +393,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         ``None`` while the set recursion carries the posterior (windowed mode,
         before the posterior is bounded, or for sets too complex for it).
         """
-        src = self._Z_src
+        src = self._state.Z_src
         return src if isinstance(src, HState) else None
 
     @property
@@ -458,7 +405,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         centre of the posterior, and the data-dependent right-hand side and
         factor bounds of its LPs.
         """
-        src = self._Z_src
+        src = self._state.Z_src
         if not isinstance(src, tuple):
             return None
         model, c, b, h, _, _ = src
@@ -471,7 +418,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         Then the disturbance interval hull is read off the state's hull (no
         extra LPs); otherwise it has LPs of its own.
         """
-        return self._P_coords is not None
+        return self.model.P_coords is not None
 
     @property
     def restart_box(self) -> Box | None:
@@ -482,32 +429,24 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         observable augmented pair of a well-scaled model, ``T_o = I``, ``D = I``);
         ``None`` in exact mode and until ``delta`` steps have been seen.
         """
-        if self.window is None or len(self._hulls) < self.window:
+        win, hulls = self.model.window, self._state.hulls
+        if win is None or len(hulls) < win:
             return None
-        return Box(*self._restart_bounds(self._hulls[-self.window]))
+        return Box(*self.model.restart_bounds(hulls[-win]))
 
     @property
     def restart_lags(self) -> int:
         """How many earlier hulls the window's restart carries back (``0``: it restarts
         from the box, eq. (24): ``restart="box"``, exact mode, time-varying sets or a
         singular ``A_o``; else ``min(restart_depth - 1, 120 // N_o)``)."""
-        return self._restart_lags
+        return self.model.restart_lags
 
     @property
     def simplex_iterations(self) -> tuple[int, int]:
         """Iterations of the compiled simplex so far, ``(primal, dual)`` (pivots and
         bound flips over every LP of the fast paths): the work behind the steps' time,
         for benchmarks and for choosing a window."""
-        tot = self._retired_iterations.copy()
-        for st in self._states.values():
-            tot += st.iters
-        return int(tot[0]), int(tot[1])
-
-    def _retire_states(self) -> None:
-        """Drop the LP warm-start states (keeping their iteration counts)."""
-        for st in self._states.values():
-            self._retired_iterations += st.iters
-        self._states.clear()
+        return self._state.iterations()
 
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
                u: ArrayLike | None = None) -> SMFDOStep:
@@ -532,7 +471,7 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             If no state and disturbance history explains the data
             (``on_inconsistent="raise"``).
         """
-        if self._blas_small:
+        if self._state.blas_small:
             # the last step was a window small enough for BLAS to run single-threaded
             # by itself (setobs._blas.SMALL_BLAS_DIM): the limit's four thread-count
             # calls (a tenth of such a step) are skipped; only speed depends on it
@@ -541,61 +480,23 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
             with single_threaded_blas():
                 step = self._update(y, u_prev, u)
         if step.status == "skipped":
-            self._count_skip(step.k)
+            self._state.count_skip(step.k, self.model.max_skip_fraction)
         return step
-
-    def _count_skip(self, k: int) -> None:
-        """Count a skipped step; stop once more than ``max_skip_fraction`` of the
-        samples (of the record being run, else of the steps so far; at least
-        ``1 / max_skip_fraction`` samples, so that one outlier of a short record may
-        be skipped) were skipped."""
-        self._skipped += 1
-        f = self.max_skip_fraction
-        total = self._run_length or k + 1
-        if f > 0:
-            total = max(total, int(np.ceil(1.0 / f)))
-        if self._skipped > f * total:
-            raise SkipLimitError(
-                f"{self._skipped} of the {k + 1} samples so far were skipped as inconsistent "
-                f"(more than max_skip_fraction = {100 * f:g} % of {total} samples; the "
-                f"first at step {self.first_inconsistent}): so many samples contradict the "
-                "model that the bounds, not the samples, are wrong", k,
-                "what to do: calibrate the noise bound (setobs.calibrate_noise, or `setobs "
-                "estimate --calibrate`; max_outliers= names the samples that raise it most, "
-                "run(ignore=) leaves them out), use larger bounds, or, if these samples "
-                "really are outliers, a larger max_skip_fraction")
 
     def _update(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
                 ) -> SMFDOStep:
-        """:meth:`update`'s step (the caller sets the BLAS threads)."""
-        self._blas_small = False
-        e, self._u_pending = self._entry(y, u_prev, u)
-        k = self.k + 1
-        mode = "init" if k == 0 else self._start_mode(k)
-        if self._hrep and k > 0:
-            hstep = self._hrep_step(e)
-            if hstep is not None:
-                self.stats["fast"] += 1
-                hst, box, box_o, Zd, box_x = hstep
-                self._depth = 0
-                return self._commit(k, mode, hst, box, box_o, Zd, e, "ok", box_x)
-        if self._history_on and k > 0:
-            hstep = self._history_step(k, mode, e)
-            if hstep is not None:
-                return hstep
-        fast = self._fast_step(k, mode, e)
-        if fast is not None:
-            self.stats["fast"] += 1
-            Z_src, box, box_o, box_x, _ = fast
-            self._blas_small = Z_src[0].blas_small
-            Zd = None
-            if self.keep_sets:
-                model, c, b, h, c_err, b_err = Z_src
-                Z_src = model.to_cz(c, b, h, c_err, b_err)
-                Zd = self.P @ Z_src
-            self._depth = k if mode == "init" else self.window
-            return self._commit(k, mode, Z_src, box, box_o, Zd, e, "ok", box_x)
-        return self._reference_step(k, mode, e)
+        """:meth:`update`'s step (the caller sets the BLAS threads): the first engine that
+        answers (the reference recursion always does), and one commit."""
+        m, s = self.model, self._state
+        s.blas_small = False
+        k = s.k + 1
+        e, s.u_pending = m.entry(y, u_prev, u, k, s.u_pending)
+        mode = "init" if k == 0 else start_mode(m, s, k)
+        for engine in self._engines:
+            out = engine.try_step(m, s, k, mode, e)
+            if out is not None:
+                return commit(m, s, k, mode, out)
+        raise InternalError("no engine answered (the reference recursion always does)")
 
     @with_single_threaded_blas
     def run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
@@ -634,47 +535,14 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
         ModelInvalidatedWarning
             Once, if measurements of this record were skipped or reset.
         """
-        Ya = as_matrix("Y", Y, cols=self.sys.l, allow_nan=True)
+        Ya, Ua = _check_record(self.model, self._state, Y, U, ignore)
         N = Ya.shape[0]
-        if ignore is not None:
-            Ya[_ignore_mask(ignore, N)] = np.nan
-        if Ya.size:
-            missing = float(np.isnan(Ya).mean())
-            if missing == 1.0 and self.k < 0:
-                raise InvalidValueError(
-                    f"Y has no measured (finite) entry: all {N} samples are missing (NaN), "
-                    "so every band would be the prior's; check the record's columns and "
-                    "its missing-value marker")
-            if missing > MISSING_WARN_FRACTION:
-                warnings.warn(
-                    f"{100 * missing:.1f} % of the record's output samples are missing "
-                    f"(NaN; warned above {100 * MISSING_WARN_FRACTION:g} %, "
-                    "setobs.tolerances.MISSING_WARN_FRACTION): the bands are mostly "
-                    "predictions", MissingDataWarning, stacklevel=3)
-        Ua = None
-        if not self.sys.p and U is not None and np.size(U):
-            raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
-                                 "U=None, or build the system with its input matrix")
-        if self.sys.p:
-            if U is None:
-                raise ArgumentError(f"U is required: the system has {self.sys.p} input(s)")
-            Ua = as_matrix("U", U, cols=self.sys.p)
-            if Ua.shape[0] not in (N, N - 1):
-                raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
-            if self._Du is not None and Ua.shape[0] != N:
-                raise DimensionError(
-                    f"U must have N = {N} rows: the system has a feedthrough D_u, so "
-                    "y_k needs u_k")
-            if self.k >= 0 and self._u_pending is None and N:
-                raise DimensionError(
-                    "the input applied before the first step of this record is unknown: "
-                    "give the previous run() its U with N rows (the last row is that "
-                    "input), or continue with update(y, u_prev)")
         steps = []
-        with_u = self._Du is not None
+        with_u = self.model.Du is not None
         bar = progress_bar(progress, total=N, unit="step", desc="SMFDO", mininterval=0.5)
-        self._in_run = True
-        self._run_length = N + max(self.k + 1, 0)
+        st = self._state
+        st.in_run = True
+        st.run_length = N + max(self.k + 1, 0)
         try:
             for j in range(N):
                 if j % 200 == 0 and j:
@@ -683,50 +551,142 @@ class SMFDO(ModelSetup, WindowedSteps, ExactSteps, SetRecursion):
                 steps.append(self.update(Ya[j], u, u=Ua[j] if with_u else None))
             bar.update(N - bar.n)
         finally:
-            self._in_run = False
-            self._run_length = 0
+            st.in_run = False
+            st.run_length = 0
             bar.close()
         if Ua is not None and Ua.shape[0] == N and N:
-            self._u_pending = Ua[N - 1].copy()
-        q = self.sys.q
-        status = np.array([s.status for s in steps], dtype="<U9")
-        bad = np.flatnonzero((status == "skipped") | (status == "reset"))
-        first = int(steps[bad[0]].k) if bad.size else None
-        if bad.size:
-            what = self.on_inconsistent
-            warnings.warn(
-                f"{bad.size} of {N} measurements were inconsistent with the model and the "
-                f"uncertainty sets (first at k={first}) and were "
-                f"{'skipped' if what == 'skip' else 'handled by a reset'}: the bands at "
-                "those steps are not the model's consistent sets (see result.status, "
-                "result.first_inconsistent)", ModelInvalidatedWarning,
-                stacklevel=3)  # run -> the BLAS-limit wrapper -> the caller
-        return SMFDOResult(
-            np.array([s.estimate for s in steps]).reshape(N, q),
-            np.array([s.lo for s in steps]).reshape(N, q),
-            np.array([s.hi for s in steps]).reshape(N, q),
-            np.array([s.error_bound for s in steps]),
-            steps,
-            status,
-            first,
-            self.sys.dt,
-            tuple(self.sys.disturbance_names),
-            *self._state_arrays(steps),
-            np.array([s.after_skip for s in steps], dtype=bool),
-        )
-
-    def _state_arrays(self, steps: list[SMFDOStep]):
-        """``state_lo``, ``state_hi`` (N x n) and the state names, or ``None``s."""
-        if not self.state_bounds:
-            return None, None, ()
-        n = self.sys.n
-        return (np.array([s.state_lo for s in steps]).reshape(len(steps), n),
-                np.array([s.state_hi for s in steps]).reshape(len(steps), n),
-                tuple(self.sys.state_names))
+            self._state.u_pending = Ua[N - 1].copy()
+        return _result(self.model, steps)
 
     def __repr__(self) -> str:
         mode = "exact" if self.window is None else f"window={self.window}"
         return f"SMFDO({self.sys!r}, {mode}, k={self.k})"
+
+
+# The model's and the state's public attributes, read-only on the SMFDO.
+for _name in ("sys", "existence", "decomposition", "mu_o", "window", "on_inconsistent",
+              "keep_sets", "fast", "margin", "data_rtol", "state_bounds", "restart",
+              "restart_depth", "reset_inflation", "max_skip_fraction", "P", "T_o", "A_o",
+              "B_o", "Gamma_o", "C_o"):
+    setattr(SMFDO, _name, _Delegated("model", _name))
+for _name in ("k", "stats", "first_inconsistent"):
+    setattr(SMFDO, _name, _Delegated("_state", _name))
+del _name
+
+
+def _policy(on_inconsistent: str, reset: str | None) -> str:
+    """``on_inconsistent``, or its deprecated spelling ``reset``, validated."""
+    if reset is not None:
+        if reset not in ("raise", "box"):
+            raise InvalidValueError(f"reset must be 'raise' or 'box', got {reset!r}")
+        if on_inconsistent != "raise":
+            raise InvalidValueError("give on_inconsistent only (reset is its deprecated "
+                                    "spelling)")
+        warnings.warn("SMFDO(reset=...) is deprecated: use on_inconsistent='raise' | "
+                      "'skip' | 'reset'", DeprecationWarning, stacklevel=3)
+        on_inconsistent = "reset" if reset == "box" else "raise"
+    if on_inconsistent not in ON_INCONSISTENT:
+        raise InvalidValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
+                                f"{on_inconsistent!r}")
+    return on_inconsistent
+
+
+def _options(max_skip_fraction, reset_inflation, margin, state_bounds, data_rtol, restart,
+             restart_depth) -> dict:
+    """The SMFDO's scalar options, validated, as :class:`._setup.SMFDOModel` takes them."""
+    max_skip_fraction = check_real_scalar("max_skip_fraction", max_skip_fraction,
+                                          nonnegative=True)
+    if max_skip_fraction > 1.0:
+        raise InvalidValueError(f"max_skip_fraction is a fraction in [0, 1], got "
+                                f"{max_skip_fraction!r}")
+    reset_inflation = check_real_scalar("reset_inflation", reset_inflation, positive=True)
+    margin = check_real_scalar("margin", margin, nonnegative=True)
+    if not isinstance(state_bounds, bool | np.bool_):
+        raise ArgumentError(f"state_bounds must be True or False, got {state_bounds!r}")
+    data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
+    if restart not in ("auto", "polytope", "box"):
+        raise InvalidValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
+    if isinstance(restart_depth, bool) or not isinstance(restart_depth, numbers.Integral) \
+            or restart_depth < 1:
+        raise InvalidValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
+    if data_rtol > 1e-6:
+        raise InvalidValueError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
+                                f"{data_rtol!r}; bound measurement noise with a set")
+    return dict(margin=margin, data_rtol=data_rtol, state_bounds=bool(state_bounds),
+                restart=restart, restart_depth=int(restart_depth),
+                reset_inflation=reset_inflation, max_skip_fraction=max_skip_fraction)
+
+
+def _check_record(m: SMFDOModel, st: SMFDOState, Y: ArrayLike, U: ArrayLike | None,
+                  ignore: ArrayLike | None):
+    """A record's ``Y`` (ignored samples as NaN) and ``U``, validated against the model
+    and the state (:meth:`SMFDO.run`'s arguments)."""
+    sys = m.sys
+    Ya = as_matrix("Y", Y, cols=sys.l, allow_nan=True)
+    N = Ya.shape[0]
+    if ignore is not None:
+        Ya[_ignore_mask(ignore, N)] = np.nan
+    if Ya.size:
+        missing = float(np.isnan(Ya).mean())
+        if missing == 1.0 and st.k < 0:
+            raise InvalidValueError(
+                f"Y has no measured (finite) entry: all {N} samples are missing (NaN), "
+                "so every band would be the prior's; check the record's columns and "
+                "its missing-value marker")
+        if missing > MISSING_WARN_FRACTION:
+            warnings.warn(
+                f"{100 * missing:.1f} % of the record's output samples are missing "
+                f"(NaN; warned above {100 * MISSING_WARN_FRACTION:g} %, "
+                "setobs.tolerances.MISSING_WARN_FRACTION): the bands are mostly "
+                "predictions", MissingDataWarning, stacklevel=4)
+    Ua = None
+    if not sys.p and U is not None and np.size(U):
+        raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
+                            "U=None, or build the system with its input matrix")
+    if sys.p:
+        if U is None:
+            raise ArgumentError(f"U is required: the system has {sys.p} input(s)")
+        Ua = as_matrix("U", U, cols=sys.p)
+        if Ua.shape[0] not in (N, N - 1):
+            raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
+        if m.Du is not None and Ua.shape[0] != N:
+            raise DimensionError(
+                f"U must have N = {N} rows: the system has a feedthrough D_u, so "
+                "y_k needs u_k")
+        if st.k >= 0 and st.u_pending is None and N:
+            raise DimensionError(
+                "the input applied before the first step of this record is unknown: "
+                "give the previous run() its U with N rows (the last row is that "
+                "input), or continue with update(y, u_prev)")
+    return Ya, Ua
+
+
+def _result(m: SMFDOModel, steps: list[SMFDOStep]) -> SMFDOResult:
+    """The run's result from its steps (warning once if a step was skipped or reset)."""
+    sys, N, q = m.sys, len(steps), m.sys.q
+    status = np.array([s.status for s in steps], dtype="<U9")
+    bad = np.flatnonzero((status == "skipped") | (status == "reset"))
+    first = int(steps[bad[0]].k) if bad.size else None
+    if bad.size:
+        warnings.warn(
+            f"{bad.size} of {N} measurements were inconsistent with the model and the "
+            f"uncertainty sets (first at k={first}) and were "
+            f"{'skipped' if m.on_inconsistent == 'skip' else 'handled by a reset'}: the "
+            "bands at those steps are not the model's consistent sets (see result.status, "
+            "result.first_inconsistent)", ModelInvalidatedWarning,
+            stacklevel=4)  # _result -> run -> the BLAS-limit wrapper -> the caller
+    states = (None, None, ())
+    if m.state_bounds:
+        n = sys.n
+        states = (np.array([s.state_lo for s in steps]).reshape(N, n),
+                  np.array([s.state_hi for s in steps]).reshape(N, n), tuple(sys.state_names))
+    return SMFDOResult(
+        np.array([s.estimate for s in steps]).reshape(N, q),
+        np.array([s.lo for s in steps]).reshape(N, q),
+        np.array([s.hi for s in steps]).reshape(N, q),
+        np.array([s.error_bound for s in steps]), steps, status, first, sys.dt,
+        tuple(sys.disturbance_names), *states,
+        np.array([s.after_skip for s in steps], dtype=bool))
 
 
 def _ignore_mask(ignore: ArrayLike, N: int) -> NDArray[np.bool_]:
