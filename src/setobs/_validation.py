@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from .exceptions import ArgumentError, DimensionError, InvalidValueError
 from .tolerances import MAX_MAGNITUDE
 
-__all__ = ["as_matrix", "as_vector", "check_real_scalar", "readonly"]
+__all__ = ["as_inputs", "as_matrix", "as_vector", "check_real_scalar", "readonly"]
 
 
 def readonly(a: NDArray[Any]) -> NDArray[Any]:
@@ -186,3 +186,31 @@ def as_vector(
         raise DimensionError(f"{name} must have length {size}, got {a.size}")
     _check_finite(name, a, allow_inf, allow_nan)
     return a
+
+
+def as_inputs(p: int, U: ArrayLike | None) -> NDArray[np.float64] | None:
+    """A record's known inputs ``U`` as an ``(N, p)`` matrix: required when the system has
+    inputs (``p > 0``), refused when it has none (``None`` then).
+
+    Parameters
+    ----------
+    p : int
+        The system's number of known inputs.
+    U : array_like or None
+        The inputs, one row per sample.
+
+    Raises
+    ------
+    ArgumentError
+        If ``U`` is missing for a system with inputs, or given to one without.
+    DimensionError
+        If it does not have ``p`` columns.
+    """
+    if not p:
+        if U is not None and np.size(U):
+            raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
+                                "U=None, or build the system with its input matrix")
+        return None
+    if U is None:
+        raise ArgumentError(f"U is required: the system has {p} input(s)")
+    return as_matrix("U", U, cols=p)

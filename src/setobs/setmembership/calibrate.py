@@ -26,7 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import as_matrix, as_vector, check_real_scalar
+from .._validation import as_inputs, as_matrix, as_vector, check_real_scalar
 from ..exceptions import (
     ArgumentError,
     DimensionError,
@@ -703,14 +703,8 @@ def _setup(sys, Y, U, increment, shape, process_noise, disturbance_inputs):
 def _prepare(sys, Y, U, disturbance_inputs):
     sys = require_system(sys, disturbance_inputs=disturbance_inputs)
     Ya = as_matrix("Y", Y, cols=sys.l, allow_nan=True)
-    Ua = None
-    if not sys.p and U is not None and np.size(U):
-        raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
-                             "U=None, or build the system with its input matrix")
-    if sys.p:
-        if U is None:
-            raise ArgumentError(f"U is required: the system has {sys.p} input(s)")
-        Ua = as_matrix("U", U, cols=sys.p)
+    Ua = as_inputs(sys.p, U)
+    if Ua is not None:
         if Ua.shape[0] < Ya.shape[0] - 1 or (np.any(sys.Du != 0) and Ua.shape[0] < Ya.shape[0]):
             raise DimensionError(f"U must have N = {Ya.shape[0]} rows (N - 1 without a "
                                  f"feedthrough), got {Ua.shape[0]}")

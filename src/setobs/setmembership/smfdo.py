@@ -110,7 +110,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._blas import single_threaded_blas, with_single_threaded_blas
 from .._lazy import progress_bar
-from .._validation import as_matrix, check_real_scalar
+from .._validation import as_inputs, as_matrix, check_real_scalar
 from ..exceptions import (
     ArgumentError,
     DimensionError,
@@ -639,14 +639,8 @@ def _check_record(m: SMFDOModel, st: SMFDOState, Y: ArrayLike, U: ArrayLike | No
                 f"(NaN; warned above {100 * MISSING_WARN_FRACTION:g} %, "
                 "setobs.tolerances.MISSING_WARN_FRACTION): the bands are mostly "
                 "predictions", MissingDataWarning, stacklevel=4)
-    Ua = None
-    if not sys.p and U is not None and np.size(U):
-        raise ArgumentError("U is given but the system has no inputs (no Gamma): pass "
-                            "U=None, or build the system with its input matrix")
-    if sys.p:
-        if U is None:
-            raise ArgumentError(f"U is required: the system has {sys.p} input(s)")
-        Ua = as_matrix("U", U, cols=sys.p)
+    Ua = as_inputs(sys.p, U)
+    if Ua is not None:
         if Ua.shape[0] not in (N, N - 1):
             raise DimensionError(f"U must have N or N-1 = {N}/{N - 1} rows, got {Ua.shape[0]}")
         if m.Du is not None and Ua.shape[0] != N:
