@@ -48,8 +48,9 @@ def cases(n_cases: int = 160) -> list[tuple]:
         w_err = np.abs(w) * 1e-14 if t % 5 == 2 else np.zeros(0)
         y = y_opt + (10.0 ** rng.uniform(-12, 0)) * rng.normal(size=m)
         indptr, indices, data = csc_of(A)
+        Ad = np.ascontiguousarray(A) if t % 2 == 0 else np.zeros((0, 0))
         out.append((w, indptr, indices, data, b, lo, hi, y, fidx, pinvU, 1e8, 1e-10,
-                    b_err, w_err, M, v, bool(t % 7 == 3)))
+                    b_err, w_err, M, v, bool(t % 7 == 3), Ad))
     return out
 
 

@@ -50,6 +50,29 @@ def test_the_compiled_certificate_is_its_text_bit_for_bit():
     assert 100 <= finite < 160
 
 
+def test_the_dense_and_the_column_forms_of_a_give_the_same_bound():
+    """With ``A`` dense as well (the simplex's and the factor polytope's LPs) the reduced
+    costs are summed row by row: the same terms in the same order as the column loop,
+    so every bound, slack and multiplier is the same value."""
+    from tests.lp.certificate_cases import cases
+
+    compared = 0
+    for args in cases():
+        if args[-1].size == 0:
+            continue
+        dense = list(args)
+        dense[7] = args[7].copy()
+        column = list(args)
+        column[7] = args[7].copy()
+        column[-1] = np.zeros((0, 0))
+        bd, sd = lower_bound(*dense)
+        bc, sc = lower_bound(*column)
+        assert bd == bc and sd == sc
+        np.testing.assert_array_equal(dense[7], column[7])
+        compared += 1
+    assert compared == 80
+
+
 def _random_lp(rng, one_sided: bool):
     m = int(rng.integers(1, 4))
     n = m + int(rng.integers(1, 5))

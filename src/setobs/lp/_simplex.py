@@ -710,7 +710,7 @@ def solve_batch(structure, data, state, params, out):
             y[k] = R[k] * s
         bnd, slack = lower_bound(Wfull[i], indptr, indices, cdata, b, neg_h, h, y, fidx,
                                  pinvU, radius, tol_unb, b_err, no_err, no_pair, no_err,
-                                 False)
+                                 False, A)
         ys[i, :] = y
         bounds[i] = bnd
         objs[i] = obj
@@ -812,7 +812,7 @@ def emptiness(A, b, h, b_err, radius, maxit):
     indptr, indices, cdata = csc_of(As)
     lower, _ = lower_bound(np.zeros(n), indptr, indices, cdata, bs, -h, h, y,
                            np.zeros(0, np.int64), np.zeros((m, 0)), radius, 0.0, be,
-                           np.zeros(0), np.zeros((0, n)), np.zeros(0), False)
+                           np.zeros(0), np.zeros((0, n)), np.zeros(0), False, As)
     norm1 = 0.0
     for i in range(m):
         norm1 += abs(y[i])

@@ -82,6 +82,7 @@ __all__ = ["certified_lower_bound", "csc_of", "lagrangian_lower_bound", "lower_b
 U = np.finfo(np.float64).eps / 2.0
 TINY = np.finfo(np.float64).tiny
 _EMPTY_I = np.zeros(0, dtype=np.int64)
+_NO_DENSE = np.zeros((0, 0))
 
 
 @njit(cache=True)
@@ -207,7 +208,7 @@ def _all_finite(x):
 
 @njit(cache=True)
 def lower_bound(w, indptr, indices, data, b, lo, hi, y, fidx, pinvU, radius, tol_unb,
-                b_err, w_err, M, v, exact):
+                b_err, w_err, M, v, exact, Ad):
     """Certified lower bound of ``min {w^T x : A x = b, lo <= x <= hi}`` from any ``y``.
 
     The one certificate of the package (module notes: weak duality and its
@@ -246,6 +247,10 @@ def lower_bound(w, indptr, indices, data, b, lo, hi, y, fidx, pinvU, radius, tol
     exact : bool
         Every reduced cost summed exactly (``O(nnz)`` TwoProducts), not bounded by
         ``gamma``: for multipliers of size 1e4, where the forward bound alone opens gaps.
+    Ad : ndarray, shape (m, n) or (0, 0)
+        ``A`` dense as well, when the caller has it: the reduced costs are then summed
+        row by row (the same terms in the same order; about twice as fast on the
+        window LPs), else column by column from the CSC arrays.
 
     Returns
     -------
@@ -307,16 +312,38 @@ def lower_bound(w, indptr, indices, data, b, lo, hi, y, fidx, pinvU, radius, tol
     r = np.empty(n)
     sc = np.empty(n)
     e = np.empty(n)
+    if Ad.shape[0] == m and Ad.shape[1] == n and m > 0:
+        # The same sums over the dense A, row by row (a contiguous, vectorised loop):
+        # per column the same terms in the same order as the column loop below, its
+        # zeros adding exact zeros (a zero's sign aside, the same values).
+        for j in range(n):
+            r[j] = w[j]
+            sc[j] = abs(w[j])
+        for i in range(m):
+            a1, a2 = y1[i], y2[i]
+            ay = abs(a1) + abs(a2)
+            if ay == 0.0:
+                continue
+            for j in range(n):
+                r[j] -= Ad[i, j] * a1
+            if a2 != 0.0:
+                for j in range(n):
+                    r[j] -= Ad[i, j] * a2
+            for j in range(n):
+                sc[j] += abs(Ad[i, j]) * ay
+    else:
+        for j in range(n):
+            s = w[j]
+            a = abs(w[j])
+            for p in range(indptr[j], indptr[j + 1]):
+                i = indices[p]
+                s -= data[p] * y1[i]
+                s -= data[p] * y2[i]
+                a += abs(data[p]) * (abs(y1[i]) + abs(y2[i]))
+            r[j] = s
+            sc[j] = a
     for j in range(n):
-        s = w[j]
-        a = abs(w[j])
-        for p in range(indptr[j], indptr[j + 1]):
-            i = indices[p]
-            s -= data[p] * y1[i]
-            s -= data[p] * y2[i]
-            a += abs(data[p]) * (abs(y1[i]) + abs(y2[i]))
         cnt = indptr[j + 1] - indptr[j]
-        sc[j] = a
         g = 2.0 * (2 * cnt + 1) * TINY
         if exact:
             nt = _column_terms(j, w, M, v, indptr, indices, data, y1, y2, terms)
@@ -326,8 +353,7 @@ def lower_bound(w, indptr, indices, data, b, lo, hi, y, fidx, pinvU, radius, tol
             if has_werr and k == 0:
                 e[j] += w_err[j] * (1.0 + 4.0 * U)
         else:
-            r[j] = s
-            e[j] = 2.0 * gamma_k(2 * cnt + 2) * a + g
+            e[j] = 2.0 * gamma_k(2 * cnt + 2) * sc[j] + g
             if has_werr:
                 e[j] += w_err[j] * (1.0 + 4.0 * U)
     Q = 0.0
@@ -484,6 +510,8 @@ def certified_lower_bound(
         v = np.ascontiguousarray(w_pair[1], dtype=np.float64)
     else:
         M, v = np.zeros((0, n)), np.zeros(0)
+    Ad = A if (isinstance(A, np.ndarray) and A.dtype == np.float64 and A.ndim == 2
+               and A.flags.c_contiguous) else _NO_DENSE
     yy = np.array(y, dtype=np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
         bound, slack = lower_bound(
@@ -492,7 +520,7 @@ def certified_lower_bound(
             yy, fidx, pinvU, float(unbounded_radius), float(UNBOUNDED_REDUCED_COST_TOL),
             np.zeros(0) if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64),
             np.zeros(0) if w_err is None else np.ascontiguousarray(w_err, dtype=np.float64),
-            M, v, bool(exact_residual))
+            M, v, bool(exact_residual), Ad)
     return float(bound), yy, float(slack)
 
 
