@@ -18,10 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..tolerances import FASTLP_PRIMAL_RTOL
-from .certificate import csc_of, lower_bound
-
-_U = np.finfo(np.float64).eps / 2.0
-_TINY = np.finfo(np.float64).tiny
+from .certificate import csc_of, gamma_k, lower_bound
 
 #: Pivots after which the explicit basis inverse is recomputed from scratch.
 REFACTOR_EVERY = 32
@@ -44,11 +41,6 @@ ITERATION_LIMIT = 2
 NUMERICAL = 3  # tiny pivot or singular refactorisation
 AMBIGUOUS = 4  # unboundedness of the direction not decided clearly
 NOT_CERTIFIED = 5  # the certified bound is -inf or far from the objective
-
-
-@njit(cache=True)
-def _gamma(k):
-    return k * _U / (1.0 - k * _U)
 
 
 @njit(cache=True)
@@ -718,7 +710,7 @@ def solve_batch(structure, data, state, params, out):
         # term, rounding terms, reduced costs at rounding level: see lower_bound),
         # and the objective's own rounding (large b cancel in it). A wrong basis
         # leaves a gap well above these.
-        allowed = gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * _gamma(nb + m + 2) * oabs
+        allowed = gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * gamma_k(nb + m + 2) * oabs
         if not np.isfinite(bnd) or obj - bnd > allowed:
             codes[i] = NOT_CERTIFIED
         else:
@@ -816,7 +808,7 @@ def emptiness(A, b, h, b_err, radius, maxit):
     norm1 = 0.0
     for i in range(m):
         norm1 += abs(y[i])
-    norm1 *= 1.0 + 2.0 * _gamma(m + 1)
+    norm1 *= 1.0 + 2.0 * gamma_k(m + 1)
     lower_inf = 0.0
     if norm1 > 0.0 and np.isfinite(lower) and lower > 0.0:
         lower_inf = np.nextafter(lower / norm1, -np.inf)

@@ -67,7 +67,6 @@ from .highs import highspy
 
 __all__ = ["EmptinessReport", "FactorPolytope", "LPResult"]
 
-_TINY = np.finfo(np.float64).tiny
 _INF = math.inf  # HiGHS's kHighsInf
 
 # the compiled simplex (numba): compiles or loads on the first compiled query
