@@ -2,11 +2,15 @@
 
 Build (from the repository root): ``python -m sphinx -W -b html docs docs/_build/html``.
 The notebooks of ``notebooks/`` are copied into ``docs/notebooks/`` and executed
-during the build (myst-nb), so their figures are rendered.
+during the build (myst-nb), so their figures are rendered. With the environment
+variable ``SETOBS_EXECUTED_NOTEBOOKS`` naming a directory of the same notebooks
+already executed (the test suite executes each once, ``tests/conftest.py``), those
+are rendered as they are instead of being executed a second time.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
@@ -18,8 +22,12 @@ ROOT = HERE.parent
 # The notebooks live in notebooks/ (where the tests run them); the docs render copies.
 _nb_dst = HERE / "notebooks"
 _nb_dst.mkdir(exist_ok=True)
+_executed = os.environ.get("SETOBS_EXECUTED_NOTEBOOKS")
 for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):
-    shutil.copy2(nb, _nb_dst / nb.name)
+    src = Path(_executed) / nb.name if _executed else nb
+    if not src.is_file():
+        raise FileNotFoundError(f"SETOBS_EXECUTED_NOTEBOOKS has no executed {nb.name}")
+    shutil.copy2(src, _nb_dst / nb.name)
 
 project = "setobs"
 author = "the setobs developers"
@@ -43,7 +51,7 @@ numpydoc_show_class_members = False
 numpydoc_xref_param_type = False
 myst_enable_extensions = ["dollarmath"]
 myst_heading_anchors = 3
-nb_execution_mode = "force"
+nb_execution_mode = "off" if _executed else "force"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True

@@ -174,3 +174,11 @@ def sample_points(Z: ConstrainedZonotope, rng: np.random.Generator, k: int = 20)
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261122)
+
+
+@pytest.fixture(scope="session")
+def executed_notebooks(tmp_path_factory):
+    """The notebooks executed once per session (:mod:`tests.notebooks`)."""
+    from tests.notebooks import ExecutedNotebooks
+
+    return ExecutedNotebooks(tmp_path_factory.mktemp("executed_notebooks"))

@@ -3,16 +3,20 @@
 The documented command is ``python -m sphinx -W -b html docs docs/_build/html``; the
 build renders the API reference (autosummary + numpydoc: a malformed docstring
 section is an error), the user guide (the README), the references and the
-notebooks (executed, with their figures).
+notebooks (executed, with their figures). The test renders the notebooks as the session
+executed them (``tests/notebooks.py``; each is executed once per session).
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from tests.notebooks import NOTEBOOKS
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -21,12 +25,16 @@ pytest.importorskip("numpydoc")
 pytest.importorskip("myst_nb")
 
 
-def test_docs_build_without_warnings(tmp_path):
+def test_docs_build_without_warnings(tmp_path, executed_notebooks):
+    # the notebooks as the test session executed them (each once: tests/notebooks.py)
+    for path in NOTEBOOKS:
+        executed_notebooks.run(path)
     out = tmp_path / "html"
+    env = {**os.environ, "SETOBS_EXECUTED_NOTEBOOKS": str(executed_notebooks.out)}
     proc = subprocess.run(
         [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
          "-d", str(tmp_path / "doctrees"), str(ROOT / "docs"), str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=1200)
+        capture_output=True, text=True, cwd=ROOT, timeout=1200, env=env)
     warnings = [line for line in proc.stderr.splitlines() if "IPKernelApp" not in line]
     assert proc.returncode == 0, "\n".join(warnings[-40:])
     # the pages exist and carry what they promise
