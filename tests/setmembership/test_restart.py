@@ -227,9 +227,11 @@ def test_auto_keeps_the_box_where_the_shape_does_not_matter():
                    initial_state_set=so.Box(-2 * np.ones(4), 2 * np.ones(4)))
     obs.run(Y2)
     # (the first restart waits for the polytope's depth while the whole history is no
-    # larger an LP: 116 rows (29 lags x 4 axes) // 5 factors per step = 23 steps)
-    assert obs.restart_lags == 29
-    assert obs.stats["polytope_restarts"] == 60 - 10 - 23
+    # larger an LP: 120 rows (30 lags x 4 axes, the most kept) // 5 factors per step = 24
+    # steps)
+    assert obs.restart_lags == 30
+    assert obs.model.restart_poly.F_all.shape == (120, 4)
+    assert obs.stats["polytope_restarts"] == 60 - 10 - 24
 
 
 def test_a_singular_dynamics_restarts_from_the_box():
@@ -248,18 +250,21 @@ def test_a_singular_dynamics_restarts_from_the_box():
 
 
 def test_how_far_the_restart_carries_back():
-    """``restart_lags``: ``restart_depth - 1``, at most ``120 // N_o``; 0 for the box, exact
-    mode and time-varying sets."""
+    """``restart_lags``: ``restart_depth - 1``, at most the lags of the first 120 rows kept;
+    0 for the box, exact mode and time-varying sets."""
     sys4 = so.LinearSystem(two_mass(), np.zeros((4, 0)), [[1.0, 0.0, 0.0, 0.0]])
     kw = dict(measurement_noise=0.1)
-    assert so.SMFDO(sys4, window=3, **kw).restart_lags == 29
+    assert so.SMFDO(sys4, window=3, **kw).restart_lags == 30  # (4 rows a lag, 120 rows)
+    assert so.SMFDO(sys4, window=3, restart_depth=20, **kw).restart_lags == 19
     assert so.SMFDO(sys4, window=3, restart_depth=5, **kw).restart_lags == 4
     assert so.SMFDO(sys4, window=3, restart="box", **kw).restart_lags == 0
     assert so.SMFDO(sys4, window=None, **kw).restart_lags == 0
     assert so.SMFDO(sys4, window=3, process_noise=lambda k: 0.1, **kw).restart_lags == 0
     A = 0.5 * np.eye(40) + np.diag(0.3 * np.ones(39), -1)
     sys40 = so.LinearSystem(A, np.zeros((40, 0)), np.eye(40)[::2])
-    assert so.SMFDO(sys40, window=3, **kw).restart_lags == 3
+    # N_o = 39 (one state unobservable): 39 rows a lag, so the 120th row is of lag 4
+    obs40 = so.SMFDO(sys40, window=3, **kw)
+    assert obs40.restart_lags == 4 and obs40.model.restart_poly.F_all.shape == (120, 39)
 
 
 @pytest.mark.parametrize("bad", [dict(restart="ball"), dict(restart_depth=0),

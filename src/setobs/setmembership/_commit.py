@@ -53,6 +53,8 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMF
         # level) empty at a later step.
         s.hulls.append(trusted_box(ho_lo, ho_hi))
         s.hull_u.append(np.zeros(m.sys.p) if e.u is None else e.u)
+        # (the restart rows' ranges get the same margin as the hull)
+        s.support.append(None if out.support is None else m.outward(*out.support))
         if s.windowing and len(s.hist) > m.window:
             del s.hist[:len(s.hist) - m.window]
     if status == "ok" and not finite:

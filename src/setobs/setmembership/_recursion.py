@@ -81,6 +81,7 @@ class ReferenceEngine:
                 # only once delta consistent steps have been collected.
                 s.hulls.clear()
                 s.hull_u.clear()
+                s.support.clear()
                 s.hist.clear()
                 s.from_initial = False
                 s.windowing = False

@@ -30,6 +30,17 @@ ranges are widened by those bounds, by the data's representation error and
 by the rounding of their own assembly. A row with an unbounded term (an
 unbounded increment factor or an unbounded hull coordinate) is left out.
 
+Support values. The window's step at ``t`` also bounds ``F_j z`` over its own posterior
+``Z_t`` (the rows of ``F`` as extra objectives of the same LPs, certified by the same
+weak-duality bound as its hull, then widened by the reported margin): ``[s_lo, s_hi]
+⊇ {F_j z : z in Z_t} ⊇ {F_j z : z in X_t}``, since ``Z_t ⊇ X_t`` by the same induction.
+So it is a valid range of ``F_j z_t`` too, and so is the intersection of the two ranges
+(:func:`setobs.setmembership._windowed.restart_rows`); where they would cross (only for
+data that contradict the model) the carried range is kept and the LP decides. The
+carried range bounds ``F_j z_t`` through the boxes of ``Z_(t-j)`` and the noise's box
+terms; the support value sees the window's polytope itself, so it is narrower where
+the carried terms add up (a constant-velocity target, every eigenvalue 1).
+
 As a set with fixed structure: factors ``(xi_0, eta)``, ``z = c + xi_0`` with
 ``|xi_0| <= r`` (the hull at ``t``: centre ``c``, radii ``r``) and
 ``F xi_0 - eta = mid - F c``, ``|eta| <= rad`` (the rows' midpoints and
@@ -63,11 +74,16 @@ _EMPTY = np.zeros(0)
 #: 4-state plant (window 10) all 29 give mean / worst width ratios 1.044 / 1.18 to the
 #: exact set, about three lags per doubling 1.073 / 1.58, powers of two 1.19 / 2.94 (the
 #: normals of an oscillatory plant keep turning: far lags add shape, not duplicates).
-DEFAULT_RESTART_DEPTH = 30
+#: A constant-velocity target's carried rows turn slowly (most are left out as nearly
+#: parallel): 29 lags keep 10 rows (1.07 / 1.26 with the support values), 59 keep 22
+#: (1.03 / 1.18).
+DEFAULT_RESTART_DEPTH = 60
 
-#: Most carried-back rows a restart adds (``lags * N``): each is a row and a
-#: slack column of every LP of the window, so ``lags`` is cut to ``MAX_ROWS // N``
-#: for a large state (N = 30: 4 lags).
+#: Most carried-back rows a restart adds: each is a row and a slack column of every LP
+#: of the window. The rows of the smallest lags are kept first (after the parallel
+#: filter), so a large state keeps few lags (N = 30: 4), and a plant whose carried rows
+#: are mostly parallel (a constant-velocity target: 2 of its 4 per lag turn slowly) keeps
+#: rows from lags far beyond ``MAX_ROWS / N``.
 MAX_ROWS = 120
 
 #: Rows whose normal is within this cosine of a kept one's (or of an axis) are left
@@ -110,7 +126,9 @@ class RestartPolytope:
                  data_rtol: float) -> None:
         N, p = A_o.shape[0], Gamma_o.shape[1]
         self.N, self.p, self.data_rtol = N, p, float(data_rtol)
-        lags = min(max(int(depth) - 1, 0), max(MAX_ROWS // N, 1))
+        # (every lag up to depth - 1 is carried; of the rows left after the parallel
+        # filter below, the first MAX_ROWS are kept)
+        lags = max(int(depth) - 1, 0)
         if lags and (not np.isfinite(A_o).all() or np.linalg.cond(A_o) > MAX_COND):
             lags = 0
         self.lags = lags
@@ -139,9 +157,25 @@ class RestartPolytope:
         K, K_a, K_e = np.zeros((lags, N)), np.zeros((lags, N)), np.zeros((lags, N))
         S, S_a = np.zeros((lags, N)), np.zeros((lags, N))
         unb = np.zeros((lags, N), dtype=bool)
+        # Rows nearly parallel to a row of a smaller lag (or to an axis) are left out:
+        # for a plant with one fast-decaying mode the rows of A_o^-j converge to its
+        # left eigenvector, and near-duplicate rows make the LP degenerate (slow, and
+        # undecided by the fast path) without adding shape. The lags are carried until
+        # MAX_ROWS rows are kept.
+        keep_rows: list[bool] = []
+        kept = np.eye(N)
         Fj = np.eye(N)
+        J = 0
         for j in range(1, lags + 1):
+            if kept.shape[0] - N >= MAX_ROWS:
+                break
+            J = j
             Fj = _row_normalize(Fj @ Ainv)
+            for v in Fj / np.linalg.norm(Fj, axis=1)[:, None]:
+                ok = kept.shape[0] - N < MAX_ROWS and np.abs(kept @ v).max() < PARALLEL_COS
+                keep_rows.append(bool(ok))
+                if ok:
+                    kept = np.vstack([kept, v])
             H, Ha = Fj, np.abs(Fj)
             for i in range(j):  # H = F_j A^i, Ha = |F_j| |A|^i
                 if p:
@@ -158,31 +192,29 @@ class RestartPolytope:
             F.append(Fj)
             Gj.append(H)
             Pj.append(Ha)
-        # Rows nearly parallel to a row of a smaller lag (or to an axis) are left out:
-        # for a plant with one fast-decaying mode the rows of A_o^-j converge to its
-        # left eigenvector, and near-duplicate rows make the LP degenerate (slow, and
-        # undecided by the fast path) without adding shape.
         Fall = np.array(F).reshape(-1, N)
-        units = Fall / np.linalg.norm(Fall, axis=1)[:, None]
-        keep = np.zeros(Fall.shape[0], dtype=bool)
-        kept = np.eye(N)
-        for i, v in enumerate(units):
-            if np.abs(kept @ v).max() < PARALLEL_COS:
-                keep[i] = True
-                kept = np.vstack([kept, v])
+        keep = np.array(keep_rows, dtype=bool)
         self.F_all = Fall[keep]
-        self.row_lag = np.repeat(np.arange(lags), N)[keep]  # (lag - 1) of each kept row
+        self.row_lag = np.repeat(np.arange(J), N)[keep]  # (lag - 1) of each kept row
+        if not self.F_all.shape[0]:  # (every carried row parallel to an axis)
+            self.lags = 0
+            self.F_all = np.zeros((0, N))
+            return
+        # the lags the kept rows reach (a row of lag j reads the inputs of the j last
+        # steps only: the further input columns are zero)
+        self.lags = used = int(self.row_lag.max()) + 1
         self.G = np.array(Gj).reshape(-1, N)[keep]
         self.G_a = np.abs(self.G)
         self.P = np.array(Pj).reshape(-1, N)[keep]
-        self.Hu = Hu.reshape(lags * N, lags * p)[keep]
-        self.Hu_a = Hu_a.reshape(lags * N, lags * p)[keep]
-        self.K, self.K_a, self.K_e = (M.reshape(-1)[keep] for M in (K, K_a, K_e))
-        self.S, self.S_a = S.reshape(-1)[keep], S_a.reshape(-1)[keep]
-        self.unbounded = unb.reshape(-1)[keep]
+        Hu, Hu_a = Hu[:J].reshape(J * N, lags * p), Hu_a[:J].reshape(J * N, lags * p)
+        self.Hu = np.ascontiguousarray(Hu[keep][:, :used * p])
+        self.Hu_a = np.ascontiguousarray(Hu_a[keep][:, :used * p])
+        self.K, self.K_a, self.K_e = (M[:J].reshape(-1)[keep] for M in (K, K_a, K_e))
+        self.S, self.S_a = S[:J].reshape(-1)[keep], S_a[:J].reshape(-1)[keep]
+        self.unbounded = unb[:J].reshape(-1)[keep]
         # Depth of every product above (j <= lags steps of N-, p- and nD-term sums,
         # plus assembly): Higham's gamma, doubled for the products' own rounding.
-        self._g = 2.0 * gamma((lags + 2) * (N + p + GD.shape[1] + 3) + 8)
+        self._g = 2.0 * gamma((used + 2) * (N + p + GD.shape[1] + 3) + 8)
 
     def rows(self, box_t, boxes, inputs):
         """Ranges of ``F_j z_t`` (the carried-back rows) from the earlier hulls.

@@ -31,7 +31,9 @@ class Outcome(NamedTuple):
     ``Z`` and of the state, the disturbance set (``keep_sets``), the status, the
     recursion depth the posterior was reached with, the entry as used (a skipped
     step drops its measurement), and whether the step's window was small enough for
-    BLAS to stay single-threaded by itself."""
+    BLAS to stay single-threaded by itself, and (the polytope restart) the certified
+    ranges of the restart rows ``F z`` over the posterior (its support values in the
+    carried directions, :mod:`._restart`), or ``None``."""
 
     Z_src: object
     box: Box
@@ -42,6 +44,7 @@ class Outcome(NamedTuple):
     depth: int
     entry: object
     blas_small: bool = False
+    support: tuple | None = None
 
     def with_posterior(self, Z_src: object) -> Outcome:
         """The same outcome carrying another representation of its posterior."""
@@ -73,6 +76,9 @@ class SMFDOState:
         keep = (window or 1) + restart_lags
         self.hulls: deque[Box] = deque(maxlen=keep)
         self.hull_u: deque[NDArray[np.float64]] = deque(maxlen=keep)
+        # beside each hull: the ranges of the restart rows F z over that posterior (its
+        # support values, when the window computed them), else None
+        self.support: deque[tuple | None] = deque(maxlen=keep)
         # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
         # runs from Z_0^-) or of the last delta steps (once the window restarts)
         self.hist: list = []
@@ -96,6 +102,9 @@ class SMFDOState:
         self.run_length = 0  # the record length run() is processing (0: update() alone)
         self.auto_poly = True  # restart="auto": the polytope restart is in use
         self.auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
+        # the polytope restart's support values at every step (probed; None: not decided)
+        self.sup_on: bool | None = None
+        self.sup_miss = 0  # probes in a row at which they did not pay
         self.set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
         self.h_fails = 0  # failed conversions to the H-representation in a row
         self.h_retry_at = 0  # first step at which the next conversion is tried
@@ -106,7 +115,7 @@ class SMFDOState:
         self.blas_small = False  # the last step's window is small (see SMFDO.update)
         if previous is None:
             self.stats = {"fast": 0, "reference": 0, "fallback": 0, "skipped": 0, "reset": 0,
-                          "mask_reference": 0, "polytope_restarts": 0}
+                          "mask_reference": 0, "polytope_restarts": 0, "support_restarts": 0}
             self.warned_fallback = False
         else:
             self.stats = previous.stats

@@ -18,9 +18,10 @@ from ._window import WindowModel
 _kernels = lazy_module("setobs.setmembership._kernels")
 _EMPTY = np.zeros(0)
 
-__all__ = ["AUTO_GAIN", "AUTO_PROBE", "MAX_MASK_STRUCTURES", "WindowEngine", "init_lags",
-           "polytope_now", "restart_cz", "restart_rows", "restart_start", "start_mode",
-           "window_hist"]
+__all__ = ["AUTO_GAIN", "AUTO_PROBE", "MAX_MASK_STRUCTURES", "SUPPORT_GAIN",
+           "SUPPORT_MAX_RATIO", "SUPPORT_RANGES", "SUPPORT_START_ROWS", "WindowEngine",
+           "init_lags", "polytope_now", "restart_cz", "restart_rows", "restart_start",
+           "start_mode", "support_at", "support_rows", "window_hist"]
 
 #: Distinct missing-sample patterns an SMFDO sets up fast-path structures for;
 #: steps with further patterns go to the reference path.
@@ -74,10 +75,12 @@ def polytope_now(m: SMFDOModel, s: SMFDOState) -> bool:
     return m.restart == "polytope" or (m.restart == "auto" and s.auto_poly)
 
 
-def restart_rows(m: SMFDOModel, s: SMFDOState, poly: bool = True):
+def restart_rows(m: SMFDOModel, s: SMFDOState, poly: bool = True, support: bool = True):
     """The restart set at ``t = k - delta``: its hull's bounds, and the carried-back
     rows ``F`` with their ranges (none with ``poly`` false or ``restart="box"``;
-    :mod:`setobs.setmembership._restart`)."""
+    :mod:`setobs.setmembership._restart`), intersected with the window's own support
+    values of ``Z_t`` in the rows' directions where they were computed at ``t`` (and
+    ``support``)."""
     win = m.window
     box_t = s.hulls[-win]
     lo, hi = m.restart_bounds(box_t)
@@ -89,10 +92,24 @@ def restart_rows(m: SMFDOModel, s: SMFDOState, poly: bool = True):
     boxes = [s.hulls[n_h - win - j] for j in range(1, J + 1)]
     inputs = [s.hull_u[n_h - win - i] for i in range(J)]
     rlo, rhi = R.rows(Box(lo, hi), boxes, inputs)
+    sup = support_at(s, win)
+    if sup is not None and support:
+        # the window's own support values of Z_t in the rows' directions (computed at
+        # t): another outer range of F z_t over X_t, so the intersection is one too
+        rlo2, rhi2 = np.maximum(rlo, sup[0]), np.minimum(rhi, sup[1])
+        if (rlo2 <= rhi2).all():  # (crossed only if the data contradict the model:
+            rlo, rhi = rlo2, rhi2  # the carried ranges then, and the LP decides)
+            s.stats["support_restarts"] += 1
     return lo, hi, R.F_all, rlo, rhi
 
 
-def restart_start(m: SMFDOModel, s: SMFDOState, poly: bool):
+def support_at(s: SMFDOState, win: int) -> tuple | None:
+    """The support values of ``Z_t`` (``t = k - delta``) in the restart rows' directions,
+    if the window computed them at ``t``."""
+    return s.support[-win] if len(s.support) == len(s.hulls) >= win else None
+
+
+def restart_start(m: SMFDOModel, s: SMFDOState, poly: bool, support: bool = True):
     """The restart set's data ``c_S``, ``b_S``, ``h_S`` (generators ``[I 0]``,
     constraints ``[F -I]``: :meth:`RestartPolytope.start_data`) and its rows ``F``;
     the box restart (eq. (24), no rows) in one compiled call."""
@@ -101,8 +118,56 @@ def restart_start(m: SMFDOModel, s: SMFDOState, poly: bool):
         box_t = s.hulls[-m.window]
         c_S, h_S = _kernels.box_start(box_t.lo, box_t.hi)
         return c_S, _EMPTY, h_S, np.zeros((0, c_S.size))
-    lo, hi, F, rlo, rhi = restart_rows(m, s, poly)
+    lo, hi, F, rlo, rhi = restart_rows(m, s, poly, support)
     return (*RestartPolytope.start_data(lo, hi, F, rlo, rhi), F)
+
+
+#: Whether the polytope restart takes its rows' ranges also from the windows' own support
+#: values in the rows' directions (:func:`restart_rows`), computed as extra objectives of
+#: the window steps while a probe finds that they pay (:data:`SUPPORT_GAIN`).
+SUPPORT_RANGES = True
+
+#: The support values are computed at every window step unless, at the last two probes,
+#: the restart with them gave bands narrower than the restart without them by at most this
+#: fraction of their width on average (then at every ``AUTO_PROBE``-th step, a probe).
+#: Measured (window 10, ``benchmarks/state_estimation.py``): a constant-velocity target
+#: (22 rows) goes from 1.15 / 1.51 to 1.03 / 1.18 times the exact set (mean / worst) at
+#: twice the cost; a random 6-state plant (3 rows) gains nothing, and a 30-tank cascade
+#: (120 rows) 1.012 -> 1.008 at 4 times the cost (with the largest gain of any band as
+#: the criterion, instead of the mean, they stayed on there): the probes turn them off.
+SUPPORT_GAIN = 0.02
+
+#: The support values are computed only when the restart has at most this many rows per
+#: coordinate of ``z`` (their ``2 R`` objectives against the hull's ``2 N``): a lightly
+#: damped two-mass plant (4 states, 120 rows) gained 1.027 -> 1.019 times the exact set
+#: at 15 times the cost; a constant-velocity target (4 states, 22 rows) 1.15 -> 1.03 at
+#: twice the cost.
+SUPPORT_MAX_RATIO = 8
+
+#: The support values start on (until the probes decide) when the window LP has at most
+#: this many rows (restart rows plus measurements), else off (the probes turn them on
+#: where they pay): a 30-tank cascade with 21 outputs (330 rows) paid 4 times the cost
+#: for its first 32 window steps before two probes turned them off; a constant-velocity
+#: target (42 rows) needs them from the start (window 10 at k = 25: 1.14 against 1.45
+#: times the exact set when they start off).
+SUPPORT_START_ROWS = 100
+
+
+def support_rows(m: SMFDOModel, s: SMFDOState, k: int, poly: bool) -> np.ndarray:
+    """The restart rows ``F`` whose ranges the window step ``k`` computes over its
+    posterior with the polytope restart: at every step while they pay (``s.sup_on``,
+    :data:`SUPPORT_GAIN`), else every ``AUTO_PROBE`` steps (a probe); none otherwise,
+    with more than :data:`SUPPORT_MAX_RATIO` rows per coordinate, or with
+    :data:`SUPPORT_RANGES` off."""
+    R = m.restart_poly
+    if not SUPPORT_RANGES or R is None or not R.lags or not poly:
+        return np.zeros((0, m.A_o.shape[0]))
+    if s.sup_on is None:  # (the first window step: on for a small window LP)
+        s.sup_on = R.F_all.shape[0] + m.window * m.C_o.shape[0] <= SUPPORT_START_ROWS
+    if (R.F_all.shape[0] > SUPPORT_MAX_RATIO * R.N
+            or not (s.sup_on or k % AUTO_PROBE == 0)):
+        return np.zeros((0, m.A_o.shape[0]))
+    return R.F_all
 
 
 def restart_cz(m: SMFDOModel, s: SMFDOState) -> ConstrainedZonotope:
@@ -126,7 +191,7 @@ class WindowEngine:
         if fast is None:
             return None
         s.stats["fast"] += 1
-        Z_src, box, box_o, box_x, _ = fast
+        Z_src, box, box_o, box_x, _, support = fast
         Zd = None
         if m.keep_sets:
             model, c, b, h, c_err, b_err = Z_src
@@ -134,7 +199,7 @@ class WindowEngine:
             Zd = m.P @ Z_src
         depth = k if mode == "init" else m.window
         return Outcome(Z_src, box, box_o, Zd, box_x, "ok", depth, e,
-                       fast[0][0].blas_small)
+                       fast[0][0].blas_small, support)
 
     def _closed_form(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, entry: Entry):
         """Hulls of ``Z_k``, ``P Z_k`` (and of the state, ``state_bounds``) by the closed
@@ -161,16 +226,32 @@ class WindowEngine:
                     s.stats["mask_reference"] += 1
                     return None
                 s.mask_keys.add(mkey)
-        if mode != "box" or m.restart_poly is None or m.restart != "auto":
-            out = self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey,
-                                     polytope_now(m, s))
-            if out is not None and mode == "box" and m.restart_poly is not None:
-                s.stats["polytope_restarts"] += 1
-            return out
+        if mode != "box" or m.restart_poly is None:
+            return self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey,
+                                      polytope_now(m, s))
+        poly = polytope_now(m, s)
+        first = self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey, poly)
+        if first is not None and poly and support_at(s, m.window) is not None and (
+                not s.sup_on or k % AUTO_PROBE == 0):
+            # the support values' probe: the same restart without them (the carried
+            # ranges alone). They are computed at every step until two probes in a row
+            # find them narrowing the bands by at most SUPPORT_GAIN of their width on
+            # average, then only every AUTO_PROBE steps until one finds more (both
+            # restarts are sound: the tighter is reported)
+            other = self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey, True,
+                                       support=False)
+            if other is not None:
+                wo, wf = other[-2], first[-2]
+                fin = np.isfinite(wo) & np.isfinite(wf) & (wo > 0.0)
+                gain = float(np.mean((wo[fin] - wf[fin]) / wo[fin])) if fin.any() else 0.0
+                s.sup_miss = 0 if gain > SUPPORT_GAIN else s.sup_miss + 1
+                s.sup_on = s.sup_miss < 2
+        if m.restart != "auto":
+            s.stats["polytope_restarts"] += first is not None
+            return first
         # restart="auto": the current choice, and every AUTO_PROBE window steps the
         # other one too; the polytope is kept while it is narrower somewhere by more
         # than AUTO_GAIN of the box's width (both are sound: the tighter is reported)
-        first = self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey, s.auto_poly)
         s.auto_count += 1
         if first is None or s.auto_count % AUTO_PROBE:
             s.stats["polytope_restarts"] += first is not None and s.auto_poly
@@ -179,26 +260,31 @@ class WindowEngine:
                                    not s.auto_poly)
         if other is None:
             return first
-        poly, box = (first, other) if s.auto_poly else (other, first)
-        wp, wb = poly[-1], box[-1]
+        poly_out, box_out = (first, other) if s.auto_poly else (other, first)
+        wp, wb = poly_out[-2], box_out[-2]
         fin = np.isfinite(wb) & np.isfinite(wp)
         s.auto_poly = bool(np.any(wb[fin] - wp[fin] > AUTO_GAIN * wb[fin]))
         s.stats["polytope_restarts"] += 1
-        return poly
+        return poly_out
 
     def _window_solve(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, hist, Y,
-                      measured, masks, mkey, poly: bool):
+                      measured, masks, mkey, poly: bool, support: bool = True):
         """One closed-form step (the window's from its restart set, with the carried-back
-        rows if ``poly``, or the history's from ``Z_0^-``): the posterior's data, its
-        hulls and their widths, or ``None``."""
-        P_extra = m.hull_rows if m.hull_rows.shape[0] else None
+        rows if ``poly`` and their support values if ``support``, or the history's from
+        ``Z_0^-``): the posterior's data, its hulls and their widths, the support values
+        of the restart rows over it (or ``None``), or ``None``."""
         inc, B_step, V = m.step_set, m.B_step, m.V_fixed
+        # with the polytope restart the window also bounds F z (the restart rows) over
+        # its posterior: the support values a later restart from this step uses
+        sup_rows = support_rows(m, s, k, poly)
+        P_extra = np.vstack([m.hull_rows, sup_rows]) if sup_rows.shape[0] else m.hull_rows
+        P_extra = P_extra if P_extra.shape[0] else None
         if mode == "box":
             win = m.window
-            c_S, b_S, h_S, F = restart_start(m, s, poly)
+            c_S, b_S, h_S, F = restart_start(m, s, poly, support)
             free = np.isinf(h_S)
             c_S_err = b_S_err = None
-            key = ("box", F.shape[0], free.tobytes(), mkey)
+            key = ("box", F.shape[0], free.tobytes(), mkey, sup_rows.shape[0])
             unbounded_radius = min(UNBOUNDED_RADIUS, inc.unbounded_radius)
 
             def build() -> WindowModel:
@@ -211,7 +297,7 @@ class WindowEngine:
             Z0 = m.Z0_prior
             c_S, b_S, h_S = Z0.c, Z0.b, Z0.h
             c_S_err, b_S_err = Z0.c_err, Z0.b_err
-            key = ("init", k, mkey)
+            key = ("init", k, mkey, sup_rows.shape[0])
             unbounded_radius = min(Z0.unbounded_radius, inc.unbounded_radius)
 
             def build() -> WindowModel:
@@ -243,5 +329,8 @@ class WindowEngine:
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
-        box_o, box, box_x, _ = m.split_hull(*out)
-        return (model, c, b, h, c_err, b_err), box, box_o, box_x, out[1] - out[0]
+        box_o, box, box_x, at = m.split_hull(*out)
+        n_sup = sup_rows.shape[0]
+        support = (out[0][at:at + n_sup], out[1][at:at + n_sup]) if n_sup else None
+        return ((model, c, b, h, c_err, b_err), box, box_o, box_x, out[1][:at] - out[0][:at],
+                support)
