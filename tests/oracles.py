@@ -403,8 +403,13 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
         for sgn in (1.0, -1.0):
             cst = np.zeros(nvar)
             cst[first + i] = sgn
-            res = linprog(cst, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=np.asarray(rhs),
-                          bounds=bounds, method="highs", options=opts)
+            # (HiGHS's default can end "Not Set" on long, ill-scaled chains: the dual
+            # simplex, then the interior point with crossover, are tried before giving up)
+            for method in ("highs", "highs-ds", "highs-ipm"):
+                res = linprog(cst, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=np.asarray(rhs),
+                              bounds=bounds, method=method, options=opts)
+                if res.status in (0, 2, 3):
+                    break
             if res.status == 3:
                 val = -np.inf if sgn > 0 else np.inf
             elif res.status != 0:

@@ -17,6 +17,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
+from setobs.lp import boxlp, fastlp
 from setobs.lp.boxlp import BoxLP
 from setobs.lp.factor import FactorPolytope
 from setobs.lp.fastlp import FixedStructureLP
@@ -87,16 +88,25 @@ def _box(A, b, h, W, free):
     return out, np.ones(W.shape[0], dtype=bool)
 
 
-BACKENDS = {"highs": _highs, "compiled": _compiled, "boxlp": _box}
+BACKENDS = {"highs": _highs, "compiled": _compiled, "compiled_each": _compiled,
+            "boxlp": _box, "boxlp_each": _box}
 
 
-# (the box LP bounds every variable, its certificate's premise: no free factors)
+# (the box LP bounds every variable, its certificate's premise: no free factors;
+# "_each": without the objective chain, each LP from its own warm start)
 @pytest.mark.parametrize(("backend", "with_free"), [
     ("highs", False), ("highs", True), ("compiled", False), ("compiled", True),
-    ("boxlp", False)])
+    ("compiled_each", True), ("boxlp", False), ("boxlp_each", False)])
 def test_every_backend_is_below_the_exact_optimum_and_tight(backend, with_free, monkeypatch):
     if backend == "highs":
         disable_compiled_lps(monkeypatch)
+    if backend == "compiled_each":
+        monkeypatch.setattr(fastlp, "PRIMAL_CHAIN", False)
+        monkeypatch.setattr(fastlp, "CHAIN_ORDER", False)
+    if backend == "boxlp":
+        monkeypatch.setattr(boxlp, "CHAIN_MIN_OBJECTIVES", 1)
+    if backend == "boxlp_each":
+        monkeypatch.setattr(boxlp, "CHAIN", False)
     solved = checked = 0
     for A, b, h, W, free in _instances(with_free):
         exact = [_exact(A, b, h, w) for w in W]
@@ -117,9 +127,13 @@ def test_every_backend_is_below_the_exact_optimum_and_tight(backend, with_free, 
     assert solved >= 0.9 * checked  # (a backend that declines everything fails here)
 
 
-def test_the_box_lp_grows_and_undoes_blocks_like_a_fresh_one():
+@pytest.mark.parametrize("chain", [True, False])
+def test_the_box_lp_grows_and_undoes_blocks_like_a_fresh_one(chain, monkeypatch):
     """Blocks added after a solve reach the warm models (the grown LP's optimum is the
-    exact one of the grown LP), and ``undo`` restores the previous LP (its exact optima)."""
+    exact one of the grown LP), and ``undo`` restores the previous LP (its exact optima);
+    with the objective chain (one model) and with one model per objective."""
+    monkeypatch.setattr(boxlp, "CHAIN", chain)
+    monkeypatch.setattr(boxlp, "CHAIN_MIN_OBJECTIVES", 1)
     A, b, h, W, _ = _instances(False)[4]
     lp = BoxLP()
     cols = lp.add_cols(-h, h)

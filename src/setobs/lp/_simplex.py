@@ -561,14 +561,18 @@ def solve_batch(structure, data, state, params, out):
 
     The arguments are grouped by lifetime (all tuples, in this order):
 
-    * ``structure = (A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat)``
-      (``csc``: ``A``'s ``(indptr, indices, data)`` for the certificate):
-      fixed for a set structure (:class:`~setobs.lp.fastlp.FixedStructureLP`);
+    * ``structure = (A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat,
+      order)`` (``csc``: ``A``'s ``(indptr, indices, data)`` for the certificate; ``order``:
+      the order the LPs are solved in, :func:`~setobs.lp.fastlp.chain_order`): fixed for a
+      set structure (:class:`~setobs.lp.fastlp.FixedStructureLP`);
     * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
     * ``state = (bases, upper, binv, npiv, est, iters)``: the warm-start state, updated
       in place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used;
       ``iters``: the primal and dual simplex iterations so far, pivots and bound flips);
-    * ``params = (maxit, radius, tol_unb, gap_rtol)``: iteration limit and tolerances;
+    * ``params = (maxit, radius, tol_unb, gap_rtol, chain)``: iteration limit, tolerances,
+      and whether every LP after the first starts by the primal simplex from the best
+      optimal vertex found so far (the objective chain), rather than by the cheaper of
+      its two warm starts when last used;
     * ``out = (bounds, objs, codes, ys)``: results, written in place.
 
     ``dirstat[i]``: 0 solve, 1 unbounded below (decided at set-up), 2 ambiguous.
@@ -579,14 +583,14 @@ def solve_batch(structure, data, state, params, out):
     certified bound is finite and within ``gap_rtol (1 + |obj|)`` of the
     simplex objective. ``ys[i]`` receives the certified multiplier.
     """
-    A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat = structure
+    A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat, order = structure
     indptr, indices, cdata = csc
     b, h, b_err, bred, hB = data
     neg_h = -h
     no_err = np.zeros(0)
     no_pair = np.zeros((0, h.size))
     bases, upper, binv, npiv, est, iters = state
-    maxit, radius, tol_unb, gap_rtol = params
+    maxit, radius, tol_unb, gap_rtol, chain = params
     nit = np.zeros(1, np.int64)
     bounds, objs, codes, ys = out
     n_lp = Wfull.shape[0]
@@ -601,7 +605,8 @@ def solve_batch(structure, data, state, params, out):
     keep_inv = np.empty((mr, mr))
     xs = np.empty((n_lp, nb))  # optimal basic solutions of this data set's LPs
     solved = np.zeros(n_lp, np.bool_)
-    for i in range(n_lp):
+    for ii in range(n_lp):
+        i = order[ii]
         if dirstat[i] == 1:
             bounds[i] = -np.inf
             objs[i] = -np.inf
@@ -621,8 +626,11 @@ def solve_batch(structure, data, state, params, out):
         # pivots warm, 15-70 primal), noise-dominated windows change a lot (random
         # 6-state plant: ~130 warm, 50-110 primal). est[i] holds each one's pivots
         # when last used, decaying while unused (so the other is tried again);
-        # the cheaper is tried first. The result is certified below on the
-        # original data either way.
+        # the cheaper is tried first. With ``chain`` (the default,
+        # setobs.lp.fastlp.PRIMAL_CHAIN) (2) is always tried first: summed over a
+        # step's LPs it was cheaper on every plant measured, though (1) was cheaper
+        # for single LPs. The result is certified below on the original data
+        # either way.
         wmax = 0.0
         for j in range(nb):
             wmax = max(wmax, abs(Wred[i, j]))
@@ -636,7 +644,7 @@ def solve_batch(structure, data, state, params, out):
         # the opposite bound, is often the worst start)
         src = -1
         best_v = np.inf
-        for j2 in range(i):
+        for j2 in range(n_lp):
             if solved[j2]:
                 v = 0.0
                 for j in range(nb):
@@ -644,7 +652,7 @@ def solve_batch(structure, data, state, params, out):
                 if v < best_v:
                     best_v = v
                     src = j2
-        use_primal = src >= 0 and est[i, 1] < est[i, 0]
+        use_primal = src >= 0 and (chain or est[i, 1] < est[i, 0])
         if use_primal:
             keep_b[:] = bases[i]
             keep_u[:] = upper[i]
