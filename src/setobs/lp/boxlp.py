@@ -32,11 +32,12 @@ __all__ = ["CHAIN", "CHAIN_MIN_OBJECTIVES", "BoxLP"]
 #: least :data:`CHAIN_MIN_OBJECTIVES` of them.
 CHAIN = True
 
-#: Fewest objectives solved as a chain. Exact mode with noise (A/B, per step, 120 steps):
-#: a 30-tank cascade with 21 outputs (60 objectives) 100 against 200 linprog at k = 30, a
-#: random 6-state plant (12) 19 against 25; but a two-mass plant (8) 15-19 against 7-8 and
-#: a bicycle model (8) 7.3 against 4.9: with few objectives each one's own last basis,
-#: which the data move little, is the cheaper start.
+#: Fewest objectives solved as a chain. Exact mode with noise, linprog per step, chain
+#: against one model per objective (``benchmarks/chain_ab.py``): a 30-tank cascade with 21
+#: outputs (60 objectives, 30 steps) 71 against 149, a random 6-state plant (12) and a
+#: bicycle model (8) about the same (22.6 / 22.1, 6.1 / 6.3), a two-mass plant (8) 13.1
+#: against 6.5: with few objectives each one's own last basis, which the data move little,
+#: is the cheaper start.
 CHAIN_MIN_OBJECTIVES = 12
 
 sparse = lazy_module("scipy.sparse")

@@ -78,9 +78,10 @@ def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
 #: simplex from the optimal vertex of an LP already solved on the same data (the one
 #: best for its objective); with ``False`` each LP picks that start or the dual simplex
 #: from its own last basis, whichever was cheaper when last used (``solve_batch``).
-#: Measured on window 10 (``benchmarks/state_estimation.py``, time per step): a 30-tank
-#: cascade with 21 outputs 2.1 s -> 0.47 s, a random 6-state plant 5.9 -> 4.3 ms, a
-#: 4-state vehicle 1.5 -> 0.8 ms; starting each LP from the previous LP's vertex alone
+#: Measured on window 10 (``benchmarks/chain_ab.py``, linprog per step, with and without
+#: the chain and its order): a 30-tank cascade with 21 outputs 213 against 919, a random
+#: 6-state plant 3.8 against 5.0, a bicycle model 2.2 against 2.3; starting each LP from
+#: the previous LP's vertex alone
 #: (not the best one) cost up to 10 times as many pivots on the restart rows' directions.
 PRIMAL_CHAIN = True
 #: Whether the LPs are solved in the chain order (:func:`chain_order`) rather than as

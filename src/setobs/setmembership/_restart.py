@@ -75,8 +75,8 @@ _EMPTY = np.zeros(0)
 #: exact set, about three lags per doubling 1.073 / 1.58, powers of two 1.19 / 2.94 (the
 #: normals of an oscillatory plant keep turning: far lags add shape, not duplicates).
 #: A constant-velocity target's carried rows turn slowly (most are left out as nearly
-#: parallel): 29 lags keep 10 rows (1.07 / 1.26 with the support values), 59 keep 22
-#: (1.03 / 1.18).
+#: parallel): 29 lags keep 10 rows (window 10 1.08 / 1.27 times the exact set with the
+#: support values), 59 keep 22 (1.03 / 1.18; ``benchmarks/chain_ab.py``).
 DEFAULT_RESTART_DEPTH = 60
 
 #: Most carried-back rows a restart adds: each is a row and a slack column of every LP

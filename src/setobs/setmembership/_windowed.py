@@ -130,26 +130,26 @@ SUPPORT_RANGES = True
 #: The support values are computed at every window step unless, at the last two probes,
 #: the restart with them gave bands narrower than the restart without them by at most this
 #: fraction of their width on average (then at every ``AUTO_PROBE``-th step, a probe).
-#: Measured (window 10, ``benchmarks/state_estimation.py``): a constant-velocity target
-#: (22 rows) goes from 1.15 / 1.51 to 1.03 / 1.18 times the exact set (mean / worst) at
-#: twice the cost; a random 6-state plant (3 rows) gains nothing, and a 30-tank cascade
-#: (120 rows) 1.012 -> 1.008 at 4 times the cost (with the largest gain of any band as
-#: the criterion, instead of the mean, they stayed on there): the probes turn them off.
+#: Measured (window 10, ``benchmarks/chain_ab.py``): a constant-velocity target (22 rows)
+#: goes from 1.15 / 1.66 to 1.03 / 1.18 times the exact set (mean / worst) at 1.4 times
+#: the cost. (Development runs, not in a results file: a random 6-state plant gained
+#: nothing, and a 30-tank cascade little at 4 times the cost; with the largest gain of any
+#: band as the criterion instead of the mean they stayed on there.)
 SUPPORT_GAIN = 0.02
 
 #: The support values are computed only when the restart has at most this many rows per
-#: coordinate of ``z`` (their ``2 R`` objectives against the hull's ``2 N``): a lightly
-#: damped two-mass plant (4 states, 120 rows) gained 1.027 -> 1.019 times the exact set
-#: at 15 times the cost; a constant-velocity target (4 states, 22 rows) 1.15 -> 1.03 at
-#: twice the cost.
+#: coordinate of ``z`` (their ``2 R`` objectives against the hull's ``2 N``). The
+#: constant-velocity target keeps 5.5 per coordinate; in development runs (not in a
+#: results file) a lightly damped two-mass plant with 30 per coordinate gained about 1 %
+#: of width at about 15 times the cost.
 SUPPORT_MAX_RATIO = 8
 
 #: The support values start on (until the probes decide) when the window LP has at most
 #: this many rows (restart rows plus measurements), else off (the probes turn them on
-#: where they pay): a 30-tank cascade with 21 outputs (330 rows) paid 4 times the cost
-#: for its first 32 window steps before two probes turned them off; a constant-velocity
-#: target (42 rows) needs them from the start (window 10 at k = 25: 1.14 against 1.45
-#: times the exact set when they start off).
+#: where they pay). In development runs (not in a results file) a 30-tank cascade with 21
+#: outputs (330 rows) paid about 4 times the cost for its first window steps before two
+#: probes turned them off, and the constant-velocity target (42 rows) was markedly wider
+#: in its first restarts when they started off.
 SUPPORT_START_ROWS = 100
 
 

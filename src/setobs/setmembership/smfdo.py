@@ -84,7 +84,7 @@ own support values in the rows' directions where the step at ``k - delta``
 computed them (extra objectives of its LPs: computed while a probe every
 ``AUTO_PROBE`` steps finds they narrow the bands by more than ``SUPPORT_GAIN = 2 %``
 on average, and only for at most ``SUPPORT_MAX_RATIO = 8`` rows per coordinate; on a
-planar constant-velocity target window 10 goes from 1.15 / 1.51 to 1.03 / 1.18 times
+planar constant-velocity target window 10 goes from 1.15 / 1.66 to 1.03 / 1.18 times
 the exact set, mean / worst). It is an outer bound of the exact set at ``k - delta``
 whatever the data, and keeps its shape: on a lightly damped 4-state plant with noise
 (``benchmarks/state_estimation.py``), window 10 ends 1.04 times as wide as the
