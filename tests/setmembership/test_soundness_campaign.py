@@ -295,3 +295,60 @@ def test_targets_hold_the_truth_short():
 def test_targets_hold_the_truth_campaign():
     out = run_campaign(target_case, range(60))
     assert sum(o[0] for o in out) == 60 * 4 * 80
+
+
+def chain_case(seed: int) -> tuple[int, int, list[str]]:
+    """A random plant of 6-9 states (12 or more hull bounds: exact mode solves them as
+    one objective chain, :data:`setobs.lp.boxlp.CHAIN_MIN_OBJECTIVES`), noise on the
+    corners of its boxes in a third of the cases; exact mode and window 10: the truth
+    inside every band, no run aborted."""
+    from setobs.lp import boxlp
+
+    rng = np.random.default_rng(7000 + seed)
+    n = int(rng.integers(6, 10))
+    assert 2 * n >= boxlp.CHAIN_MIN_OBJECTIVES
+    l = int(rng.integers(1, n + 1))
+    Phi = rng.normal(size=(n, n))
+    Phi *= rng.uniform(0.5, 1.0) / np.abs(np.linalg.eigvals(Phi)).max()
+    Xi = rng.normal(size=(l, n))
+    rw, rv = 10.0 ** rng.uniform(-3, -1), 10.0 ** rng.uniform(-3, -1)
+    corners = rng.random() < 0.34
+    N = 30
+    x = rng.uniform(-1, 1, n)
+    X, Y = [], []
+    for _ in range(N):
+        X.append(x.copy())
+        v = rng.choice([-rv, rv], l) if corners else rng.uniform(-rv, rv, l)
+        w = rng.choice([-rw, rw], n) if corners else rng.uniform(-rw, rw, n)
+        Y.append(Xi @ x + v)
+        x = Phi @ x + w
+    X, Y = np.array(X), np.array(Y)
+    sys = LinearSystem(Phi, np.zeros((n, 0)), Xi)
+    steps, violations, problems = 0, 0, []
+    for win in (None, 10):
+        obs = so.SMFDO(sys, window=win, process_noise=rw, measurement_noise=rv,
+                       state_bounds=True, initial_state_set=so.Box(-2.0 * np.ones(n),
+                                                                   2.0 * np.ones(n)))
+        try:
+            res = obs.run(Y)
+        except Exception as exc:  # every abort is a failure, recorded
+            problems.append(f"seed {seed} window {win}: {type(exc).__name__}: {exc}")
+            continue
+        steps += N
+        out = int(((X < res.state_lo) | (X > res.state_hi)).any(axis=1).sum())
+        violations += out
+        if out:
+            problems.append(f"seed {seed} window {win}: {out} violations")
+    return steps, violations, problems
+
+
+def test_chained_exact_mode_holds_the_truth_short():
+    out = [chain_case(s) for s in (0, 2)]  # (9 states, 5 outputs; 6 and 4, on the corners)
+    assert not [p for o in out for p in o[2]]
+    assert sum(o[0] for o in out) == 2 * 2 * 30
+
+
+@pytest.mark.slow
+def test_chained_exact_mode_holds_the_truth_campaign():
+    out = run_campaign(chain_case, range(30))
+    assert sum(o[0] for o in out) == 30 * 2 * 30
