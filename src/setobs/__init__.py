@@ -5,6 +5,7 @@ from . import (
     compare,
     examples,
     geometry,
+    interval,
     observers,
     plotting,
     setmembership,
@@ -16,6 +17,7 @@ from .exceptions import (
     DesignError,
     DesignWarning,
     DimensionError,
+    DomainError,
     EmptySetError,
     ExistenceError,
     ImmutableError,
@@ -37,7 +39,7 @@ from .exceptions import (
 )
 from .geometry import Box, ConstrainedZonotope
 from .nonlinear import NonlinearSystem
-from .setmembership import SMFDO, calibrate_noise, noise_tradeoff
+from .setmembership import SMFDO, NonlinearSetObserver, calibrate_noise, noise_tradeoff
 from .systems import LinearSystem
 
 __version__ = "0.1.0"
@@ -50,6 +52,7 @@ __all__ = [
     "DesignError",
     "DesignWarning",
     "DimensionError",
+    "DomainError",
     "EmptySetError",
     "ExistenceError",
     "ImmutableError",
@@ -62,6 +65,7 @@ __all__ = [
     "ModelFileError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
+    "NonlinearSetObserver",
     "NonlinearSystem",
     "NotFoundError",
     "NotSupportedError",
@@ -76,6 +80,7 @@ __all__ = [
     "compare",
     "examples",
     "geometry",
+    "interval",
     "noise_tradeoff",
     "observers",
     "plotting",

@@ -17,6 +17,7 @@ __all__ = [
     "DesignError",
     "DesignWarning",
     "DimensionError",
+    "DomainError",
     "EmptySetError",
     "ExistenceError",
     "ImmutableError",
@@ -86,6 +87,12 @@ class MagnitudeError(SetobsError, OverflowError):
     next operation or LP would overflow double precision. The message names the
     operation, the array and the entry; rescale the units (or the matrix) instead.
     """
+
+
+class DomainError(SetobsError, ValueError):
+    """An interval evaluation left a function's domain (``sqrt`` or ``log`` of a box
+    reaching below 0, a division by a box holding 0): the message names the
+    sub-expression and the box (:mod:`setobs.interval`)."""
 
 
 class EmptySetError(SetobsError, ValueError):
