@@ -3,6 +3,7 @@
 from ..exceptions import SkipLimitError
 from .calibrate import NoiseCalibration, NoiseTradeoff, calibrate_noise, noise_tradeoff
 from .estimates import PointEstimate, chebyshev_center, interval_center
+from .nonlinear import NonlinearSetObserver
 from .smfdo import (
     SMFDO,
     ExistenceError,
@@ -19,6 +20,7 @@ __all__ = [
     "ModelInvalidatedWarning",
     "NoiseCalibration",
     "NoiseTradeoff",
+    "NonlinearSetObserver",
     "PointEstimate",
     "SMFDOResult",
     "SMFDOStep",
