@@ -73,7 +73,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._lazy import optional_import
-from .._rounding import gamma, round_up
+from .._rounding import gamma, round_down, round_up
 from .._validation import as_matrix, as_vector
 from ..exceptions import (
     ArgumentError,
@@ -392,7 +392,8 @@ class NonlinearSetObserver:
             ym = yv[msk]
             centre = ym - offset
             err = round_up(gamma(2) * (np.abs(ym) + np.abs(offset)))
-            Y = ConstrainedZonotope.from_box(centre - rad - err, centre + rad + err)
+            wide = round_up(rad + err)  # (and the box's ends rounded outward)
+            Y = ConstrainedZonotope.from_box(round_down(centre - wide), round_up(centre + wide))
             if self.V is not None:
                 Y = Y + (-np.eye(msk.sum()) @ self.V.project(np.flatnonzero(msk)))
             X = X.intersect(Y, M)
@@ -422,7 +423,8 @@ class NonlinearSetObserver:
             Xp = ConstrainedZonotope.from_box(f_lo, f_hi)
         else:
             M, offset, rad = lin
-            Xp = (M @ X) + ConstrainedZonotope.from_box(offset - rad, offset + rad)
+            Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
+                                                        round_up(offset + rad))
             Xp = self._cut(Xp, M, offset, rad, box, uv)
         if self.W is not None:
             Xp = Xp + self.W
