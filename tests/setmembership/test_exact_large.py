@@ -75,6 +75,15 @@ def test_a_15_tank_cascade_in_exact_mode_is_the_whole_history_lp(chain, monkeypa
     assert obs.stats["reference"] == 1 and obs.stats["fast"] == 29  # (k = 0: the recursion)
 
 
+def test_a_stalled_warm_start_hands_over_to_the_dual_simplex(monkeypatch):
+    """With the warm primal simplex stopped after one iteration (on the 30-tank cascade it
+    stalled for up to 184 000 from k = 85 on), the dual simplex finishes every bound from
+    where it stopped: still the whole-history LP, every step on it."""
+    monkeypatch.setattr(boxlp, "WARM_PRIMAL_LIMIT", 1)
+    obs = run_case(15, [i for i in range(15) if i % 3 != 1], 12, [11])
+    assert obs.stats["reference"] == 1 and obs.stats["fast"] == 11
+
+
 @pytest.mark.slow
 def test_the_30_tank_cascade_with_21_outputs_in_exact_mode_is_the_whole_history_lp():
     """The issue's size (30 tanks, 21 measured), 40 steps: every step after the first on

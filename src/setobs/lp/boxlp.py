@@ -40,6 +40,14 @@ CHAIN = True
 #: is the cheaper start.
 CHAIN_MIN_OBJECTIVES = 12
 
+#: Simplex iterations allowed to a warm start by the primal simplex (the first attempt
+#: of :meth:`BoxLP._solve`) before the dual simplex takes over from where it stopped. A
+#: healthy warm start takes tens of iterations; on the whole-history LP of a 30-tank
+#: cascade with 21 outputs the primal stalled from ``k`` = 85 on (up to 184 000
+#: iterations, 66 s, for one bound; 524 s for the step), where the dual simplex finished
+#: the same bounds in 3 500-7 500 (``benchmarks/exact_long.py``).
+WARM_PRIMAL_LIMIT = 2000
+
 sparse = lazy_module("scipy.sparse")
 _certificate = lazy_module("setobs.lp.certificate")
 
@@ -321,7 +329,8 @@ class BoxLP:
     def _solve(self, j: int, cols, w: NDArray[np.float64], limit: int) -> float | None:
         """Certified ``min w^T x_cols`` on model ``j``: from its last optimal basis with
         the primal simplex (its phase 1 for the new rows: 2-8x fewer iterations than
-        the dual on the whole-history LP), then the dual simplex, then a fresh
+        the dual on the whole-history LP) for at most :data:`WARM_PRIMAL_LIMIT`
+        iterations, then the dual simplex from where it stopped, then a fresh
         model, then a fresh model with ranged rows (:meth:`_row_bounds`); ``None``
         if none is optimal with a tight certificate."""
         for attempt in range(4):
@@ -332,8 +341,10 @@ class BoxLP:
                 self._models[j] = hs
                 self._ranged[j] = attempt == 3
             hs = self._models[j]
-            if highs.solve(hs, primal=attempt == 0 and self._warm[j],
-                           iteration_limit=limit) != "optimal":
+            warm = attempt == 0 and self._warm[j]
+            if highs.solve(hs, primal=warm,
+                           iteration_limit=min(limit, WARM_PRIMAL_LIMIT) if warm else limit
+                           ) != "optimal":
                 self.retries += 1
                 continue
             obj = float(hs.getInfo().objective_function_value)
