@@ -541,3 +541,49 @@ def assert_box_covers(c, r, lo, hi) -> None:
     for i in range(len(c)):
         assert Fraction(c[i]) - Fraction(r[i]) <= Fraction(lo[i])
         assert Fraction(c[i]) + Fraction(r[i]) >= Fraction(hi[i])
+
+
+def nonlinear_inner_bounds(F, H, X0, rw, rv, Y, U, X, k, states, shrink=0.999):
+    """An *inner* bound of the exact state set at step ``k`` of ``x+ = F(x, u) + w``,
+    ``y = H(x, u) + v`` (``|w| <= rw``, ``|v| <= rv``, ``x_0`` in the box ``X0 = (lo,
+    hi)``): for each state ``i`` in ``states``, histories that minimize and maximize
+    ``x_k[i]`` (SLSQP over ``x_0`` and ``w_0 .. w_(k-1)``, single shooting, started
+    from the true history ``X``), kept only when feasible for the unshrunk bounds (the
+    optimizer works on bounds shrunk by ``shrink`` so that its answer is strictly
+    feasible). Every value returned is attained by a history consistent with the data,
+    so ``[lo, hi]`` lies inside the exact set's hull (the truth's ``X[k]`` where no
+    better feasible point was found)."""
+    from scipy.optimize import minimize
+
+    n = len(X0[0])
+    lo_b = np.concatenate([X0[0], np.full(k * n, -rw * shrink)])
+    hi_b = np.concatenate([X0[1], np.full(k * n, rw * shrink)])
+
+    def traj(z):
+        x = z[:n]
+        ws = z[n:].reshape(k, n)
+        out = [x]
+        for j in range(k):
+            x = F(x, U[j]) + ws[j]
+            out.append(x)
+        return out
+
+    def slack(z, s):
+        xs = traj(z)
+        r = np.concatenate([Y[j] - H(xs[j], U[j]) for j in range(k + 1)])
+        return np.concatenate([s * rv - r, s * rv + r])
+
+    z0 = np.concatenate([X[0], (X[1:k + 1] - np.array([F(X[j], U[j]) for j in range(k)]))
+                         .ravel()])
+    lo, hi = X[k].copy(), X[k].copy()
+    for i in states:
+        for sgn in (1.0, -1.0):
+            res = minimize(lambda z, i=i, sgn=sgn: -sgn * traj(z)[k][i], np.clip(z0, lo_b, hi_b),
+                           method="SLSQP", bounds=list(zip(lo_b, hi_b, strict=True)),
+                           constraints=[{"type": "ineq", "fun": lambda z: slack(z, shrink)}],
+                           options={"maxiter": 300, "ftol": 1e-12})
+            z = np.clip(res.x, lo_b, hi_b)
+            if slack(z, 1.0).min() >= 0.0 and np.all(np.abs(z[n:]) <= rw):
+                v = traj(z)[k][i]
+                lo[i], hi[i] = min(lo[i], v), max(hi[i], v)
+    return lo, hi

@@ -268,21 +268,16 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
     if e.is_Number:
         raise NotSupportedError(f"the number {e} has no real interval enclosure here")
     args = [_compile(a, index, sp) for a in e.args]
-    if e.is_Add:
-        def add(X: Sequence[_Ival]) -> _Ival:
+    if e.is_Add or e.is_Mul:
+        # (a quotient is a product with a negative power: 1 / x^n, its domain checked)
+        op = _add if e.is_Add else _mul
+
+        def fold(X: Sequence[_Ival]) -> _Ival:
             acc = args[0](X)
             for a in args[1:]:
-                acc = _add(acc, a(X))
+                acc = op(acc, a(X))
             return acc
-        return add
-    if e.is_Mul:
-        # a negative rational exponent is a division: 1 / x^n with its domain check
-        def mul(X: Sequence[_Ival]) -> _Ival:
-            acc = args[0](X)
-            for a in args[1:]:
-                acc = _mul(acc, a(X))
-            return acc
-        return mul
+        return fold
     if e.is_Pow:
         base, ex = args[0], e.args[1]
         bwhere = str(e.args[0])

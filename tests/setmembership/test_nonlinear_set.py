@@ -10,7 +10,7 @@ import pytest
 sp = pytest.importorskip("sympy")
 
 import setobs as so  # noqa: E402
-from tests.oracles import history_lp_highs  # noqa: E402
+from tests.oracles import history_lp_highs, nonlinear_inner_bounds  # noqa: E402
 
 
 def tank_cascade(n: int, T: float = 0.5):
@@ -63,6 +63,31 @@ def test_the_truth_is_inside_on_a_tank_cascade(method, corners):
     # (the box was +-1)
     assert (res.state_hi[20:] - res.state_lo[20:]).max() < 0.7
     assert set(res.status) == {"ok"}
+
+
+@pytest.mark.parametrize("method", ["mean-value", "taylor"])
+def test_the_bands_are_close_to_an_inner_bound_of_the_exact_set(method):
+    """Six tanks, the unmeasured levels at step 10: the band against histories consistent
+    with the data that push each level to its extremes (found by SLSQP from the truth, an
+    *inner* bound of the exact set): it holds them, and is at most 1.5 times as wide on
+    average (measured: 1.37 mean-value, 1.33 Taylor)."""
+    f, h, xs, us = tank_cascade(6)
+    Fs, Hs = sp.lambdify([xs, us], f), sp.lambdify([xs, us], h)
+    F = lambda x, u: np.array(Fs(x, u), dtype=float)  # noqa: E731
+    H = lambda x, u: np.array(Hs(x, u), dtype=float)  # noqa: E731
+    rng = np.random.default_rng(3)
+    N, k = 11, 10
+    U = 1.0 + 0.3 * np.sin(0.1 * np.arange(N))[:, None]
+    X, Y = simulate(f, h, xs, us, rng.uniform(1.5, 2.5, 6), U, 0.002, 0.01, rng, False)
+    X0 = (np.ones(6), 3.0 * np.ones(6))
+    res = so.NonlinearSetObserver(f, h, xs, us, process_noise=0.002, measurement_noise=0.01,
+                                  initial_state_set=so.Box(*X0), method=method).run(Y, U)
+    ilo, ihi = nonlinear_inner_bounds(F, H, X0, 0.002, 0.01, Y, U, X, k, [1, 3, 5])
+    assert np.all(res.state_lo[k] <= ilo) and np.all(ihi <= res.state_hi[k])
+    un = [1, 3, 5]
+    assert (ihi - ilo)[un].min() > 0.02  # (the optimizer found the set's extent)
+    ratio = (res.state_hi[k] - res.state_lo[k])[un] / (ihi - ilo)[un]
+    assert ratio.mean() <= 1.5
 
 
 @pytest.mark.parametrize("method", ["mean-value", "taylor"])

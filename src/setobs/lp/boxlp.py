@@ -331,8 +331,8 @@ class BoxLP:
         the primal simplex (its phase 1 for the new rows: 2-8x fewer iterations than
         the dual on the whole-history LP) for at most :data:`WARM_PRIMAL_LIMIT`
         iterations, then the dual simplex from where it stopped, then a fresh
-        model, then a fresh model with ranged rows (:meth:`_row_bounds`); ``None``
-        if none is optimal with a tight certificate."""
+        model by the primal simplex, then a fresh model with ranged rows
+        (:meth:`_row_bounds`); ``None`` if none is optimal with a tight certificate."""
         for attempt in range(4):
             if attempt >= 2:  # a fresh model; the last with ranged rows
                 hs = self._build(cols, w, ranged=attempt == 3)
@@ -342,7 +342,9 @@ class BoxLP:
                 self._ranged[j] = attempt == 3
             hs = self._models[j]
             warm = attempt == 0 and self._warm[j]
-            if highs.solve(hs, primal=warm,
+            # (the fresh model by the primal simplex: HiGHS's dual ratio test can fail at
+            # once, "excessive dual values", on a cold start of this LP)
+            if highs.solve(hs, primal=warm or attempt == 2,
                            iteration_limit=min(limit, WARM_PRIMAL_LIMIT) if warm else limit
                            ) != "optimal":
                 self.retries += 1

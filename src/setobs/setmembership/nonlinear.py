@@ -39,7 +39,9 @@ Soundness
 ---------
 Every enclosure is outer: the interval evaluator rounds outward; the set operations
 carry their own rounding (:attr:`setobs.ConstrainedZonotope.c_err`, ``b_err``); the
-interval hulls are certified LP bounds; the reductions are outer
+interval hulls are certified LP bounds (of the posterior before its reduction: the
+prediction maps the reduced set, a superset, but its enclosure of ``f`` holds on the
+hull of the unreduced one, which holds the truth); the reductions are outer
 (:func:`setobs.geometry.reduction.reduce_order`,
 :func:`~setobs.geometry.reduction.eliminate_constraints`). An empty posterior is
 reported only when certified (:meth:`setobs.ConstrainedZonotope.is_empty`), as
@@ -79,6 +81,7 @@ from ..exceptions import (
     ArgumentError,
     DimensionError,
     DomainError,
+    EmptySetError,
     InvalidValueError,
     ModelInvalidatedError,
     UnboundedSetError,
@@ -397,16 +400,19 @@ class NonlinearSetObserver:
             if self.V is not None:
                 Y = Y + (-np.eye(msk.sum()) @ self.V.project(np.flatnonzero(msk)))
             X = X.intersect(Y, M)
-            if X.is_empty():
-                raise ModelInvalidatedError(
-                    f"the measurement at step {self.k} contradicts the model: the set of "
-                    "consistent states is empty (certified)", self.k,
-                    hint="what to do: if the sample is an outlier or a fault, it is found; "
-                    "if the model and the record are right, the noise bounds are too small "
-                    "(a larger measurement_noise / process_noise)")
-        X = self._reduce(X)
-        box, fb = hull_with_status(X)
+        # the hull of the posterior before its reduction (tighter); its LPs certify an
+        # empty set (EmptySetError) when the data contradict the model
+        try:
+            box, fb = hull_with_status(X)
+        except EmptySetError:
+            raise ModelInvalidatedError(
+                f"the measurement at step {self.k} contradicts the model: the set of "
+                "consistent states is empty (certified)", self.k,
+                hint="what to do: if the sample is an outlier or a fault, it is found; "
+                "if the model and the record are right, the noise bounds are too small "
+                "(a larger measurement_noise / process_noise)") from None
         status = "fallback" if fb else status
+        X = self._reduce(X)
         if self.domain is not None:  # (X lies in the domain: the cut above, or its prior's
             # hull did; the certified hull may pass its edge by the LP's outward rounding)
             box = Box(np.maximum(box.lo, self.domain[0]), np.minimum(box.hi, self.domain[1]))
