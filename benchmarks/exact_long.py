@@ -106,10 +106,9 @@ def main() -> None:
             unit = min(unit, linprog_unit())
         print(f"k={k:3d} {1e3 * dt:8.1f} ms {dt / unit:7.1f} LP  it {steps[-1]['iterations']:5d}"
               f"  solves {len(solves):3d}  {engine}", file=sys.stderr, flush=True)
-        if k % 10 == 9:  # (a partial file: the run may be stopped before its end)
-            Path(args.out).write_text(json.dumps(
-                summary(steps, X[:k + 1], lo[:k + 1], hi[:k + 1], obs, unit, checks, N),
-                indent=1))
+        # (a partial file every step: the run may be stopped before its end)
+        Path(args.out).write_text(json.dumps(
+            summary(steps, X[:k + 1], lo[:k + 1], hi[:k + 1], obs, unit, checks, N), indent=1))
         if k in checks_at:
             ref = history_lp_highs(A, np.zeros((n, 0)), C, Y, k, 0.0, U=U, Gamma=B, states=True,
                                    x_box=(X0.lo, X0.hi), noise_w=noise_w,

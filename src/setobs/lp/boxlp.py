@@ -45,7 +45,8 @@ CHAIN_MIN_OBJECTIVES = 12
 #: healthy warm start takes tens of iterations; on the whole-history LP of a 30-tank
 #: cascade with 21 outputs the primal stalled from ``k`` = 85 on (up to 184 000
 #: iterations, 66 s, for one bound; 524 s for the step), where the dual simplex finished
-#: the same bounds in 3 500-7 500 (``benchmarks/exact_long.py``).
+#: the same bounds in 3 500-7 500 (a prototype run on a record of
+#: ``benchmarks/exact_long.py``).
 WARM_PRIMAL_LIMIT = 2000
 
 sparse = lazy_module("scipy.sparse")
