@@ -75,7 +75,7 @@ def _exact_bounds(sys, Y, k, r_inc, **kw):
 
 
 # ---------------------------------------------------------------- exact mode = whole-history LP
-@pytest.mark.parametrize("case", ["box", "matrices"])
+@pytest.mark.parametrize("case", ["box", pytest.param("matrices", marks=pytest.mark.slow)])
 def test_exact_mode_with_noise_equals_the_whole_history_lp(case):
     """V, W boxes (E = F = I), or noise through matrices with a feedthrough D_u."""
     rng = np.random.default_rng(12)

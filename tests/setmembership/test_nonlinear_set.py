@@ -183,6 +183,12 @@ def test_the_paper_example_gets_a_certified_disturbance_band(method):
     np.testing.assert_allclose(res.estimate, 0.5 * (res.lo + res.hi))
     df = res.to_pandas()
     assert {"w", "w_lo", "w_hi", "x_lo", "x_hi", "status"} <= set(df.columns)
+    np.testing.assert_array_equal(df["x_hi"].to_numpy(), res.state_hi[:, 0])
+    import matplotlib
+
+    matplotlib.use("Agg")
+    ax = res.plot(states=True, truth=X)
+    assert len(ax.lines) >= 2  # (the band's centre and the truth)
 
 
 def test_an_inconsistent_record_is_certified():
