@@ -359,11 +359,16 @@ class IntervalFunction:
         if lo.shape != (n,) or hi.shape != (n,):
             raise DimensionError(f"the box must have {n} entries, got {lo.size} and {hi.size}")
         if np.isnan(lo).any() or np.isnan(hi).any() or (lo > hi).any():
-            raise DomainError("the box has NaN bounds or a lower bound above its upper bound")
+            raise DomainError(f"the box [{lo.tolist()}, {hi.tolist()}] has NaN bounds or a "
+                              "lower bound above its upper bound: pass lo <= hi")
         X = list(zip(lo.tolist(), hi.tolist(), strict=True))
         out = [node(X) for node in self._nodes]
         return (np.array([o[0] for o in out], dtype=np.float64),
                 np.array([o[1] for o in out], dtype=np.float64))
+
+    def __reduce__(self):
+        # (the compiled closures do not pickle: rebuilt from the expressions)
+        return (type(self), (self.exprs, self.variables))
 
     def __repr__(self) -> str:
         m, n = self.shape

@@ -249,6 +249,28 @@ def test_a_pole_of_the_derivative_falls_back_to_the_interval_enclosure():
     assert res.status[0] == "ok" and res.status[1] == "fallback"
 
 
+def test_an_observer_pickles_mid_run_and_goes_on_the_same():
+    """The compiled enclosures are rebuilt from the expressions on unpickling: the copy's
+    next steps equal the original's."""
+    import pickle
+
+    f, h, xs, us = tank_cascade(3)
+    rng = np.random.default_rng(4)
+    U = np.ones((8, 1))
+    X, Y = simulate(f, h, xs, us, [2.0, 1.8, 1.6], U, 0.002, 0.01, rng, False)
+    obs = so.NonlinearSetObserver(f, h, xs, us, process_noise=0.002, measurement_noise=0.01,
+                                  initial_state_set=so.Box(np.ones(3), 3.0 * np.ones(3)),
+                                  method="taylor")
+    for k in range(4):
+        obs.update(Y[k], U[k])
+    copy = pickle.loads(pickle.dumps(obs))
+    for k in range(4, 8):
+        a, b = obs.update(Y[k], U[k]), copy.update(Y[k], U[k])
+        np.testing.assert_array_equal(a.state_lo, b.state_lo)
+        np.testing.assert_array_equal(a.state_hi, b.state_hi)
+        assert np.all((X[k] >= a.state_lo) & (X[k] <= a.state_hi))
+
+
 def test_bad_input():
     box = so.Box([0.0], [1.0])
     kw = dict(process_noise=0.1, measurement_noise=0.1, initial_state_set=box)

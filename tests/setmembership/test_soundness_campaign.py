@@ -363,6 +363,7 @@ def nonlinear_case(seed: int) -> tuple[int, int, list[str]]:
     cases; NonlinearSetObserver with both enclosures: the truth inside every band, no
     run aborted (own simulator)."""
     sp = pytest.importorskip("sympy")
+    from tests.setmembership.test_nonlinear_set import simulate
     rng = np.random.default_rng(8000 + seed)
     corners = rng.random() < 0.34
     N = 40
@@ -387,24 +388,14 @@ def nonlinear_case(seed: int) -> tuple[int, int, list[str]]:
         g, c = rng.uniform(1.0, 20.0), rng.uniform(0.0, 1.0)
         f = [th + dt * om, om + dt * (-g * sp.sin(th) - c * om + tau)]
         h = [th]
-        xs, us, n = [th, om], [tau], 2
+        xs, us = [th, om], [tau]
         U = rng.uniform(-1, 1) * np.sin(0.3 * np.arange(N))[:, None]
         x0 = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1)])
         r0 = np.array([0.2, 1.0])
         X0 = so.Box(x0 - r0, x0 + r0)
         extra = {}
     rw, rv = 10.0 ** rng.uniform(-4, -2), 10.0 ** rng.uniform(-3, -1.5)
-    F = sp.lambdify([xs, us], f)
-    H = sp.lambdify([xs, us], h)
-    x = x0.copy()
-    X, Y = [], []
-    for k in range(N):
-        X.append(x.copy())
-        v = rv * (rng.choice([-1.0, 1.0], len(h)) if corners else rng.uniform(-1, 1, len(h)))
-        Y.append(np.array(H(x, U[k]), dtype=float) + v)
-        w = rw * (rng.choice([-1.0, 1.0], n) if corners else rng.uniform(-1, 1, n))
-        x = np.array(F(x, U[k]), dtype=float) + w
-    X, Y = np.array(X), np.array(Y)
+    X, Y = simulate(f, h, xs, us, x0, U, rw, rv, rng, corners)
     if not np.isfinite(X).all() or ("state_domain" in extra and X.min() < 0.0):
         return 0, 0, []  # (a tank ran dry: not a record of this model)
     return check_states(

@@ -140,6 +140,11 @@ class _Map:
             H = [sp.hessian(e, zs) for e in exprs]
             self.hess = _Sparse([h for Hi in H for h in Hi], (self.m, self.n, self.n), variables)
 
+    def enclose(self, box: Box, u: NDArray[np.float64]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The natural interval enclosure ``[g](B)`` over the box, at the input ``u``."""
+        return self.value(np.concatenate([box.lo, u]), np.concatenate([box.hi, u]))
+
     def linearize(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
                   u: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
                                                    NDArray[np.float64]]:
@@ -147,12 +152,13 @@ class _Map:
         ``z`` in ``[lo, hi]`` (module docstring; all rounding inside ``rad``)."""
         c = 0.5 * lo + 0.5 * hi  # (in the box: the mean value theorem's segment stays in it)
         r = round_up(np.maximum(hi - c, c - lo))
-        gc_lo, gc_hi = self.value(np.concatenate([c, u]), np.concatenate([c, u]))
+        zc = np.concatenate([c, u])
+        gc_lo, gc_hi = self.value(zc, zc)
         if self.hess is None:  # mean value: the Jacobian over the box
             J_lo, J_hi = self.jac(np.concatenate([lo, u]), np.concatenate([hi, u]))
             rem_c, rem_r = np.zeros(self.m), np.zeros(self.m)
         else:  # Taylor: the Jacobian at c, the Hessian over the box
-            J_lo, J_hi = self.jac(np.concatenate([c, u]), np.concatenate([c, u]))
+            J_lo, J_hi = self.jac(zc, zc)
             H_lo, H_hi = self.hess(np.concatenate([lo, u]), np.concatenate([hi, u]))
             rem_c, rem_r = _quadratic_remainder(H_lo, H_hi, r)
         if not (np.isfinite(J_lo).all() and np.isfinite(J_hi).all()
@@ -321,7 +327,8 @@ class NonlinearSetObserver:
             DD = noise_set("increment_set", increment_set, q)
             D0 = as_set("initial_disturbance_set", initial_disturbance_set, q)
             if D0 is None or not D0.is_bounded:
-                raise InvalidValueError("initial_disturbance_set must be a bounded set")
+                raise InvalidValueError("initial_disturbance_set must be a bounded set (the "
+                                        f"enclosures need a bounded box), got {D0!r}")
             X0 = X0.cartesian(D0)
             W = _cartesian(W, n, DD, q)
         elif increment_set is not None or initial_disturbance_set is not None:
@@ -330,7 +337,8 @@ class NonlinearSetObserver:
         self.domain = None
         if state_domain is not None:
             if not isinstance(state_domain, Box) or state_domain.dim != n:
-                raise ArgumentError(f"state_domain must be a Box of the {n} states")
+                raise ArgumentError(f"state_domain must be a Box of the {n} states, got "
+                                    f"{state_domain!r}")
             inf = np.full(q, np.inf)
             self.domain = (np.concatenate([state_domain.lo, -inf]),
                            np.concatenate([state_domain.hi, inf]))
@@ -339,7 +347,8 @@ class NonlinearSetObserver:
         self.max_constraints = int(max_constraints) if max_constraints is not None else 2 * N
         if self.max_generators < N or self.max_constraints < 0:
             raise InvalidValueError(f"max_generators must be at least {N} and "
-                                    "max_constraints nonnegative")
+                                    "max_constraints nonnegative, got "
+                                    f"{self.max_generators} and {self.max_constraints}")
         self.dt = dt
         self.reset()
 
@@ -375,10 +384,9 @@ class NonlinearSetObserver:
             noise bounds.
         """
         yv = as_vector("y", y, size=self.l, allow_nan=True)
-        uv = np.zeros(0) if self.p == 0 else as_vector("u", u, size=self.p) if u is not None \
-            else None
-        if uv is None:
+        if self.p and u is None:
             raise ArgumentError(f"u is required: the model has {self.p} inputs")
+        uv = as_vector("u", u, size=self.p) if self.p else np.zeros(0)
         X = self.prior
         status = "fallback" if self.pred_fallback else "ok"
         msk = ~np.isnan(yv)
@@ -417,21 +425,21 @@ class NonlinearSetObserver:
             # hull did; the certified hull may pass its edge by the LP's outward rounding)
             box = Box(np.maximum(box.lo, self.domain[0]), np.minimum(box.hi, self.domain[1]))
         if not (np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
-            raise UnboundedSetError("the posterior's hull is not finite")
+            raise UnboundedSetError(
+                f"the hull of the posterior at step {self.k} is not finite ({box!r}): bound "
+                "the initial state set tighter, or give a state_domain")
         self.posterior = X
         step = self._step(box, status)
         # prediction: X+ = M X + offset + P + W, cut by f's natural enclosure over the box
         lin = self._linearize(self._f, box, uv)
         self.pred_fallback = lin is None
         if lin is None:  # (f's natural enclosure over the box alone)
-            f_lo, f_hi = self._f.value(np.concatenate([box.lo, uv]),
-                                       np.concatenate([box.hi, uv]))
-            Xp = ConstrainedZonotope.from_box(f_lo, f_hi)
+            Xp = ConstrainedZonotope.from_box(*self._f.enclose(box, uv))
         else:
             M, offset, rad = lin
             Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
                                                         round_up(offset + rad))
-            Xp = self._cut(Xp, M, offset, rad, box, uv)
+            Xp = self._cut(Xp, M, rad, box, uv)
         if self.W is not None:
             Xp = Xp + self.W
         self.prior = self._reduce(Xp)
@@ -448,7 +456,7 @@ class NonlinearSetObserver:
         try:
             return g.linearize(box.lo, box.hi, u)
         except DomainError:
-            g.value(np.concatenate([box.lo, u]), np.concatenate([box.hi, u]))  # (raises)
+            g.enclose(box, u)  # (raises)
             return None
 
     def _in_domain(self, X: ConstrainedZonotope, box: Box) -> tuple[ConstrainedZonotope, Box]:
@@ -469,25 +477,19 @@ class NonlinearSetObserver:
         X = X.intersect(ConstrainedZonotope.from_box(lo[sel], hi[sel]), np.eye(X.dim)[sel])
         return X, Box(lo, hi)
 
-    def _cut(self, Xp: ConstrainedZonotope, M: NDArray[np.float64],
-             offset: NDArray[np.float64], rad: NDArray[np.float64], box: Box,
-             u: NDArray[np.float64]) -> ConstrainedZonotope:
+    def _cut(self, Xp: ConstrainedZonotope, M: NDArray[np.float64], rad: NDArray[np.float64],
+             box: Box, u: NDArray[np.float64]) -> ConstrainedZonotope:
         """``Xp`` intersected with the natural interval enclosure ``[f](B)`` in the
         coordinates where that box is narrower than the interval image of ``B`` under the
         linearization (by more than :data:`CUT_GAIN` of it): both enclose ``f(X)``, and
         on a large box with a rational ``f`` the mean-value form alone can be several
         times wider (the dependency effect in the interval Jacobian)."""
-        z_lo = np.concatenate([box.lo, u])
-        z_hi = np.concatenate([box.hi, u])
-        f_lo, f_hi = self._f.value(z_lo, z_hi)
-        c, r = box_center_radius(box.lo, box.hi)
-        lin_rad = np.abs(M) @ r + rad
-        lin_c = M @ c + offset
+        f_lo, f_hi = self._f.enclose(box, u)
+        _, r = box_center_radius(box.lo, box.hi)
+        lin_rad = np.abs(M) @ r + rad  # (the linearization's radius over B: the choice only)
         sel = np.flatnonzero(f_hi - f_lo < (1.0 - CUT_GAIN) * 2.0 * lin_rad)
         if sel.size == 0 or not (np.isfinite(f_lo[sel]).all() and np.isfinite(f_hi[sel]).all()):
             return Xp
-        # (lin_c: only the choice of coordinates; the cut is f's enclosure itself)
-        del lin_c
         R = np.eye(Xp.dim)[sel]
         return Xp.intersect(ConstrainedZonotope.from_box(f_lo[sel], f_hi[sel]), R)
 
