@@ -44,14 +44,14 @@ NOT_CERTIFIED = 5  # the certified bound is -inf or far from the objective
 
 
 @njit(cache=True)
-def _refactor(A, basis, Binv):
-    """``Binv = inv(A[:, basis])`` (LAPACK ``getrf``/``getri``); False if singular or
-    inaccurate.
+def _refactor(A, basis, BinvT):
+    """``BinvT = inv(A[:, basis])^T`` (LAPACK ``getrf``/``getri``; the inverse is kept
+    transposed, see :func:`_entering_column`); False if singular or inaccurate.
 
     LAPACK, not a hand-written Gauss-Jordan: at m = 210 rows the latter took 12 ms
     against 1.1 ms, which every ``REFACTOR_EVERY`` pivots was most of the cost of a
-    pivot. The inverse is accepted only if ``B (Binv 1) = 1`` holds to ``1e-9``
-    relative to ``|B| |Binv 1|`` (one O(m^2) residual): an ill-conditioned basis
+    pivot. The inverse is accepted only if ``B (B^-1 1) = 1`` holds to ``1e-9``
+    relative to ``|B| |B^-1 1|`` (one O(m^2) residual): an ill-conditioned basis
     is reported (``NUMERICAL``), as the Gauss-Jordan's pivot threshold did.
     Soundness does not depend on it (every multiplier is certified).
     """
@@ -77,20 +77,36 @@ def _refactor(A, basis, Binv):
             s += abs(t)
         if not abs(r) <= 1e-9 * s:  # (also catches NaN)
             return False
-    Binv[:, :] = inv
+    BinvT[:, :] = inv.T
     return True
 
 
 @njit(cache=True)
-def primal_residual(A, b, x):
-    """``max_i |A_i x - b_i| / (1 + |b_i| + |A_i| |x|)``."""
-    m, n = A.shape
+def sparse_pattern(A):
+    """``(rows, cols)`` of a dense matrix, exact zeros left out: ``rows = (indptr, indices,
+    data)`` row by row (the columns ascending) and ``cols`` the same column by column.
+
+    The simplices' loops over ``A`` (pivot row, entering column, basic solution, reduced
+    costs, residual) run over these: the window LPs are 4-40 % nonzeros (a 30-tank
+    cascade's 210 x 540 window 16 %), and a product that skips exact zeros adds the same
+    terms in the same order as the dense loop, so every iterate is the dense loop's.
+    """
+    cols = csc_of(A)
+    rows = csc_of(np.ascontiguousarray(A.T))
+    return rows, cols
+
+
+@njit(cache=True)
+def primal_residual(rows, b, x):
+    """``max_i |A_i x - b_i| / (1 + |b_i| + |A_i| |x|)`` (``rows``: ``A`` row by row,
+    :func:`sparse_pattern`)."""
+    indptr, indices, data = rows
     worst = 0.0
-    for i in range(m):
+    for i in range(b.size):
         r = -b[i]
         s = 1.0 + abs(b[i])
-        for j in range(n):
-            t = A[i, j] * x[j]
+        for p in range(indptr[i], indptr[i + 1]):
+            t = data[p] * x[indices[p]]
             r += t
             s += abs(t)
         worst = max(worst, abs(r) / s)
@@ -98,70 +114,108 @@ def primal_residual(A, b, x):
 
 
 @njit(cache=True)
-def _reduced_costs(A, w, basis, Binv, y, d):
-    """``y = Binv^T w_B`` and ``d = w - A^T y`` (rows of ``Binv`` and ``A``, axpy)."""
-    m, n = A.shape
-    y[:] = 0.0
+def _reduced_costs(rows, w, basis, BinvT, y, d):
+    """``y = B^-T w_B`` and ``d = w - A^T y`` (rows of ``BinvT`` and of ``A``, sparse)."""
+    indptr, indices, data = rows
+    m = basis.size
+    wB = np.empty(m)
     for k in range(m):
-        wk = w[basis[k]]
-        if wk != 0.0:
-            for i in range(m):
-                y[i] += wk * Binv[k, i]
+        wB[k] = w[basis[k]]
+    # y_i = sum_k wB_k (B^-1)[k, i], each summed in the order k = 0, 1, ..., four rows
+    # of BinvT at a time (four independent sums: the same values, four times the
+    # throughput of one)
+    i = 0
+    while i + 4 <= m:
+        s0 = s1 = s2 = s3 = 0.0
+        for k in range(m):
+            wk = wB[k]
+            s0 += wk * BinvT[i, k]
+            s1 += wk * BinvT[i + 1, k]
+            s2 += wk * BinvT[i + 2, k]
+            s3 += wk * BinvT[i + 3, k]
+        y[i] = s0
+        y[i + 1] = s1
+        y[i + 2] = s2
+        y[i + 3] = s3
+        i += 4
+    while i < m:
+        s0 = 0.0
+        for k in range(m):
+            s0 += wB[k] * BinvT[i, k]
+        y[i] = s0
+        i += 1
     d[:] = w
     for i in range(m):
         yi = y[i]
         if yi != 0.0:
-            for j in range(n):
-                d[j] -= yi * A[i, j]
+            for p in range(indptr[i], indptr[i + 1]):
+                d[indices[p]] -= yi * data[p]
 
 
 @njit(cache=True)
-def _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs):
+def _basic_solution(cols, b, h, basis, upper, isb, BinvT, x, rhs):
     """The basic solution: each nonbasic ``x_j`` at the bound ``upper[j]`` selects, then
-    ``x_B = Binv (b - N x_N)``."""
+    ``x_B = B^-1 (b - N x_N)`` (``cols``: ``A`` column by column, sparse)."""
+    indptr, indices, data = cols
     m = basis.size
     rhs[:] = b
-    for j in range(AT.shape[0]):
+    for j in range(h.size):
         if isb[j]:
             continue
         xj = h[j] if upper[j] else -h[j]
         x[j] = xj
         if xj != 0.0:
+            for p in range(indptr[j], indptr[j + 1]):
+                rhs[indices[p]] -= xj * data[p]
+    acc = np.zeros(m)
+    for k in range(m):
+        rk = rhs[k]
+        if rk != 0.0:
             for i in range(m):
-                rhs[i] -= xj * AT[j, i]
+                acc[i] += BinvT[k, i] * rk
     for i in range(m):
-        s = 0.0
-        for k in range(m):
-            s += Binv[i, k] * rhs[k]
-        x[basis[i]] = s
+        x[basis[i]] = acc[i]
 
 
 @njit(cache=True)
-def _entering_column(Binv, AT, q, col):
-    """``col = Binv a_q``; returns ``max |col|``."""
+def _entering_column(BinvT, cols, q, col):
+    """``col = B^-1 a_q`` (``cols``: ``A`` column by column, sparse); returns ``max |col|``.
+
+    The inverse is kept transposed (``BinvT[k, i] = (B^-1)[i, k]``) so that this product
+    and the basic solution are contiguous ``axpy`` over the nonzeros of ``a_q``, and the
+    eta update touches only the rows of ``BinvT`` whose entry in the pivot column is
+    nonzero (the inverse of a window basis is about 20 % nonzeros): on a 30-tank
+    cascade's 210 x 540 window LP a pivot went from 100 to about 40 us. Each ``col[i]``
+    sums the same terms in the same order as the row-wise product, so the iterates are
+    unchanged.
+    """
+    indptr, indices, data = cols
     m = col.size
+    col[:] = 0.0
+    for p in range(indptr[q], indptr[q + 1]):
+        k = indices[p]
+        v = data[p]
+        for i in range(m):
+            col[i] += BinvT[k, i] * v
     cmax = 0.0
     for i in range(m):
-        s = 0.0
-        for k in range(m):
-            s += Binv[i, k] * AT[q, k]
-        col[i] = s
-        cmax = max(cmax, abs(s))
+        cmax = max(cmax, abs(col[i]))
     return cmax
 
 
 @njit(cache=True)
-def _eta_update(Binv, col, r):
-    """Rank-one update of the explicit inverse for pivot row ``r`` of ``col = Binv a_q``."""
+def _eta_update(BinvT, col, r):
+    """Rank-one update of the explicit inverse (kept transposed) for pivot row ``r`` of
+    ``col = B^-1 a_q``: row ``r`` of ``B^-1`` divided by the pivot, then each other row
+    ``i`` less ``col[i]`` times it (only the columns where row ``r`` is nonzero change)."""
     m = col.size
     piv = col[r]
     for k in range(m):
-        Binv[r, k] /= piv
-    for i in range(m):
-        if i != r and col[i] != 0.0:
-            f = col[i]
-            for k in range(m):
-                Binv[i, k] -= f * Binv[r, k]
+        t = BinvT[k, r] / piv
+        if t != 0.0:
+            for i in range(m):
+                BinvT[k, i] -= col[i] * t
+        BinvT[k, r] = t
 
 
 @njit(cache=True)
@@ -178,23 +232,23 @@ def _start(basis, w, n):
 
 
 @njit(cache=True)
-def _pivot_row(Binv, A, r, sgn, alpha):
-    """``alpha = sgn * Binv[r, :] A`` (rows of ``A``, axpy)."""
-    m, n = A.shape
+def _pivot_row(BinvT, rows, r, sgn, alpha):
+    """``alpha = sgn * (B^-1)[r, :] A`` (``rows``: ``A`` row by row, sparse)."""
+    indptr, indices, data = rows
     alpha[:] = 0.0
-    for k in range(m):
-        bk = sgn * Binv[r, k]
+    for k in range(BinvT.shape[0]):
+        bk = sgn * BinvT[k, r]
         if bk != 0.0:
-            for j in range(n):
-                alpha[j] += bk * A[k, j]
+            for p in range(indptr[k], indptr[k + 1]):
+                alpha[indices[p]] += bk * data[p]
 
 
 @njit(cache=True)
-def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
+def dual_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
     """Bounded dual simplex for ``min w^T x, A x = b, |x_j| <= h_j`` (all ``h`` finite).
 
-    ``AT`` is ``A`` transposed (contiguous), for column access. ``basis`` (m
-    column indices), ``upper`` (nonbasic at ``+h``), ``Binv`` (the basis
+    ``sp`` is ``A``'s sparse pattern (:func:`sparse_pattern`). ``basis`` (m
+    column indices), ``upper`` (nonbasic at ``+h``), ``BinvT`` (the basis
     inverse) and ``npiv[0]`` (pivots since the last refactorisation) are the
     warm-start state, updated in place. Every basis is made dual feasible by
     putting each nonbasic variable at the bound its reduced cost selects, so any
@@ -202,7 +256,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     Dual steepest-edge pricing of the leaving row, the bound-flipping ("long
     step") ratio test with Harris's tolerance at its stop; the basis inverse is
     updated by a rank-one (eta) update and recomputed every ``REFACTOR_EVERY``
-    pivots (``m / 4`` for larger bases). The reduced costs are updated along
+    pivots (``m / 2`` for larger bases). The reduced costs are updated along
     the pivot row and recomputed after each refactorisation and before
     optimality is declared. Inner loops are written as contiguous ``axpy``
     updates (vectorisable without reassociation).
@@ -221,18 +275,23 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     col = np.empty(m)
     cand = np.empty(n, np.int64)
     tj = np.empty(n)
+    vrow = np.empty(m, np.int64)
+    vval = np.empty(m)
+    vrel = np.empty(m)
+    vbeta = np.empty(m)
     need_full = True  # recompute y and d from scratch
     clean = False  # d was recomputed and no pivot since
-    # (at least every m / 4 pivots: a refactorisation costs O(m^3), a pivot O(m n))
-    refactor_at = max(REFACTOR_EVERY, m // 4)
+    # (every m / 2 pivots for larger bases: a refactorisation costs O(m^3), a pivot
+    # O(m^2) at most; at m = 210 every m / 4 pivots was a third of a pivot's cost)
+    refactor_at = max(REFACTOR_EVERY, m // 2)
     for it in range(maxit + 1):
         if npiv[0] >= refactor_at:
-            if not _refactor(A, basis, Binv):
+            if not _refactor(A, basis, BinvT):
                 return NUMERICAL
             npiv[0] = 0
             need_full = True
         if need_full:
-            _reduced_costs(A, w, basis, Binv, y, d)
+            _reduced_costs(sp[0], w, basis, BinvT, y, d)
             need_full = False
             clean = True
         # every nonbasic variable at the bound its reduced cost selects
@@ -245,14 +304,12 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
                 upper[j] = False
             elif s < -dtol:
                 upper[j] = True
-        _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs)
+        _basic_solution(sp[1], b, h, basis, upper, isb, BinvT, x, rhs)
         # leaving row: among the violations beyond the tolerance (relative to the
         # variable's own range; columns are equilibrated), the largest by dual
         # steepest edge, violation^2 / ||row i of B^-1||^2 (Forrest-Goldfarb; the
         # explicit inverse gives the exact weights)
-        r = -1
-        worst = 0.0
-        score = 0.0
+        nv = 0
         for i in range(m):
             j = basis[i]
             v = x[j]
@@ -265,14 +322,27 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             rel = viol / (ptol * (1.0 + h[j]))
             if rel <= 1.0:
                 continue
-            beta = 0.0
-            for k in range(m):
-                beta += Binv[i, k] * Binv[i, k]
-            sc = viol * viol / max(beta, 1e-300)
+            vrow[nv] = i
+            vval[nv] = viol
+            vrel[nv] = rel
+            nv += 1
+        # the weights ||row i of B^-1||^2 of the violated rows (columns of BinvT, summed
+        # row by row of BinvT: contiguous reads, each weight in the order k = 0, 1, ...)
+        for t in range(nv):
+            vbeta[t] = 0.0
+        for k in range(m):
+            for t in range(nv):
+                bk = BinvT[k, vrow[t]]
+                vbeta[t] += bk * bk
+        r = -1
+        worst = 0.0
+        score = 0.0
+        for t in range(nv):
+            sc = vval[t] * vval[t] / max(vbeta[t], 1e-300)
             if sc > score:
                 score = sc
-                worst = rel
-                r = i
+                worst = vrel[t]
+                r = vrow[t]
         if r < 0:
             if clean:
                 return OPTIMAL
@@ -282,7 +352,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             return ITERATION_LIMIT
         p = basis[r]
         sgn = 1.0 if x[p] < -h[p] else -1.0
-        _pivot_row(Binv, A, r, sgn, alpha)
+        _pivot_row(BinvT, sp[0], r, sgn, alpha)
         amax = 0.0
         for j in range(n):
             if isb[j] or h[j] == 0.0:
@@ -334,7 +404,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             if a > best:
                 best = a
                 q = j
-        cmax = _entering_column(Binv, AT, q, col)
+        cmax = _entering_column(BinvT, sp[1], q, col)
         if abs(col[r]) <= 1e-11 * cmax:
             npiv[0] = FORCE_REFACTOR  # refactor on the next call
             return NUMERICAL
@@ -348,7 +418,7 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
                 d[j] -= theta * a
         d[q] = 0.0
         d[p] = -sgn * theta
-        _eta_update(Binv, col, r)
+        _eta_update(BinvT, col, r)
         basis[r] = q
         isb[p] = False
         isb[q] = True
@@ -360,11 +430,11 @@ def dual_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
 
 
 @njit(cache=True)
-def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
+def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
     """Bounded primal simplex for ``min w^T x, A x = b, |x_j| <= h_j`` from a primal
     feasible basis (the optimal basis of another objective on the same data).
 
-    The state (``basis``, ``upper``, ``Binv``, ``npiv``) is that of
+    The state (``basis``, ``upper``, ``BinvT``, ``npiv``) is that of
     :func:`dual_simplex` and updated in place. Devex pricing (Forrest-Goldfarb's
     reference framework; the weights start at 1 on every call), Harris's two-pass
     ratio test, bound flips of the entering variable without a basis change.
@@ -390,23 +460,24 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
     need_full = True  # recompute x, y and d from scratch
     clean = False  # x and d were recomputed and no pivot since
     first = True
-    # (at least every m / 4 pivots: a refactorisation costs O(m^3), a pivot O(m n))
-    refactor_at = max(REFACTOR_EVERY, m // 4)
+    # (every m / 2 pivots for larger bases: a refactorisation costs O(m^3), a pivot
+    # O(m^2) at most; at m = 210 every m / 4 pivots was a third of a pivot's cost)
+    refactor_at = max(REFACTOR_EVERY, m // 2)
     for it in range(maxit + 1):
         if npiv[0] >= refactor_at:
-            if not _refactor(A, basis, Binv):
+            if not _refactor(A, basis, BinvT):
                 return NUMERICAL
             npiv[0] = 0
             need_full = True
         if need_full:
-            _basic_solution(AT, b, h, basis, upper, isb, Binv, x, rhs)
+            _basic_solution(sp[1], b, h, basis, upper, isb, BinvT, x, rhs)
             if first:
                 for i in range(m):
                     j = basis[i]
                     if abs(x[j]) > h[j] + ptol * (1.0 + h[j]):
                         return NUMERICAL  # not primal feasible: not this method's start
                 first = False
-            _reduced_costs(A, w, basis, Binv, y, d)
+            _reduced_costs(sp[0], w, basis, BinvT, y, d)
             for i in range(m):
                 d[basis[i]] = 0.0
             need_full = False
@@ -431,7 +502,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
         if it == maxit:
             return ITERATION_LIMIT
         dirq = 1.0 if not upper[q] else -1.0  # x_q moves up from -h or down from +h
-        cmax = _entering_column(Binv, AT, q, col)  # x_B changes by -theta dirq col
+        cmax = _entering_column(BinvT, sp[1], q, col)  # x_B changes by -theta dirq col
         atol = 1e-9 * cmax
         # Harris pass 1: the largest step keeping every basic variable within its
         # bounds relaxed by the tolerance
@@ -482,7 +553,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
             return NUMERICAL
         p = basis[r]
         # pivot row (old inverse), then the updates of x, d and the devex weights
-        _pivot_row(Binv, A, r, 1.0, alpha)
+        _pivot_row(BinvT, sp[0], r, 1.0, alpha)
         aq = alpha[q]  # = col[r]
         step = tr * dirq
         for i in range(m):
@@ -504,7 +575,7 @@ def primal_simplex(A, AT, b, h, w, basis, upper, Binv, npiv, x, y, maxit, nit):
         d[q] = 0.0
         d[p] = -theta
         ref[p] = max(wq / (aq * aq), 1.0)
-        _eta_update(Binv, col, r)
+        _eta_update(BinvT, col, r)
         basis[r] = q
         isb[p] = False
         isb[q] = True
@@ -561,8 +632,9 @@ def solve_batch(structure, data, state, params, out):
 
     The arguments are grouped by lifetime (all tuples, in this order):
 
-    * ``structure = (A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat,
-      order)`` (``csc``: ``A``'s ``(indptr, indices, data)`` for the certificate; ``order``:
+    * ``structure = (A, csc, fidx, pinvU, Ared, sp, Wfull, Wred, yU, Q2, R, dirstat,
+      order)`` (``csc``: ``A``'s ``(indptr, indices, data)`` for the certificate; ``sp``:
+      ``Ared``'s :func:`sparse_pattern`, for the simplices' loops; ``order``:
       the order the LPs are solved in, :func:`~setobs.lp.fastlp.chain_order`): fixed for a
       set structure (:class:`~setobs.lp.fastlp.FixedStructureLP`);
     * ``data = (b, h, b_err, bred, hB)``: this set's right-hand side and bounds;
@@ -583,7 +655,7 @@ def solve_batch(structure, data, state, params, out):
     certified bound is finite and within ``gap_rtol (1 + |obj|)`` of the
     simplex objective. ``ys[i]`` receives the certified multiplier.
     """
-    A, csc, fidx, pinvU, Ared, AredT, Wfull, Wred, yU, Q2, R, dirstat, order = structure
+    A, csc, fidx, pinvU, Ared, sp, Wfull, Wred, yU, Q2, R, dirstat, order = structure
     indptr, indices, cdata = csc
     b, h, b_err, bred, hB = data
     neg_h = -h
@@ -602,7 +674,6 @@ def solve_batch(structure, data, state, params, out):
     wp = np.empty(nb)
     keep_b = np.empty(mr, np.int64)
     keep_u = np.empty(nb, np.bool_)
-    keep_inv = np.empty((mr, mr))
     xs = np.empty((n_lp, nb))  # optimal basic solutions of this data set's LPs
     solved = np.zeros(n_lp, np.bool_)
     for ii in range(n_lp):
@@ -656,13 +727,12 @@ def solve_batch(structure, data, state, params, out):
         if use_primal:
             keep_b[:] = bases[i]
             keep_u[:] = upper[i]
-            keep_inv[:, :] = binv[i]
             bases[i, :] = bases[src]
             upper[i, :] = upper[src]
             binv[i, :, :] = binv[src]
             npiv[i] = npiv[src]
             nit[0] = 0
-            code = primal_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i],
+            code = primal_simplex(Ared, sp, bred, hB, Wred[i], bases[i], upper[i],
                                   binv[i], npiv[i:i + 1], x, z, maxit, nit)
             est[i, 1] = nit[0] if code == OPTIMAL else 1e9
             est[i, 0] *= EST_DECAY
@@ -670,14 +740,13 @@ def solve_batch(structure, data, state, params, out):
             if code != OPTIMAL:  # (from the last data set's basis of this LP instead)
                 bases[i, :] = keep_b
                 upper[i, :] = keep_u
-                binv[i, :, :] = keep_inv
-                npiv[i] = FORCE_REFACTOR
+                npiv[i] = FORCE_REFACTOR  # (its inverse: recomputed from the basis)
         if code != OPTIMAL:
             nit[0] = 0
-            code = dual_simplex(Ared, AredT, bred, hB, wp, bases[i], upper[i], binv[i],
+            code = dual_simplex(Ared, sp, bred, hB, wp, bases[i], upper[i], binv[i],
                                 npiv[i:i + 1], x, z, maxit, nit)
             if code == OPTIMAL or code == ITERATION_LIMIT:
-                code = dual_simplex(Ared, AredT, bred, hB, Wred[i], bases[i], upper[i],
+                code = dual_simplex(Ared, sp, bred, hB, Wred[i], bases[i], upper[i],
                                     binv[i], npiv[i:i + 1], x, z, maxit, nit)
             if not use_primal:
                 est[i, 0] = DUAL_PIVOT_COST * nit[0] if code == OPTIMAL else 1e9
@@ -689,7 +758,7 @@ def solve_batch(structure, data, state, params, out):
         # The basic solution must satisfy the reduced equations: an inaccurate basis
         # inverse gives a point whose objective (and a multiplier certified near it)
         # undercuts the true minimum while the gap below looks closed.
-        if primal_residual(Ared, bred, x) > FASTLP_PRIMAL_RTOL:
+        if primal_residual(sp[0], bred, x) > FASTLP_PRIMAL_RTOL:
             codes[i] = NOT_CERTIFIED
             continue
         xs[i, :] = x
@@ -747,7 +816,7 @@ def phase1(As, bs, h, maxit):
         A[i, n + i] = 1.0
         A[i, n + m + i] = -1.0
         S += abs(bs[i])
-    AT = np.ascontiguousarray(A.T)
+    sp = sparse_pattern(A)
     H = np.empty(N)
     H[:n] = h
     H[n:] = S
@@ -760,14 +829,14 @@ def phase1(As, bs, h, maxit):
         wp[j] = w[j] + sg * PERTURB * (1.0 + frac)
     basis = np.arange(n, n + m).astype(np.int64)
     upper = np.zeros(N, np.bool_)
-    Binv = np.eye(m)
+    BinvT = np.eye(m)
     npiv = np.zeros(1, np.int64)
     nit = np.zeros(1, np.int64)
     x = np.zeros(N)
     y = np.zeros(m)
-    code = dual_simplex(A, AT, bs, H, wp, basis, upper, Binv, npiv, x, y, maxit, nit)
+    code = dual_simplex(A, sp, bs, H, wp, basis, upper, BinvT, npiv, x, y, maxit, nit)
     if code == OPTIMAL:
-        code = dual_simplex(A, AT, bs, H, w, basis, upper, Binv, npiv, x, y, maxit, nit)
+        code = dual_simplex(A, sp, bs, H, w, basis, upper, BinvT, npiv, x, y, maxit, nit)
     return code, x[:n].copy(), y
 
 

@@ -122,7 +122,7 @@ class LPState:
     """Warm-start state of one user of a :class:`FixedStructureLP` (mutable, not shared).
 
     Holds, per objective, the simplex basis, the nonbasic bound flags, the
-    explicit basis inverse, the pivot counter and the pivot counts of its two
+    explicit basis inverse (stored transposed), the pivot counter and the pivot counts of its two
     warm starts, the simplex iterations so far (``iters``: primal, dual), plus the
     output buffers.
     Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
@@ -287,7 +287,7 @@ class FixedStructureLP:
         self._absAB = np.abs(A_B)
         self._absQ0 = np.abs(self.Q0)
         self.Ared = np.ascontiguousarray(A_red)
-        self.AredT = np.ascontiguousarray(self.Ared.T)
+        self.sp = _simplex.sparse_pattern(self.Ared)
         mr = self.Ared.shape[0]
         self.mr = mr
         basis = np.arange(0, dtype=np.int64)
@@ -295,7 +295,7 @@ class FixedStructureLP:
         if mr and self.usable:
             _, _, piv = scipy.linalg.qr(self.Ared, pivoting=True, mode="economic")
             basis = np.sort(piv[:mr]).astype(np.int64)
-            binv = np.linalg.inv(self.Ared[:, basis])
+            binv = np.ascontiguousarray(np.linalg.inv(self.Ared[:, basis]).T)  # (transposed)
         self.basis0 = basis
         self.binv0 = binv
         self.maxit = 20 * (mr + 5)
@@ -347,7 +347,8 @@ class FixedStructureLP:
         self.Q2 = np.eye(m)
         self.Q0 = self._absQ0 = np.zeros((m, 0))
         self._absAB = np.abs(As)
-        self.Ared, self.AredT = As, np.ascontiguousarray(As.T)
+        self.Ared = As
+        self.sp = _simplex.sparse_pattern(As)
         self.mr = m
         self.basis0 = np.arange(n, n + m, dtype=np.int64)
         self.binv0 = np.diag(1.0 / (R * S[n:]))
@@ -464,7 +465,7 @@ class FixedStructureLP:
             return bounds, np.zeros(self.n_lp, dtype=bool)
         if b_err is None:
             berr = np.zeros(self.m)
-        args = ((self.A, self.csc, self.fidx, self.pinvU_orig, self.Ared, self.AredT, self.W,
+        args = ((self.A, self.csc, self.fidx, self.pinvU_orig, self.Ared, self.sp, self.W,
                  self.Wred, self.yU, self.Q2, self.R, self.dirstat, self.order),
                 (b, h, berr, bred, hB),
                 (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
