@@ -216,7 +216,10 @@ def test_auto_keeps_the_box_where_the_shape_does_not_matter():
     ra = auto.run(Y)
     rb = so.SMFDO(sys, window=10, restart="box").run(Y)
     assert ra.violations(D) == 0
-    assert auto.stats["fast"] == 150 and auto.stats["polytope_restarts"] < 50
+    # the polytope for the first 15 window steps, then the box from the first probe (the
+    # 16th window step) on, with probes at the 32nd and 64th (the interval doubling while
+    # they agree; the next, the 128th, is beyond the record's 112 window steps)
+    assert auto.stats["fast"] == 150 and auto.stats["polytope_restarts"] == 15 + 3
     fin = np.isfinite(rb.lo)
     tol = 1e-9 * (1 + np.abs(rb.lo[fin]))
     assert (ra.lo[fin] >= rb.lo[fin] - tol).all() and (ra.hi[fin] <= rb.hi[fin] + tol).all()
@@ -232,6 +235,25 @@ def test_auto_keeps_the_box_where_the_shape_does_not_matter():
     assert obs.restart_lags == 30
     assert obs.model.restart_poly.F_all.shape == (120, 4)
     assert obs.stats["polytope_restarts"] == 60 - 10 - 24
+
+
+def test_auto_weighs_the_polytopes_gain_on_average():
+    """The rule at a probe: the polytope is kept when it narrows the bands by more than
+    1 % of the box restart's widths on average or more than 5 % in one coordinate;
+    coordinates with a non-finite or zero width are left out."""
+    from setobs.setmembership._windowed import polytope_pays
+
+    wb = np.ones(10)
+    one = wb.copy()
+    one[3] = 0.97  # 3 % in one coordinate, 0.3 % on average: the box
+    assert not polytope_pays(one, wb)
+    one[3] = 0.94  # 6 % in one coordinate: the polytope
+    assert polytope_pays(one, wb)
+    assert polytope_pays(np.full(10, 0.985), wb)  # 1.5 % everywhere
+    assert not polytope_pays(np.full(10, 0.995), wb)  # 0.5 % everywhere
+    # (only the third coordinate counts: 2 % there)
+    assert polytope_pays(np.array([1.0, 0.0, 0.98]), np.array([np.inf, 0.0, 1.0]))
+    assert not polytope_pays(np.array([1.0, 0.0]), np.array([np.inf, 0.0]))
 
 
 def test_a_singular_dynamics_restarts_from_the_box():

@@ -101,7 +101,11 @@ class SMFDOState:
         self.skipped = 0  # skipped steps since k = 0 (max_skip_fraction)
         self.run_length = 0  # the record length run() is processing (0: update() alone)
         self.auto_poly = True  # restart="auto": the polytope restart is in use
-        self.auto_count = 0  # window steps on the fast path (probes every AUTO_PROBE)
+        self.auto_count = 0  # window steps on the fast path
+        # steps between its probes (doubling while they agree) and the window step of the
+        # next one (0: not yet set, _windowed.AUTO_PROBE)
+        self.auto_period = 0
+        self.auto_next = 0
         # the polytope restart's support values at every step (probed; None: not decided)
         self.sup_on: bool | None = None
         self.sup_miss = 0  # probes in a row at which they did not pay

@@ -94,11 +94,13 @@ wide); where the box restart is already nearly exact (the paper example at windo
 10) the two agree. Its LPs are larger (about 3 to 10 times the box restart's time
 per step). It is used with fixed uncertainty sets and an invertible,
 well-conditioned ``A_o``; otherwise (callables, a pure delay) the window restarts
-from the box. With ``restart="auto"`` the box restart is computed too every
-``AUTO_PROBE = 16`` window steps on the fast path, and the polytope stays in use
-while it is narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of the
-width in some coordinate (where the shape does not matter the step keeps the box
-restart's cost); on a probe step the narrower one is reported; the reference path
+from the box. With ``restart="auto"`` the other restart is computed too at a probe
+(after ``AUTO_PROBE = 16`` window steps on the fast path, the interval doubling up to
+``AUTO_PROBE_MAX = 64`` while the probes keep the choice), and the polytope stays in
+use while it is narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of
+the widths on average, or ``AUTO_GAIN_MAX = 5e-2`` in some coordinate (where the
+shape does not matter the step keeps the box restart's cost); on a probe step the
+narrower one is reported; the reference path
 (``fast=False``) keeps the polytope. With the polytope, the first restart waits for
 its depth (up to ``restart_lags`` steps beyond the window, while the whole history
 is no larger an LP than the window's); until then each step is the whole history
@@ -276,10 +278,9 @@ class SMFDO:
         carried back through the dynamics (at most 120), with ranges from the earlier
         hulls and the window's own support values
         (:mod:`setobs.setmembership._restart`, soundness proof there). ``"auto"``
-        (default): the polytope while it is narrower than the box by more than
-        ``AUTO_GAIN`` somewhere, checked every ``AUTO_PROBE`` window steps. Both are
-        certified; the module notes (*The window's restart*) give the measured widths
-        and costs.
+        (default): the polytope while it is narrower than the box by ``AUTO_GAIN`` on
+        average or ``AUTO_GAIN_MAX`` somewhere, checked at probes. Both are certified;
+        the module notes (*The window's restart*) give the rule, widths and costs.
     restart_depth : int
         ``m >= 1``: the hull at ``k - delta`` and up to ``m - 1`` earlier ones
         (default 60; the restart keeps at most 120 rows, the smallest lags first, so
