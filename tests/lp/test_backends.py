@@ -160,3 +160,38 @@ def test_the_box_lp_grows_and_undoes_blocks_like_a_fresh_one(chain, monkeypatch)
     for i, w in enumerate(W):
         e = _exact(A, b, h, w)
         assert Fraction(again[i]) <= e and float(e) - again[i] <= 1e-9 * (1 + abs(float(e)))
+
+
+def test_a_failed_warm_solve_restarts_a_fresh_model_from_the_warm_basis(monkeypatch):
+    """When HiGHS's warm primal and then its dual simplex both stop undecided (on the
+    30-tank cascade's whole-history LP at k = 186 they did, and a cold model then ran for
+    minutes), the next attempt is a fresh model started from the basis the warm solve
+    began with: one more solve, not a cold one, and the bound is still the exact optimum."""
+    from setobs.lp import highs
+
+    monkeypatch.setattr(boxlp, "CHAIN_MIN_OBJECTIVES", 1)
+    A, b, h, W, _ = _instances(False)[4]
+    lp = BoxLP()
+    cols = lp.add_cols(-h, h)
+    r, c = np.nonzero(A)
+    lp.add_rows(r, c, A[r, c], b, np.zeros(b.size))
+    assert lp.minimize_all(cols, W) is not None  # (the model is warm from here on)
+    calls = []
+    real = highs.solve
+
+    def failing(hs, *, primal=False, iteration_limit=None):
+        calls.append((primal, hs.getBasis().valid))
+        if len(calls) <= 2:  # (the warm primal, then the dual from where it stopped)
+            return "undecided"
+        return real(hs, primal=primal, iteration_limit=iteration_limit)
+
+    monkeypatch.setattr(highs, "solve", failing)
+    again = lp.minimize_all(cols, W)
+    assert again is not None
+    # the third solve: a fresh model by the primal simplex, from a valid basis; then the
+    # chain goes on on that model (one solve per objective)
+    assert calls[2] == (True, True)
+    assert len(calls) == 2 + W.shape[0]
+    for i, w in enumerate(W):
+        e = _exact(A, b, h, w)
+        assert Fraction(again[i]) <= e and float(e) - again[i] <= 1e-9 * (1 + abs(float(e)))

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 
 __all__ = ["RETRY_SETTINGS", "basis", "highspy", "new_model", "option", "pass_csc",
-           "pass_dense", "simplex_limit", "solve", "status", "status_name"]
+           "pass_dense", "set_basis", "simplex_limit", "solve", "status", "status_name"]
 
 # HiGHS loads on the first LP, not on ``import setobs``.
 highspy = lazy_module("highspy")
@@ -99,6 +99,25 @@ def solve(hs, *, primal: bool = False, iteration_limit: int | None = None) -> st
         hs.setOptionValue("simplex_iteration_limit", int(iteration_limit))
     hs.run()
     return status(hs)
+
+
+def set_basis(hs, basis) -> bool:
+    """Start the next solve of ``hs`` from ``basis`` (a ``highspy.HighsBasis`` of a model
+    of the same size, from ``getBasis()``, which copies); ``False`` if HiGHS refuses it.
+
+    Parameters
+    ----------
+    hs : highspy.Highs
+        A model with its data.
+    basis : highspy.HighsBasis
+        The basis.
+
+    Returns
+    -------
+    bool
+        Whether the basis was taken.
+    """
+    return bool(basis.valid) and hs.setBasis(basis) == highspy.HighsStatus.kOk
 
 
 def simplex_limit(n_rows: int, n_cols: int) -> int:
