@@ -36,7 +36,7 @@ sys.path.insert(0, str(HERE))
 
 import setobs as so  # noqa: E402
 from _common import linprog_unit  # noqa: E402
-from setobs.lp import _simplex, fastlp  # noqa: E402
+from setobs.lp import fastlp  # noqa: E402
 from state_estimation import noise_model, random_system, record, tanks_outputs  # noqa: E402
 
 SETS = 5
@@ -106,8 +106,7 @@ def chains(name: str) -> dict:
         st2 = copy.deepcopy(st)
         orig(lp, b, h, st2, b_scale, b_err)
         ours = int(st2.iters.sum() - st.iters.sum())
-        hB, bred, ok = _simplex.prepare(b, h, np.zeros(0), lp.bidx, lp.S_B, lp.R, lp.Q0,
-                                        lp._absQ0, lp._absAB, lp.Q2, float(b_scale), 1e-9)
+        hB, bred, ok = lp.reduced_data(b, h, b_scale)
         assert ok
         primal, dual = highs_chain(lp, hB, bred, False), highs_chain(lp, hB, bred, True)
         out.append({"ours": ours, "highs_primal_chain": sum(primal),

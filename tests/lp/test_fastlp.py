@@ -178,15 +178,9 @@ def test_warm_start_survives_new_data():
     assert pivots > 0  # the state really was carried from call to call
 
 
-def test_window_like_lps_with_many_boxed_noise_factors():
-    """The SMFDO window's LP shape: a few state factors and many small boxed noise
-    factors entering banded rows (random 6-state plant, window 10: 40 x 106). The
-    bound-flipping dual simplex, then the primal simplex from the previous
-    objective's basis, agree with HiGHS on every objective and every new data
-    set, with the warm state carried (there the short-step dual needed 500-2000
-    pivots per LP and ran into its iteration limit)."""
-    rng = np.random.default_rng(33)
-    n_state, steps, l = 6, 10, 4
+def _window_lp(rng, n_state=6, steps=10, l=4):
+    """The SMFDO window's LP shape (states eliminated): ``A``, the hull objectives of the
+    last state (pairs ``(w, -w)``) and the factor bounds."""
     m = steps * l
     A = np.zeros((m, n_state + steps * (n_state + l)))
     Phi = rng.normal(size=(n_state, n_state))
@@ -212,10 +206,23 @@ def test_window_like_lps_with_many_boxed_noise_factors():
             col = n_state + s * (n_state + l)
             row[col:col + n_state] = np.linalg.matrix_power(Phi, steps - 1 - s)[i]
         W[2 * i], W[2 * i + 1] = row, -row
-    S = FixedStructureLP(A, W, np.zeros(n, bool))
-    state = S.new_state()
     h = np.concatenate([np.full(n_state, 2.0)] + [np.r_[np.full(n_state, 0.01),
                                                         np.full(l, 0.05)]] * steps)
+    return A, W, h
+
+
+def test_window_like_lps_with_many_boxed_noise_factors():
+    """The SMFDO window's LP shape: a few state factors and many small boxed noise
+    factors entering banded rows (random 6-state plant, window 10: 40 x 106). The
+    bound-flipping dual simplex, then the primal simplex from the previous
+    objective's basis, agree with HiGHS on every objective and every new data
+    set, with the warm state carried (there the short-step dual needed 500-2000
+    pivots per LP and ran into its iteration limit)."""
+    rng = np.random.default_rng(33)
+    A, W, h = _window_lp(rng)
+    n = A.shape[1]
+    S = FixedStructureLP(A, W, np.zeros(n, bool))
+    state = S.new_state()
     solved = total = 0
     for _ in range(15):
         xi = rng.uniform(-1, 1, n) * h
@@ -228,3 +235,56 @@ def test_window_like_lps_with_many_boxed_noise_factors():
                 solved += 1
                 assert _agree(bounds[i], fp.minimize(W[i]).bound), i
     assert solved == total
+
+
+@pytest.mark.parametrize("rel_gap", [1e-3, 0.05])
+def test_the_early_stop_stays_below_the_minimum_within_its_gap(rel_gap):
+    """``rel_gap``: on window-shaped LPs with new data at every call, each bound is at
+    most the exact minimum (HiGHS) and below it by at most ``rel_gap`` times the pair's
+    width at the previous call (plus rounding), and the chain needs fewer iterations
+    than to the optimum. Objectives not in pairs ``(w, -w)`` ignore it."""
+    A, W, h = _window_lp(np.random.default_rng(33))
+    n = A.shape[1]
+    S = FixedStructureLP(A, W, np.zeros(n, bool))
+    assert S.paired
+    exact_state, early_state = S.new_state(), S.new_state()
+    rng = np.random.default_rng(4)
+    width = None
+    early = 0
+    for _ in range(12):
+        b = A @ (rng.uniform(-1, 1, n) * h)
+        _, ok0 = S.minimize_all(b, h, exact_state)
+        bounds, ok = S.minimize_all_unchecked(b, h, early_state, rel_gap=rel_gap)
+        assert ok0.all() and ok.all()
+        fp = FactorPolytope(A, b, h)
+        ref = np.array([fp.minimize(w).bound for w in W])
+        assert (bounds <= ref + 1e-9 * (1 + np.abs(ref))).all()
+        if width is not None:  # (the first call has no previous widths: to the optimum)
+            slack = 1.01 * rel_gap * np.repeat(width, 2) + 1e-8 * (1 + np.abs(ref))
+            assert (ref - bounds <= slack).all()
+            early += int((ref - bounds > 1e-8 * (1 + np.abs(ref))).sum())
+        else:
+            np.testing.assert_allclose(bounds, ref, rtol=1e-8, atol=1e-8)
+        width = -bounds[1::2] - bounds[0::2]
+    assert early > 0  # (some bounds did stop short of the minimum)
+    assert early_state.iters.sum() < exact_state.iters.sum()
+    unpaired = FixedStructureLP(A, np.vstack([W[0::2], W[1::2]]), np.zeros(n, bool))
+    assert not unpaired.paired
+
+
+def test_the_reduced_data_are_the_lp_the_simplex_solves():
+    """``reduced_data``: the reduced LP (here without free factors: the equilibrated copy)
+    solved by HiGHS (scipy's linprog) has the minima of ``minimize_all``."""
+    from scipy.optimize import linprog
+
+    A, W, h = _window_lp(np.random.default_rng(5), steps=4)
+    n = A.shape[1]
+    S = FixedStructureLP(A, W, np.zeros(n, bool))
+    b = A @ (np.random.default_rng(6).uniform(-1, 1, n) * h)
+    bounds, ok = S.minimize_all(b, h)
+    hB, bred, consistent = S.reduced_data(b, h)
+    assert ok.all() and consistent
+    for i in range(W.shape[0]):
+        r = linprog(S.Wred[i], A_eq=S.Ared, b_eq=bred, bounds=np.c_[-hB, hB], method="highs")
+        assert r.status == 0
+        assert abs(r.fun - bounds[i]) <= 1e-7 * (1 + abs(bounds[i]))

@@ -106,6 +106,7 @@ def test_exact_mode_with_noise_equals_the_whole_history_lp(case):
         _close_outward(res.lo[k], res.hi[k], *ref)
 
 
+@pytest.mark.usefixtures("exact_window_lps")
 def test_missing_samples_equal_the_lp_without_those_rows():
     """NaN entries and an all-NaN row (a prediction step), in exact mode, and the
     windowed fast path (a structure per mask) equal to the reference path."""
@@ -159,6 +160,7 @@ def test_many_missing_patterns_fall_back_per_step_and_are_counted():
 
 
 # ---------------------------------------------------------------- fast path = reference path
+@pytest.mark.usefixtures("exact_window_lps")
 @pytest.mark.parametrize("window", [3, 10])
 def test_fast_path_with_noise_equals_the_reference_path(window):
     rng = np.random.default_rng(window)

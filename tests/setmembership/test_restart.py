@@ -126,6 +126,7 @@ def test_the_polytope_restart_is_inside_the_box_restart_at_every_step(two_mass_r
         assert (p.state_hi[fin] <= b.state_hi[fin] + np.abs(scale)).all()
 
 
+@pytest.mark.usefixtures("exact_window_lps")
 def test_known_inputs_and_disturbances_are_carried_back_soundly():
     """A disturbance (q = 1) and a known input: the carried-back rows shift by the
     inputs of the lags they span. Window 3 with the polytope restart holds the

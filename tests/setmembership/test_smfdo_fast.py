@@ -173,6 +173,7 @@ def test_windowed_recursion_amplifies_rounding():
     assert a.violations(np.array(Ds)) == 0 and b.violations(np.array(Ds)) == 0
 
 
+@pytest.mark.usefixtures("exact_window_lps")
 def test_random_systems_fast_equals_reference():
     for sys, step, Y, D, w in random_runs(np.random.default_rng(21), 6, 60):
         kw = dict(window=w, increment_set=np.full(sys.q, step))
@@ -183,6 +184,7 @@ def test_random_systems_fast_equals_reference():
         assert rf.violations(D) == 0
 
 
+@pytest.mark.usefixtures("exact_window_lps")
 def test_noisy_window_lps_stay_on_the_fast_path():
     """A random 6-state plant with 4 outputs, process and measurement noise, window 10
     (the window LP is 40 x 106, most factors small noise boxes): the compiled
@@ -214,6 +216,43 @@ def test_noisy_window_lps_stay_on_the_fast_path():
     primal, dual = obs.simplex_iterations
     assert primal > 0 and dual > 0
     assert ref.simplex_iterations == (0, 0)
+
+
+def test_the_window_lps_early_stop_is_outward_and_small(monkeypatch):
+    """The default window (its hull LPs stop within ``WINDOW_REL_GAP = 1e-3`` of the
+    coordinate's previous width, ``setobs.setmembership._window``) on the random
+    6-state plant of the test above: its bands contain the reference path's (the set
+    recursion with HiGHS, every LP to its optimum) and are at most 1 % wider, the truth
+    is inside, and the simplex needs fewer iterations than with the LPs solved to their
+    optimum."""
+    from setobs.setmembership import _window
+
+    assert _window.WINDOW_REL_GAP == 1e-3
+    rng = np.random.default_rng(3)
+    n, l = 6, 4
+    A = rng.normal(size=(n, n))
+    A *= 0.95 / np.abs(np.linalg.eigvals(A)).max()
+    B, C = rng.normal(size=(n, 1)) * 0.2, rng.normal(size=(l, n))
+    rw, rv, N = 0.01, 0.05, 40
+    U = np.sin(0.05 * np.arange(N))[:, None]
+    X, Y = noisy_record(A, B, C, U, rw, rv, rng)
+    sys = so.LinearSystem(A, np.zeros((n, 0)), C, B)
+    kw = dict(window=10, restart="box", process_noise=rw, measurement_noise=rv,
+              state_bounds=True, initial_state_set=so.Box(-2 * np.ones(n), 2 * np.ones(n)))
+    obs = so.SMFDO(sys, **kw)
+    rf = obs.run(Y, U)
+    rr = so.SMFDO(sys, fast=False, **kw).run(Y, U)
+    assert obs.stats["reference"] == 0
+    assert np.all((X >= rf.state_lo) & (X <= rf.state_hi))
+    tol = 1e-9 * (1 + np.abs(rr.state_lo))
+    assert (rf.state_lo <= rr.state_lo + tol).all()
+    assert (rf.state_hi >= rr.state_hi - 1e-9 * (1 + np.abs(rr.state_hi))).all()
+    ratio = (rf.state_hi - rf.state_lo) / (rr.state_hi - rr.state_lo)
+    assert ratio.max() <= 1.01
+    monkeypatch.setattr(_window, "WINDOW_REL_GAP", 0.0)
+    exact = so.SMFDO(sys, **kw)
+    exact.run(Y, U)
+    assert sum(obs.simplex_iterations) < sum(exact.simplex_iterations)
 
 
 def _with_outlier():

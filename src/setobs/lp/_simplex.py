@@ -430,7 +430,8 @@ def dual_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
 
 
 @njit(cache=True)
-def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
+def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit,
+                   gap_stop=0.0):
     """Bounded primal simplex for ``min w^T x, A x = b, |x_j| <= h_j`` from a primal
     feasible basis (the optimal basis of another objective on the same data).
 
@@ -448,6 +449,14 @@ def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
     a handful of pivots where the dual simplex needs about as many as from scratch
     (``setobs.setmembership._history`` saw the same with HiGHS: 1-60 pivots
     against ~150).
+
+    ``gap_stop > 0`` stops it (``OPTIMAL``) once the duality gap of the current basis is
+    at most that: with ``y`` the basis's multiplier and ``d = w - A^T y``, the
+    Lagrangian bound ``b^T y - sum_j h_j |d_j|`` is below the basic solution's objective
+    by exactly ``sum 2 h_j |d_j|`` over the nonbasic columns whose reduced cost would
+    improve it (the others, at their bound, and the basic columns contribute nothing),
+    a sum the pricing loop forms anyway. The caller certifies the bound of ``y`` either
+    way; it is then within ``gap_stop`` (and rounding) of the minimum.
     """
     m, n = A.shape
     isb, dtol = _start(basis, w, n)
@@ -485,15 +494,23 @@ def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
         # entering: the largest d_j^2 / devex weight
         q = -1
         best = 0.0
+        gap = 0.0
         for j in range(n):
             if isb[j] or h[j] == 0.0:
                 continue
             dj = d[j]
             if (not upper[j] and dj < -dtol) or (upper[j] and dj > dtol):
+                gap += 2.0 * h[j] * abs(dj)
                 sc = dj * dj / ref[j]
                 if sc > best:
                     best = sc
                     q = j
+        if q >= 0 and gap <= gap_stop:
+            # (within the caller's gap: on freshly computed x and d, as for optimality)
+            if clean:
+                return OPTIMAL
+            need_full = True
+            continue
         if q < 0:
             if clean:
                 return OPTIMAL
@@ -641,10 +658,14 @@ def solve_batch(structure, data, state, params, out):
     * ``state = (bases, upper, binv, npiv, est, iters)``: the warm-start state, updated
       in place (``est[i]``: the pivots of LP ``i``'s two warm starts when last used;
       ``iters``: the primal and dual simplex iterations so far, pivots and bound flips);
-    * ``params = (maxit, radius, tol_unb, gap_rtol, chain)``: iteration limit, tolerances,
-      and whether every LP after the first starts by the primal simplex from the best
-      optimal vertex found so far (the objective chain), rather than by the cheaper of
-      its two warm starts when last used;
+    * ``params = (maxit, radius, tol_unb, gap_rtol, chain, rel_gap)``: iteration limit,
+      tolerances, whether every LP after the first starts by the primal simplex from
+      the best optimal vertex found so far (the objective chain), rather than by the
+      cheaper of its two warm starts when last used, and the primal simplex's early
+      stop: with ``rel_gap > 0`` and objectives in pairs ``(w, -w)`` (hull objectives),
+      each LP after the first stops once its duality gap is at most ``rel_gap`` times
+      the pair's width at the last data set (``-bounds[i ^ 1] - bounds[i]`` where both
+      were solved; :func:`primal_simplex`), and is accepted with that gap;
     * ``out = (bounds, objs, codes, ys)``: results, written in place.
 
     ``dirstat[i]``: 0 solve, 1 unbounded below (decided at set-up), 2 ambiguous.
@@ -662,7 +683,7 @@ def solve_batch(structure, data, state, params, out):
     no_err = np.zeros(0)
     no_pair = np.zeros((0, h.size))
     bases, upper, binv, npiv, est, iters = state
-    maxit, radius, tol_unb, gap_rtol, chain = params
+    maxit, radius, tol_unb, gap_rtol, chain, rel_gap = params
     nit = np.zeros(1, np.int64)
     bounds, objs, codes, ys = out
     n_lp = Wfull.shape[0]
@@ -675,6 +696,14 @@ def solve_batch(structure, data, state, params, out):
     keep_b = np.empty(mr, np.int64)
     keep_u = np.empty(nb, np.bool_)
     xs = np.empty((n_lp, nb))  # optimal basic solutions of this data set's LPs
+    # the early stop: each pair's width at the last data set (its certified bounds)
+    gstop = np.zeros(n_lp)
+    if rel_gap > 0.0 and n_lp % 2 == 0:
+        for i in range(n_lp):
+            wd = -bounds[i ^ 1] - bounds[i]
+            if (codes[i] == OPTIMAL and codes[i ^ 1] == OPTIMAL and np.isfinite(wd)
+                    and wd > 0.0):
+                gstop[i] = rel_gap * wd
     solved = np.zeros(n_lp, np.bool_)
     for ii in range(n_lp):
         i = order[ii]
@@ -733,7 +762,7 @@ def solve_batch(structure, data, state, params, out):
             npiv[i] = npiv[src]
             nit[0] = 0
             code = primal_simplex(Ared, sp, bred, hB, Wred[i], bases[i], upper[i],
-                                  binv[i], npiv[i:i + 1], x, z, maxit, nit)
+                                  binv[i], npiv[i:i + 1], x, z, maxit, nit, gstop[i])
             est[i, 1] = nit[0] if code == OPTIMAL else 1e9
             est[i, 0] *= EST_DECAY
             iters[0] += nit[0]
@@ -785,9 +814,10 @@ def solve_batch(structure, data, state, params, out):
         objs[i] = obj
         # accepted gap: the tolerance, what precision alone explains (the b_err
         # term, rounding terms, reduced costs at rounding level: see lower_bound),
-        # and the objective's own rounding (large b cancel in it). A wrong basis
-        # leaves a gap well above these.
-        allowed = gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * gamma_k(nb + m + 2) * oabs
+        # the objective's own rounding (large b cancel in it), and the early stop's
+        # gap. A wrong basis leaves a gap well above these.
+        allowed = (gap_rtol * (1.0 + abs(obj)) + slack + 4.0 * gamma_k(nb + m + 2) * oabs
+                   + 1.01 * gstop[i])
         if not np.isfinite(bnd) or obj - bnd > allowed:
             codes[i] = NOT_CERTIFIED
         else:

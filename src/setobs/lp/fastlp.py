@@ -69,6 +69,11 @@ __all__ = ["CHAIN_ORDER", "PRIMAL_CHAIN", "FixedStructureLP", "LPState", "chain_
 _EMPTY = np.zeros(0)
 
 
+def _paired(W: NDArray[np.float64]) -> bool:
+    """Whether the objectives come in pairs ``(w, -w)`` (:func:`hull_objectives`)."""
+    return W.shape[0] % 2 == 0 and bool(np.array_equal(W[0::2], -W[1::2]))
+
+
 def _floored(norms: NDArray[np.float64]) -> NDArray[np.float64]:
     top = float(norms.max(initial=0.0))
     return np.where(norms < EQUILIBRATION_FLOOR * top, top, norms)
@@ -150,7 +155,7 @@ class LPState:
         self.iters = np.zeros(2, dtype=np.int64)
         self.bounds = np.empty(n_lp)
         self.objs = np.empty(n_lp)
-        self.codes = np.empty(n_lp, dtype=np.int64)
+        self.codes = np.full(n_lp, -1, dtype=np.int64)  # (none solved yet)
         self.ys = np.empty((n_lp, lp.m))
 
 
@@ -205,6 +210,7 @@ class FixedStructureLP:
         self.m, self.n = m, n
         self.n_lp = self.W.shape[0]
         self.order = chain_order(self.n_lp)  # (the order solve_batch solves them in)
+        self.paired = _paired(self.W)  # (rel_gap applies: hull objectives)
         self.fidx = np.flatnonzero(self.free).astype(np.int64)
         self.bidx = np.flatnonzero(~self.free).astype(np.int64)
         self.usable = True
@@ -330,6 +336,7 @@ class FixedStructureLP:
         self.csc = _certificate.csc_of(Aa)
         self.m, self.n, self.n_lp = m, n + m, Wa.shape[0]
         self.order = chain_order(self.n_lp)
+        self.paired = _paired(Wa)
         self.free = np.zeros(n + m, dtype=bool)
         self.unbounded_radius = UNBOUNDED_RADIUS
         self.fidx = np.zeros(0, dtype=np.int64)
@@ -373,6 +380,7 @@ class FixedStructureLP:
         Wa[:, :n] = W
         out.W, out.n_lp = Wa, Wa.shape[0]
         out.order = chain_order(out.n_lp)
+        out.paired = _paired(Wa)
         out.yU = np.zeros((out.n_lp, self.m))
         out.dirstat = np.zeros(out.n_lp, dtype=np.int64)
         out.Wred = np.ascontiguousarray(Wa * self.S_B)
@@ -429,9 +437,37 @@ class FixedStructureLP:
             return bounds.copy(), ok, st.ys.copy(), st.objs.copy()
         return bounds.copy(), ok
 
+    def reduced_data(self, b: NDArray[np.float64], h: NDArray[np.float64],
+                     b_scale: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                    bool]:
+        """The reduced LP's data, as the simplex sees it: ``min Wred[i]^T x`` subject to
+        ``Ared x = bred``, ``|x| <= hB`` (for benchmarks and diagnostics, e.g. to hand the
+        same LPs to another solver).
+
+        Parameters
+        ----------
+        b : ndarray, shape (m,)
+        h : ndarray, shape (n,)
+        b_scale : float
+            Magnitude of the terms ``b`` was computed from.
+
+        Returns
+        -------
+        hB : ndarray
+            Bounds of the reduced LP's variables.
+        bred : ndarray
+            Its right-hand side.
+        consistent : bool
+            Whether ``b`` satisfies the redundant rows (else the reduced LP is not the LP).
+        """
+        return _simplex.prepare(
+            np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
+            _EMPTY, self.bidx, self.S_B, self.R, self.Q0, self._absQ0, self._absAB, self.Q2,
+            float(b_scale), FASTLP_CONSISTENCY_RTOL)
+
     def minimize_all_unchecked(self, b: NDArray[np.float64], h: NDArray[np.float64],
                                st: LPState, b_scale: float = 0.0,
-                               b_err: NDArray[np.float64] | None = None
+                               b_err: NDArray[np.float64] | None = None, rel_gap: float = 0.0
                                ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """:meth:`minimize_all` for contiguous float arrays with the right free factors.
 
@@ -452,6 +488,13 @@ class FixedStructureLP:
         b_err : ndarray, shape (m,), optional
             Bound on the uncertainty of ``b``; the bounds hold for every right-hand side
             within it.
+        rel_gap : float
+            For objectives in pairs ``(w, -w)`` (:func:`hull_objectives`; ignored
+            otherwise): each LP solved
+            by the objective chain stops once its duality gap is at most ``rel_gap``
+            times the pair's width at ``st``'s last data set, and its certified bound is
+            accepted within that gap of the minimum (0: every LP to its optimum). The
+            bounds are certified either way.
         """
         bounds, codes = st.bounds, st.codes
         if not self.usable:
@@ -470,7 +513,7 @@ class FixedStructureLP:
                 (b, h, berr, bred, hB),
                 (st.bases, st.upper, st.binv, st.npiv, st.est, st.iters),
                 (self.maxit, self.unbounded_radius, UNBOUNDED_REDUCED_COST_TOL,
-                 FASTLP_GAP_RTOL, PRIMAL_CHAIN),
+                 FASTLP_GAP_RTOL, PRIMAL_CHAIN, float(rel_gap) if self.paired else 0.0),
                 (bounds, st.objs, codes, st.ys))
         _simplex.solve_batch(*args)
         stuck = (codes == _simplex.ITERATION_LIMIT) | (codes == _simplex.NUMERICAL)
