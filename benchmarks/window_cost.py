@@ -5,7 +5,8 @@ Two measurements on plants of ``benchmarks/state_estimation.py`` (its records):
 * ``chains``: the window LPs of the last ``SETS`` steps of a run (window 10, box
   restart: one data set of ``2 n`` hull LPs per step) solved three ways from the same
   start: by setobs's compiled simplex from the warm-start state the run had (the
-  objective chain, ``setobs.lp.fastlp``), and by HiGHS (no presolve) as a chain on one
+  objective chain, ``setobs.lp.fastlp``; to the optimum, and with the window's early
+  stop, ``WINDOW_REL_GAP``), and by HiGHS (no presolve) as a chain on one
   model, the first LP cold and each next one from the previous LP's optimal basis by
   the primal simplex, or by the dual simplex. Simplex iterations per data set (HiGHS's
   ``simplex_iteration_count``; ours: primal and dual pivots and bound flips).
@@ -37,6 +38,7 @@ sys.path.insert(0, str(HERE))
 import setobs as so  # noqa: E402
 from _common import linprog_unit  # noqa: E402
 from setobs.lp import fastlp  # noqa: E402
+from setobs.setmembership import _window  # noqa: E402
 from state_estimation import noise_model, random_system, record, tanks_outputs  # noqa: E402
 
 SETS = 5
@@ -89,10 +91,10 @@ def chains(name: str) -> dict:
     calls = []
     orig = fastlp.FixedStructureLP.minimize_all_unchecked
 
-    def record_call(self, b, h, st, b_scale=0.0, b_err=None):
+    def record_call(self, b, h, st, b_scale=0.0, b_err=None, rel_gap=0.0):
         calls.append((self, b.copy(), h.copy(), copy.deepcopy(st), b_scale,
                       None if b_err is None else b_err.copy()))
-        return orig(self, b, h, st, b_scale, b_err)
+        return orig(self, b, h, st, b_scale, b_err, rel_gap)
 
     fastlp.FixedStructureLP.minimize_all_unchecked = record_call
     try:
@@ -103,13 +105,16 @@ def chains(name: str) -> dict:
     sets = [c for c in calls if c[0].mr == big][-SETS:]
     out = []
     for lp, b, h, st, b_scale, b_err in sets:
-        st2 = copy.deepcopy(st)
+        st2, st3 = copy.deepcopy(st), copy.deepcopy(st)
         orig(lp, b, h, st2, b_scale, b_err)
         ours = int(st2.iters.sum() - st.iters.sum())
+        orig(lp, b, h, st3, b_scale, b_err, _window.WINDOW_REL_GAP)
+        ours_early = int(st3.iters.sum() - st.iters.sum())
         hB, bred, ok = lp.reduced_data(b, h, b_scale)
         assert ok
         primal, dual = highs_chain(lp, hB, bred, False), highs_chain(lp, hB, bred, True)
-        out.append({"ours": ours, "highs_primal_chain": sum(primal),
+        out.append({"ours": ours, "ours_early_stop": ours_early,
+                    "highs_primal_chain": sum(primal),
                     "highs_dual_chain": sum(dual), "highs_first_lp_cold": primal[0]})
     mean = {k: float(np.mean([o[k] for o in out])) for k in out[0]}
     print(f"{name}: LP {big} x {sets[0][0].Ared.shape[1]}, {sets[0][0].n_lp} LPs per set; "
