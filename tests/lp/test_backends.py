@@ -77,11 +77,17 @@ def _compiled(A, b, h, W, free):
     return S.minimize_all(b, h)
 
 
-def _box(A, b, h, W, free):
+def _box_lp(A, b, h):
+    """A BoxLP of ``A xi = b``, ``|xi| <= h``, and its columns."""
     lp = BoxLP()
     cols = lp.add_cols(-h, h)
     r, c = np.nonzero(A)
     lp.add_rows(r, c, A[r, c], b, np.zeros(b.size))
+    return lp, cols
+
+
+def _box(A, b, h, W, free):
+    lp, cols = _box_lp(A, b, h)
     out = lp.minimize_all(cols, W)
     if out is None:
         return np.full(W.shape[0], -np.inf), np.zeros(W.shape[0], dtype=bool)
@@ -135,10 +141,7 @@ def test_the_box_lp_grows_and_undoes_blocks_like_a_fresh_one(chain, monkeypatch)
     monkeypatch.setattr(boxlp, "CHAIN", chain)
     monkeypatch.setattr(boxlp, "CHAIN_MIN_OBJECTIVES", 1)
     A, b, h, W, _ = _instances(False)[4]
-    lp = BoxLP()
-    cols = lp.add_cols(-h, h)
-    r, c = np.nonzero(A)
-    lp.add_rows(r, c, A[r, c], b, np.zeros(b.size))
+    lp, cols = _box_lp(A, b, h)
     assert lp.minimize_all(cols, W) is not None  # (warm models exist from here on)
     lp.begin()
     # a new block: x' = xi_0 + xi_1 + s, |s| <= 0.05, objectives on x'
@@ -171,10 +174,7 @@ def test_a_failed_warm_solve_restarts_a_fresh_model_from_the_warm_basis(monkeypa
 
     monkeypatch.setattr(boxlp, "CHAIN_MIN_OBJECTIVES", 1)
     A, b, h, W, _ = _instances(False)[4]
-    lp = BoxLP()
-    cols = lp.add_cols(-h, h)
-    r, c = np.nonzero(A)
-    lp.add_rows(r, c, A[r, c], b, np.zeros(b.size))
+    lp, cols = _box_lp(A, b, h)
     assert lp.minimize_all(cols, W) is not None  # (the model is warm from here on)
     calls = []
     real = highs.solve

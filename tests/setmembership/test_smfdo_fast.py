@@ -184,13 +184,9 @@ def test_random_systems_fast_equals_reference():
         assert rf.violations(D) == 0
 
 
-@pytest.mark.usefixtures("exact_window_lps")
-def test_noisy_window_lps_stay_on_the_fast_path():
-    """A random 6-state plant with 4 outputs, process and measurement noise, window 10
-    (the window LP is 40 x 106, most factors small noise boxes): the compiled
-    simplex decides every step (the short-step dual simplex ran into its iteration
-    limit on two thirds of them, which went to the reference path at 25x the cost),
-    and its bands equal the reference path's (the set recursion with HiGHS)."""
+def _noisy_random_plant():
+    """A random 6-state plant with 4 outputs, process and measurement noise, 40 steps, and
+    the SMFDO's keywords for window 10 with the box restart and state bounds."""
     rng = np.random.default_rng(3)
     n, l = 6, 4
     A = rng.normal(size=(n, n))
@@ -202,6 +198,17 @@ def test_noisy_window_lps_stay_on_the_fast_path():
     sys = so.LinearSystem(A, np.zeros((n, 0)), C, B)
     kw = dict(window=10, restart="box", process_noise=rw, measurement_noise=rv,
               state_bounds=True, initial_state_set=so.Box(-2 * np.ones(n), 2 * np.ones(n)))
+    return sys, kw, X, Y, U
+
+
+@pytest.mark.usefixtures("exact_window_lps")
+def test_noisy_window_lps_stay_on_the_fast_path():
+    """A random 6-state plant with 4 outputs, process and measurement noise, window 10
+    (the window LP is 40 x 106, most factors small noise boxes): the compiled
+    simplex decides every step (the short-step dual simplex ran into its iteration
+    limit on two thirds of them, which went to the reference path at 25x the cost),
+    and its bands equal the reference path's (the set recursion with HiGHS)."""
+    sys, kw, X, Y, U = _noisy_random_plant()
     obs = so.SMFDO(sys, **kw)
     rf = obs.run(Y, U)
     ref = so.SMFDO(sys, fast=False, **kw)
@@ -228,17 +235,7 @@ def test_the_window_lps_early_stop_is_outward_and_small(monkeypatch):
     from setobs.setmembership import _window
 
     assert _window.WINDOW_REL_GAP == 1e-3
-    rng = np.random.default_rng(3)
-    n, l = 6, 4
-    A = rng.normal(size=(n, n))
-    A *= 0.95 / np.abs(np.linalg.eigvals(A)).max()
-    B, C = rng.normal(size=(n, 1)) * 0.2, rng.normal(size=(l, n))
-    rw, rv, N = 0.01, 0.05, 40
-    U = np.sin(0.05 * np.arange(N))[:, None]
-    X, Y = noisy_record(A, B, C, U, rw, rv, rng)
-    sys = so.LinearSystem(A, np.zeros((n, 0)), C, B)
-    kw = dict(window=10, restart="box", process_noise=rw, measurement_noise=rv,
-              state_bounds=True, initial_state_set=so.Box(-2 * np.ones(n), 2 * np.ones(n)))
+    sys, kw, X, Y, U = _noisy_random_plant()
     obs = so.SMFDO(sys, **kw)
     rf = obs.run(Y, U)
     rr = so.SMFDO(sys, fast=False, **kw).run(Y, U)
