@@ -82,6 +82,15 @@ def _refactor(A, basis, BinvT):
 
 
 @njit(cache=True)
+def _refactor_interval(m):
+    """Pivots between refactorisations of an ``m``-row basis (both simplices): every
+    ``REFACTOR_EVERY``, every ``m / 2`` for larger bases (a refactorisation costs
+    ``O(m^3)``, a pivot ``O(m^2)`` at most; at ``m`` = 210 every ``m / 4`` pivots was a
+    third of a pivot's cost)."""
+    return max(REFACTOR_EVERY, m // 2)
+
+
+@njit(cache=True)
 def sparse_pattern(A):
     """``(rows, cols)`` of a dense matrix, exact zeros left out: ``rows = (indptr, indices,
     data)`` row by row (the columns ascending) and ``cols`` the same column by column.
@@ -281,9 +290,7 @@ def dual_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
     vbeta = np.empty(m)
     need_full = True  # recompute y and d from scratch
     clean = False  # d was recomputed and no pivot since
-    # (every m / 2 pivots for larger bases: a refactorisation costs O(m^3), a pivot
-    # O(m^2) at most; at m = 210 every m / 4 pivots was a third of a pivot's cost)
-    refactor_at = max(REFACTOR_EVERY, m // 2)
+    refactor_at = _refactor_interval(m)
     for it in range(maxit + 1):
         if npiv[0] >= refactor_at:
             if not _refactor(A, basis, BinvT):
@@ -469,9 +476,7 @@ def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit,
     need_full = True  # recompute x, y and d from scratch
     clean = False  # x and d were recomputed and no pivot since
     first = True
-    # (every m / 2 pivots for larger bases: a refactorisation costs O(m^3), a pivot
-    # O(m^2) at most; at m = 210 every m / 4 pivots was a third of a pivot's cost)
-    refactor_at = max(REFACTOR_EVERY, m // 2)
+    refactor_at = _refactor_interval(m)
     for it in range(maxit + 1):
         if npiv[0] >= refactor_at:
             if not _refactor(A, basis, BinvT):

@@ -127,9 +127,9 @@ class LPState:
     """Warm-start state of one user of a :class:`FixedStructureLP` (mutable, not shared).
 
     Holds, per objective, the simplex basis, the nonbasic bound flags, the
-    explicit basis inverse (stored transposed), the pivot counter and the pivot counts of its two
-    warm starts, the simplex iterations so far (``iters``: primal, dual), plus the
-    output buffers.
+    explicit basis inverse (stored transposed), the pivot counter and the pivot
+    counts of its two warm starts, the simplex iterations so far (``iters``: primal,
+    dual), plus the output buffers.
     Create it with :meth:`FixedStructureLP.new_state`; an SMFDO keeps one per
     structure it uses, so its results depend only on its own data.
 
@@ -438,8 +438,8 @@ class FixedStructureLP:
         return bounds.copy(), ok
 
     def reduced_data(self, b: NDArray[np.float64], h: NDArray[np.float64],
-                     b_scale: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                                    bool]:
+                     b_scale: float = 0.0, b_err: NDArray[np.float64] | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
         """The reduced LP's data, as the simplex sees it: ``min Wred[i]^T x`` subject to
         ``Ared x = bred``, ``|x| <= hB`` (for benchmarks and diagnostics, e.g. to hand the
         same LPs to another solver).
@@ -450,6 +450,8 @@ class FixedStructureLP:
         h : ndarray, shape (n,)
         b_scale : float
             Magnitude of the terms ``b`` was computed from.
+        b_err : ndarray, shape (m,), optional
+            Bound on the uncertainty of ``b`` (the consistency check allows it).
 
         Returns
         -------
@@ -458,11 +460,13 @@ class FixedStructureLP:
         bred : ndarray
             Its right-hand side.
         consistent : bool
-            Whether ``b`` satisfies the redundant rows (else the reduced LP is not the LP).
+            Whether ``b`` satisfies the redundant rows up to rounding and ``b_err`` (else
+            the reduced LP is not the LP).
         """
+        berr = _EMPTY if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
         return _simplex.prepare(
             np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
-            _EMPTY, self.bidx, self.S_B, self.R, self.Q0, self._absQ0, self._absAB, self.Q2,
+            berr, self.bidx, self.S_B, self.R, self.Q0, self._absQ0, self._absAB, self.Q2,
             float(b_scale), FASTLP_CONSISTENCY_RTOL)
 
     def minimize_all_unchecked(self, b: NDArray[np.float64], h: NDArray[np.float64],
@@ -490,24 +494,20 @@ class FixedStructureLP:
             within it.
         rel_gap : float
             For objectives in pairs ``(w, -w)`` (:func:`hull_objectives`; ignored
-            otherwise): each LP solved
-            by the objective chain stops once its duality gap is at most ``rel_gap``
-            times the pair's width at ``st``'s last data set, and its certified bound is
-            accepted within that gap of the minimum (0: every LP to its optimum). The
-            bounds are certified either way.
+            otherwise): each LP solved by the objective chain stops once its duality
+            gap is at most ``rel_gap`` times the pair's width at ``st``'s last data set,
+            and its certified bound is accepted within that gap of the minimum (0: every
+            LP to its optimum). The bounds are certified either way.
         """
         bounds, codes = st.bounds, st.codes
         if not self.usable:
             return bounds, np.zeros(self.n_lp, dtype=bool)
-        berr = _EMPTY if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
         # (data consistent with the redundant rows, up to rounding and b_err?)
-        hB, bred, consistent = _simplex.prepare(
-            b, h, berr, self.bidx, self.S_B, self.R, self.Q0, self._absQ0, self._absAB,
-            self.Q2, float(b_scale), FASTLP_CONSISTENCY_RTOL)
+        hB, bred, consistent = self.reduced_data(b, h, b_scale, b_err)
         if not consistent:
             return bounds, np.zeros(self.n_lp, dtype=bool)
-        if b_err is None:
-            berr = np.zeros(self.m)
+        berr = (np.zeros(self.m) if b_err is None
+                else np.ascontiguousarray(b_err, dtype=np.float64))
         args = ((self.A, self.csc, self.fidx, self.pinvU_orig, self.Ared, self.sp, self.W,
                  self.Wred, self.yU, self.Q2, self.R, self.dirstat, self.order),
                 (b, h, berr, bred, hB),
