@@ -6,9 +6,10 @@ after, the faster kept), HiGHS's simplex iterations and its number of solves (ev
 ``hs.run()`` of the step, counted around :func:`setobs.lp.highs.solve`), the time spent
 inside those solves, the LP's size, and which engine decided the step
 (``SMFDO.stats``). At the ``--check`` steps the hull is compared with the independent
-whole-history LP (``tests.oracles.history_lp_highs``, states as variables).
+whole-history LP (``tests.oracles.history_lp_highs``, states as variables, each LP on a
+fresh HiGHS model without scaling).
 
-Run: ``python benchmarks/exact_long.py [--steps 235] [--check 40]``; writes
+Run: ``python benchmarks/exact_long.py [--steps 235] [--check 40,120,186,234]``; writes
 ``benchmarks/results/exact_long.json``.
 """
 
@@ -60,9 +61,8 @@ def summary(steps, X, lo, hi, obs, unit, checks, N) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=235)
-    ap.add_argument("--check", default="",
-                    help="steps compared with the oracle (comma-separated; none by default: "
-                         "its cold solves took more than 15 minutes at k = 40)")
+    ap.add_argument("--check", default="40,120,186,234",
+                    help="steps compared with the oracle (comma-separated)")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "exact_long.json"))
     args = ap.parse_args()
     N = args.steps
@@ -112,7 +112,8 @@ def main() -> None:
         if k in checks_at:
             ref = history_lp_highs(A, np.zeros((n, 0)), C, Y, k, 0.0, U=U, Gamma=B, states=True,
                                    x_box=(X0.lo, X0.hi), noise_w=noise_w,
-                                   noise_v=(np.eye(C.shape[0]), np.full(C.shape[0], rv)))
+                                   noise_v=(np.eye(C.shape[0]), np.full(C.shape[0], rv)),
+                                   unscaled=True)
             wid = ref[1] - ref[0]
             dev = float(np.max(np.maximum(np.abs(lo[k] - ref[0]), np.abs(hi[k] - ref[1])) / wid))
             checks.append({"k": k, "largest_distance_over_width": dev,

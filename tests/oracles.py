@@ -291,7 +291,7 @@ def exact_hpolytope_vertices(H: np.ndarray, k: np.ndarray) -> list[list[Fraction
 
 def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_box=None,
                      noise_w=None, noise_v=None, Du=None, r_inc_set=None, y_rtol=0.0,
-                     states=False):
+                     states=False, unscaled=False):
     """``(lo, hi)`` of ``d_k`` (``states``: of ``x_k``) over the whole history by a
     sparse float LP (HiGHS).
 
@@ -305,6 +305,9 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     ``y_rtol``: each measurement is known to ``y_rtol |y|`` (a slack per row; the
     float simulation's data are consistent only up to their rounding).
     Tight solver tolerances (1e-10); the optimum is a float, not certified.
+    ``unscaled``: each LP on a fresh ``highspy`` model with HiGHS's scaling off, by the
+    dual simplex (through ``linprog`` HiGHS scales, and on the 30-tank cascade's history
+    its cold solves took more than 15 minutes at ``k`` = 40).
     """
     import scipy.sparse as sp
     from scipy.optimize import linprog
@@ -399,6 +402,9 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
     opts = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
     first, count = (ix(k), n) if states else (idd(k), q)
     lo, hi = np.empty(count), np.empty(count)
+    if unscaled:
+        return _history_unscaled(A_eq, np.asarray(rhs), A_ub, b_ub, bounds, first, count,
+                                 opts)
     for i in range(count):
         for sgn in (1.0, -1.0):
             cst = np.zeros(nvar)
@@ -420,6 +426,50 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
                 lo[i] = val
             else:
                 hi[i] = val
+    return lo, hi
+
+
+def _history_unscaled(A_eq, b_eq, A_ub, b_ub, bounds, first, count, opts):
+    """:func:`history_lp_highs`'s bounds by ``highspy`` directly: a fresh model per LP,
+    HiGHS's scaling off, the dual simplex, the options ``opts``."""
+    import highspy
+    import scipy.sparse as sp
+
+    M = A_eq if A_ub is None else sp.vstack([A_eq, A_ub])
+    M = sp.csc_array(M)
+    rlo = np.r_[b_eq, np.full(0 if A_ub is None else A_ub.shape[0], -np.inf)]
+    rhi = np.r_[b_eq, [] if A_ub is None else b_ub]
+    clo = np.array([-np.inf if b[0] is None else b[0] for b in bounds], dtype=float)
+    chi = np.array([np.inf if b[1] is None else b[1] for b in bounds], dtype=float)
+    lo, hi = np.empty(count), np.empty(count)
+    for i in range(count):
+        for sgn in (1.0, -1.0):
+            h = highspy.Highs()
+            h.setOptionValue("output_flag", False)
+            h.setOptionValue("simplex_scale_strategy", 0)
+            h.setOptionValue("simplex_strategy", 1)
+            for key, val in opts.items():
+                h.setOptionValue(key, val)
+            cost = np.zeros(M.shape[1])
+            cost[first + i] = sgn
+            h.passModel(highspy.HighsLp())
+            h.addVars(M.shape[1], clo, chi)
+            h.changeColsCost(M.shape[1], np.arange(M.shape[1], dtype=np.int32), cost)
+            Mr = sp.csr_array(M)
+            h.addRows(M.shape[0], rlo, rhi, Mr.nnz, Mr.indptr[:-1].astype(np.int32),
+                      Mr.indices.astype(np.int32), Mr.data)
+            h.run()
+            status = h.getModelStatus()
+            if status == highspy.HighsModelStatus.kUnbounded:
+                val = -np.inf
+            elif status != highspy.HighsModelStatus.kOptimal:
+                raise RuntimeError(f"HiGHS: {h.modelStatusToString(status)}")
+            else:
+                val = h.getInfo().objective_function_value
+            if sgn > 0:
+                lo[i] = val
+            else:
+                hi[i] = -val
     return lo, hi
 
 
