@@ -401,10 +401,10 @@ def history_lp_highs(Phi, G, Xi, Y, k, r_inc, U=None, Gamma=None, x_box=None, d_
         bounds[o_e + t] = (-eb, eb)
     opts = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
     first, count = (ix(k), n) if states else (idd(k), q)
-    lo, hi = np.empty(count), np.empty(count)
     if unscaled:
         return _history_unscaled(A_eq, np.asarray(rhs), A_ub, b_ub, bounds, first, count,
                                  opts)
+    lo, hi = np.empty(count), np.empty(count)
     for i in range(count):
         for sgn in (1.0, -1.0):
             cst = np.zeros(nvar)
@@ -435,8 +435,9 @@ def _history_unscaled(A_eq, b_eq, A_ub, b_ub, bounds, first, count, opts):
     import highspy
     import scipy.sparse as sp
 
-    M = A_eq if A_ub is None else sp.vstack([A_eq, A_ub])
-    M = sp.csc_array(M)
+    M = sp.csr_array(A_eq if A_ub is None else sp.vstack([A_eq, A_ub]))
+    starts, index = M.indptr[:-1].astype(np.int32), M.indices.astype(np.int32)
+    every = np.arange(M.shape[1], dtype=np.int32)
     rlo = np.r_[b_eq, np.full(0 if A_ub is None else A_ub.shape[0], -np.inf)]
     rhi = np.r_[b_eq, [] if A_ub is None else b_ub]
     clo = np.array([-np.inf if b[0] is None else b[0] for b in bounds], dtype=float)
@@ -454,10 +455,8 @@ def _history_unscaled(A_eq, b_eq, A_ub, b_ub, bounds, first, count, opts):
             cost[first + i] = sgn
             h.passModel(highspy.HighsLp())
             h.addVars(M.shape[1], clo, chi)
-            h.changeColsCost(M.shape[1], np.arange(M.shape[1], dtype=np.int32), cost)
-            Mr = sp.csr_array(M)
-            h.addRows(M.shape[0], rlo, rhi, Mr.nnz, Mr.indptr[:-1].astype(np.int32),
-                      Mr.indices.astype(np.int32), Mr.data)
+            h.changeColsCost(M.shape[1], every, cost)
+            h.addRows(M.shape[0], rlo, rhi, M.nnz, starts, index, M.data)
             h.run()
             status = h.getModelStatus()
             if status == highspy.HighsModelStatus.kUnbounded:
