@@ -24,7 +24,7 @@ from .._rounding import round_down, round_up
 from ..tolerances import HISTORY_GAP_RTOL
 from . import highs
 
-__all__ = ["CHAIN", "CHAIN_MIN_OBJECTIVES", "HIGHS_SETTINGS", "BoxLP"]
+__all__ = ["CHAIN", "CHAIN_MIN_OBJECTIVES", "HIGHS_SCALING", "BoxLP"]
 
 #: :meth:`BoxLP.minimize_all` solves the objectives as a chain on one HiGHS model (each
 #: from the previous one's optimal vertex by the primal simplex; the model grown once per
@@ -49,8 +49,8 @@ CHAIN_MIN_OBJECTIVES = 12
 #: ``benchmarks/exact_long.py``).
 WARM_PRIMAL_LIMIT = 2000
 
-#: HiGHS options of every model :class:`BoxLP` builds (on top of
-#: :func:`setobs.lp.highs.new_model`'s): HiGHS's own scaling off. :meth:`BoxLP.add_cols`
+#: Whether HiGHS scales the models :class:`BoxLP` builds itself (``scaled`` of
+#: :func:`setobs.lp.highs.new_model`): it does not. :meth:`BoxLP.add_cols`
 #: already scales each column by a power of two to its range. On the whole-history LP of
 #: a 30-tank cascade with 21 outputs (``A_o`` the ``expm`` of a chain: entries from 0.8
 #: down to 1e-50), HiGHS's scaling on top made its recoveries stall: steps 186 and 187
@@ -60,7 +60,7 @@ WARM_PRIMAL_LIMIT = 2000
 #: simplex for one bound at ``k`` = 110 took 9 800 iterations scaled against 6 700
 #: unscaled in this class, and 28 800 (stopped at 15 s) against 3 300 on the same LP with
 #: free states and no column scaling.
-HIGHS_SETTINGS: dict[str, object] = {"simplex_scale_strategy": 0}
+HIGHS_SCALING = False
 
 sparse = lazy_module("scipy.sparse")
 _certificate = lazy_module("setobs.lp.certificate")
@@ -244,7 +244,7 @@ class BoxLP:
         """A HiGHS model of the LP with objective ``w`` on ``cols``."""
         lo, hi, b, berr, A, _, _ = self.arrays()
         s = np.concatenate(self._s)
-        hs = highs.new_model(HIGHS_SETTINGS)  # (cold: the dual simplex)
+        hs = highs.new_model(scaled=HIGHS_SCALING)  # (cold: the dual simplex)
         cost = np.zeros(self.n_col)
         cost[cols] = w
         As = A @ sparse.diags_array(s)  # (exact: powers of two)

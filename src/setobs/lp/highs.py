@@ -35,14 +35,18 @@ RETRY_SETTINGS: tuple[dict[str, object], ...] = (
 )
 
 
-def new_model(settings: dict[str, object] | None = None):
+def new_model(settings: dict[str, object] | None = None, *, scaled: bool = True):
     """A HiGHS model with the package's settings: silent, no presolve, tolerances
-    1e-10, the dual simplex (measured faster here), then ``settings``.
+    1e-10, the dual simplex (measured faster here), HiGHS's own scaling unless
+    ``scaled`` is false, then ``settings``.
 
     Parameters
     ----------
     settings : dict, optional
         HiGHS options to set on top (e.g. one of :data:`RETRY_SETTINGS`).
+    scaled : bool
+        Whether HiGHS scales the LP itself (its default); off for an LP whose columns
+        the caller has already scaled (:data:`setobs.lp.boxlp.HIGHS_SCALING`).
 
     Returns
     -------
@@ -70,6 +74,8 @@ def new_model(settings: dict[str, object] | None = None):
     hs.setOptionValue("primal_feasibility_tolerance", 1e-10)
     hs.setOptionValue("dual_feasibility_tolerance", 1e-10)
     hs.setOptionValue("simplex_strategy", 1)
+    if not scaled:
+        hs.setOptionValue("simplex_scale_strategy", 0)
     for key, val in (settings or {}).items():
         hs.setOptionValue(key, val)
     return hs
