@@ -46,3 +46,29 @@ def noisy_record(sys, N, rng, r_inc, r_v, U=None):
         D[k] = d
         d = d + r_inc * rng.uniform(-1, 1, sys.q)
     return sys.simulate(D, U, x0=x)[0] + V
+
+
+def random_stable_record(seed: int, N: int = 120):
+    """A random stable plant without disturbance and its record (the plants of
+    ``benchmarks/early_stop.py``): 3-8 states, 1-3 outputs, spectral radius 0.5-0.98,
+    process and measurement noise radii ``rw``, ``rv`` from 1e-3 to 1e-1, uniform or on
+    the corners (half the seeds), ``x_0`` uniform in ``[-1, 1]^n``. Returns
+    ``(system, Y, rw, rv)``."""
+    import setobs as so
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 9))
+    l = int(rng.integers(1, 4))
+    A = rng.normal(size=(n, n))
+    A *= rng.uniform(0.5, 0.98) / np.abs(np.linalg.eigvals(A)).max()
+    C = rng.normal(size=(l, n))
+    rw, rv = 10.0 ** rng.uniform(-3, -1), 10.0 ** rng.uniform(-3, -1)
+    corners = rng.random() < 0.5
+    x = rng.uniform(-1, 1, n)
+    Y = []
+    for _ in range(N):
+        v = rng.choice([-rv, rv], l) if corners else rng.uniform(-rv, rv, l)
+        w = rng.choice([-rw, rw], n) if corners else rng.uniform(-rw, rw, n)
+        Y.append(C @ x + v)
+        x = A @ x + w
+    return so.LinearSystem(A, np.zeros((n, 0)), C), np.array(Y), rw, rv

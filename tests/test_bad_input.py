@@ -307,8 +307,8 @@ def test_round2_cli_inputs_get_one_line_and_exit_2(tmp_path, capsys):
     cases = [
         (["check", str(tmp_path / "big.yaml")], "at most 1e+150"),
         (["estimate", str(tmp_path / "huge.csv"), "--model", str(tmp_path / "m.yaml"),
-          "--outputs", "y", "--increment", "0.01", "--no-plot", "--out", str(tmp_path / "o")],
-         "Y has an entry of -1e+308"),
+          "--outputs", "y", "--increment", "0.01", "--noise", "0", "--no-plot",
+          "--out", str(tmp_path / "o")], "Y has an entry of -1e+308"),
         (["estimate", str(tmp_path / "huge.csv"), "--model", str(tmp_path / "m.yaml"),
           "--outputs", "y", "--increment", "0.01,0.02", "--no-plot",
           "--out", str(tmp_path / "o")], "--increment needs one value"),

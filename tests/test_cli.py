@@ -477,3 +477,41 @@ def test_estimate_a_model_without_disturbances_is_a_state_estimation(tmp_path, c
     assert main(["estimate", str(rec), "--model", str(motor), "--outputs", "y",
                  "--inputs", "u", "--dt", "1e-3", "--out", str(tmp_path / "c")]) == 2
     assert "--increment" in capsys.readouterr().err
+
+
+def test_estimate_asks_for_a_noise_bound_and_help_shows_every_default(tmp_path, capsys):
+    # without --noise or --calibrate the run took zero noise on a
+    # measured record and stopped "inconsistent at step k"
+    rec, _ = _motor_record(tmp_path, N=60)
+    model = tmp_path / "m.yaml"
+    model.write_text(yaml.safe_dump(MOTOR_CT))
+    base = ["estimate", str(rec), "--model", str(model), "--outputs", "theta", "--inputs",
+            "tau", "--time", "t", "--increment", "1e-3", "--no-plot", "--no-progress"]
+    assert main([*base, "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "no measurement-noise bound given" in err
+    assert "--noise" in err and "--calibrate" in err and "--noise 0" in err
+    # an explicit zero is exact measurements, as asked: this noisy record is then
+    # inconsistent (exit 1), where a bound of the simulated noise explains it
+    assert main([*base, "--noise", "0", "--out", str(tmp_path / "b")]) == 1
+    capsys.readouterr()
+    assert main([*base, "--noise", "1e-4", "--out", str(tmp_path / "c")]) == 0
+    capsys.readouterr()
+    for cmd in ("estimate", "demo", "check", "study"):
+        with pytest.raises(SystemExit):
+            main([cmd, "--help"])
+        # every option's entry (from a line "  --name" to the next) states its default
+        entries: list[str] = []
+        for line in capsys.readouterr().out.splitlines():
+            if line.startswith("  -"):
+                entries.append(line)
+            elif entries and line.startswith("    "):
+                entries[-1] += " " + line.strip()
+            elif not line.startswith("   "):
+                entries.append("")  # (a section heading or usage ends an entry)
+        options = [e for e in entries if e.startswith("  --")]
+        assert options, cmd
+        for e in options:
+            if e.split()[0] in ("--model", "--outputs"):  # (required)
+                continue
+            assert "default" in e, (cmd, e)

@@ -131,3 +131,99 @@ def test_bad_input():
         interval_function(["gamma(x)"], ["x"])
     with pytest.raises(so.NotSupportedError, match="interval evaluation of ImaginaryUnit"):
         interval_function(["x + I"], ["x"])
+
+
+# ------------------------------------------- integer powers, huge arguments, edges
+@pytest.fixture
+def dps60():
+    """mpmath at 60 digits for one test."""
+    with mpmath.workdps(60):
+        yield
+
+
+def _enc(expr: str, lo: float, hi: float) -> tuple[float, float]:
+    a, b = interval_function([expr], ["x"])([lo], [hi])
+    return float(a[0]), float(b[0])
+
+
+def _inside(v, lo: float, hi: float) -> bool:
+    return mpmath.mpf(lo) <= v <= mpmath.mpf(hi)
+
+
+@pytest.mark.parametrize("n", [2**53 + 1, 2**53 + 2, 2**60 + 128, 2**64 + 3, 10**20 + 7])
+@pytest.mark.parametrize("x", [-1.0, 1.0, -1.0000000000000002, 1.0000000000000002,
+                               -0.9999999999999999, 0.5, -2.0])
+def test_integer_powers_above_2_53_hold_the_exact_value(n, x, dps60):
+    # math.pow rounded 2**53 + 1 to 2**53 (even): x = -1 gave +1
+    lo, hi = _enc(f"x**{n}", x, x)
+    assert lo <= hi
+    v = mpmath.mpf(x) ** n
+    assert _inside(v, lo, hi), (lo, hi, v)
+    if abs(x) == 1.0:  # exact products stay exact
+        assert lo == hi == float(v)
+
+
+def test_integer_powers_over_boxes_hold_every_point(dps60):
+    rng = np.random.default_rng(59)
+    for _ in range(200):
+        n = int(rng.choice([3, 4, 17, 2**53 + 1, 2**53 + 4, 1001]))
+        a, b = np.sort(rng.normal(size=2) * 10.0 ** rng.uniform(-1, 0.1))
+        lo, hi = _enc(f"x**{n}", a, b)
+        assert lo <= hi
+        for t in (a, b, 0.5 * (a + b), 0.0 if a <= 0.0 <= b else a):
+            assert _inside(mpmath.mpf(t) ** n, lo, hi)
+    lo, hi = _enc(f"x**{2**53 + 1}", -1.0000000000000002, -1.0)
+    assert lo <= hi == -1.0
+
+
+@pytest.mark.parametrize("x", [1e6, 1e9, 1e12, 1e17, 1e18, 1e300, -1e308])
+@pytest.mark.parametrize("fn", ["sin", "cos"])
+def test_sin_and_cos_of_huge_arguments_are_enclosed_at_once(fn, x, dps60):
+    # (the candidate-extremum loop ran about 1e-9 |x| times: no return at 1e18)
+    lo, hi = _enc(f"{fn}(x)", x, x)
+    v = getattr(mpmath, fn)(mpmath.mpf(x))
+    assert _inside(v, lo, hi)
+    if abs(x) < 1e8:  # below the threshold a point is enclosed tightly
+        assert hi - lo < 1e-6
+    lo, hi = _enc(f"{fn}(x)", x, np.nextafter(x, np.inf))
+    assert _inside(v, lo, hi)
+
+
+def test_sin_near_its_extrema_keeps_them():
+    for k in (0, 1, 7, 10**6):
+        t = (k + 0.5) * math.pi
+        lo, hi = _enc("sin(x)", t - 1e-3, t + 1e-3)
+        top = (-1.0) ** k
+        assert (hi == 1.0) if top > 0 else (lo == -1.0)
+
+
+@pytest.mark.parametrize("expr", ["x + 10**400", "x*1e400", "tanh(x)*1e308*10", "x - 10**309"])
+def test_constants_beyond_the_double_range_raise_a_clear_error(expr):
+    with pytest.raises(so.MagnitudeError, match="beyond the double range"):
+        interval_function([expr], ["x"])
+
+
+@pytest.mark.parametrize("expr, box, point", [
+    ("sqrt(-x)", (-1.0, 0.0), 0.0), ("sqrt(1 - x**2)", (-1.0, 1.0), 1.0),
+    ("sqrt(x - 1)", (1.0, 5.0), 1.0), ("sqrt(x + 1)", (-1.0, 3.0), -1.0),
+    ("x**-2", (1e-200, 1e-199), 1e-200), ("log(x)", (1.0, 2.0), 1.0)])
+def test_boxes_exactly_at_a_domains_edge_are_accepted(expr, box, point, dps60):
+    lo, hi = _enc(expr, *box)
+    import sympy as sp
+
+    v = sp.sympify(expr).subs("x", sp.Float(point, 60)).evalf(60)
+    assert _inside(mpmath.mpf(str(v)), lo, hi)
+    assert lo >= 0.0 or expr.startswith("log")
+
+
+def test_a_wide_initial_set_does_not_hang_the_nonlinear_observer():
+    # shared/data/regressions/nonlinear_wide_initial_set_hang.py: sin and cos of boxes of
+    # 1e8 took the extremum loop 1e-1 ... 1e15 rounds
+    f = ["0.9*x + 0.2*sin(y)", "0.8*y - 0.1*x**3 + 0.05*cos(x)"]
+    obs = so.NonlinearSetObserver(f, ["x + 0.1*y**2"], ["x", "y"], process_noise=1e-3,
+                                  measurement_noise=0.01,
+                                  initial_state_set=so.Box([-1e8, -1e8], [1e8, 1e8]),
+                                  method="taylor")
+    for y in ([0.52], [0.49], [0.47]):
+        st = obs.update(y)
+        assert np.all(st.state_lo <= st.state_hi)

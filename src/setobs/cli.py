@@ -283,8 +283,13 @@ def estimate(record: str, model: str, *, outputs: str, inputs: str | None = None
         print(f"calibrated noise: {pairs} (used; LPs over {cal.samples} samples)")
     elif noise is not None:
         v = _per_channel("--noise", _numbers("--noise", noise), sys_.l)
+        if not np.any(v):
+            v = None  # (--noise 0: exact measurements, asked for explicitly)
     else:
-        v = None
+        raise CLIError(
+            "no measurement-noise bound given: a measured record needs one. Give --noise "
+            "R (one or l radii), --calibrate (the smallest bound that explains the record, "
+            "validated on a held-out part), or --noise 0 for measurements taken as exact")
     obs = SMFDO(sys_, window=window, increment_set=inc, measurement_noise=v,
                 process_noise=w, on_inconsistent=on_inconsistent, state_bounds=states,
                 restart=restart, max_skip_fraction=max_skip_fraction)
@@ -462,23 +467,43 @@ def study(config: str, dask: str | None = None, out: str | None = None,
     return 0
 
 
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """Every option's help ends with its default (unless the help already states it);
+    an option without one says so."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if ("default" in text or action.default is argparse.SUPPRESS or action.required
+                or not action.option_strings):
+            return text
+        if action.default is None:
+            return text + " (default: none)"
+        if action.default is False:
+            return text + " (default: off)"
+        return text + " (default: %(default)s)"
+
+
 # ---------------------------------------------------------------------------- main
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``setobs`` command."""
     parser = argparse.ArgumentParser(prog="setobs", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"setobs {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    pd_ = sub.add_parser("demo", help="SMFDO vs PIO on the set-membership paper's example")
+    pd_ = sub.add_parser("demo", formatter_class=_DefaultsFormatter,
+                         help="SMFDO vs PIO on the set-membership paper's example")
     pd_.add_argument("--out", default="setobs_demo.png", help="PNG to write")
-    pd_.add_argument("--steps", type=int, default=120)
-    pd_.add_argument("--seed", type=int, default=0)
-    pc = sub.add_parser("check", help="which observer designs exist for a system")
+    pd_.add_argument("--steps", type=int, default=120, help="length of the simulated record")
+    pd_.add_argument("--seed", type=int, default=0, help="seed of the simulated disturbance")
+    pc = sub.add_parser("check", formatter_class=_DefaultsFormatter,
+                         help="which observer designs exist for a system")
     pc.add_argument("file", help=".json, .yaml, .npz or .mat with Phi, G, Xi (, Gamma); "
                                  "or an example name (chang2006, cgl1, ...), or 'all'")
-    pc.add_argument("--format", choices=["text", "markdown", "json"], default="text")
+    pc.add_argument("--format", choices=["text", "markdown", "json"], default="text",
+                    help="the report's format")
     pc.add_argument("--dt", type=float, default=None,
                     help="sampling time for a continuous-time model file without Ts")
-    pe = sub.add_parser("estimate", help="certified disturbance bounds from a measured record")
+    pe = sub.add_parser("estimate", formatter_class=_DefaultsFormatter,
+                         help="certified disturbance bounds from a measured record")
     pe.add_argument("record", help="the record: .csv (header optional), .mat or .npz")
     pe.add_argument("--model", required=True,
                     help="model file (.yaml/.json/.mat/.npz): Phi, G, Xi (, Gamma, Du) or "
@@ -501,8 +526,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="what each window restarts from: 'polytope' (keeps the set's "
                          "shape), 'box' (the paper's eq. (24)) or 'auto' (default: the "
                          "polytope where it is tighter, checked every 16 steps)")
-    pe.add_argument("--noise", help="measurement-noise radii (one or l numbers); with "
-                                    "--calibrate: the shape to scale")
+    pe.add_argument("--noise", help="measurement-noise radii (one or l numbers; 0: exact "
+                                    "measurements); with --calibrate: the shape to scale. "
+                                    "Required unless --calibrate (default: none)")
     pe.add_argument("--calibrate", action="store_true",
                     help="use the smallest noise bound that makes the record consistent "
                          "(with this run's --increment, --process-noise and --noise shape)")
@@ -540,10 +566,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "(default 0.1: 10 %%; 0 uses the validated bound itself, whose "
                          "bands collapse where it is attained)")
     pe.add_argument("--out", help="output directory")
-    pe.add_argument("--no-plot", action="store_true")
-    pe.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None)
-    ps = sub.add_parser("study", help="run a Monte Carlo campaign from a YAML file")
-    ps.add_argument("config")
+    pe.add_argument("--no-plot", action="store_true", help="write no summary plot")
+    pe.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                    help="a progress line on stderr (default: on a terminal only)")
+    ps = sub.add_parser("study", formatter_class=_DefaultsFormatter,
+                         help="run a Monte Carlo campaign from a YAML file")
+    ps.add_argument("config", help="the campaign's YAML file")
     ps.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler address")
     ps.add_argument("--out", help="output directory")
     ps.add_argument("--processes", type=int, help="local worker processes")

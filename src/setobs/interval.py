@@ -14,8 +14,17 @@ Rounding
 Python floats round to nearest, so the exact result of ``+``, ``-``, ``*``,
 ``/`` and ``sqrt`` (correctly rounded by IEEE 754) lies within one unit in the
 last place of the computed one: one step of :func:`math.nextafter` outward
-encloses it. The elementary functions of the C library (``exp``, ``log``,
-``sin``, ``cos``, ``tanh``, ``atan``, ``pow`` ...) are not correctly rounded; the
+encloses it. Sums and products are widened only on the side their exact error
+lies (Knuth's TwoSum, Dekker's TwoProduct), and not at all when exact, so that a
+box exactly at a domain's edge stays there (``sqrt(-x)`` over ``[-1, 0]``,
+``sqrt(1 - x**2)`` over ``[-1, 1]``). Integer powers of any size are products by
+binary exponentiation (``O(log n)``), never ``pow`` (which rounds an exponent
+above ``2**53``). ``sin`` and ``cos`` take constant time: a box that may hold a
+maximum and a minimum (any box wider than about ``1e-9 |x|``, so every box
+beyond ``|x| ~ 6e9``) is ``[-1, 1]``. A constant beyond the double range raises
+:class:`setobs.exceptions.MagnitudeError`. The elementary functions of the C
+library (``exp``, ``log``, ``sin``, ``cos``, ``tanh``, ``atan``, ``pow`` ...) are
+not correctly rounded; the
 GNU C library documents errors of at most 1-2 units in the last place for them
 on x86-64, and the evaluator widens their results by :data:`LIBM_ULPS` units (4)
 outward. Constants (``Rational``, ``pi``, ``E``, floats) become intervals that
@@ -46,7 +55,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._lazy import optional_import
-from .exceptions import ArgumentError, DimensionError, DomainError, NotSupportedError
+from .exceptions import (
+    ArgumentError,
+    DimensionError,
+    DomainError,
+    MagnitudeError,
+    NotSupportedError,
+)
 
 __all__ = ["IntervalFunction", "interval_function"]
 
@@ -77,32 +92,80 @@ def _up(v: float, k: int = 1) -> float:
     return v
 
 
+# ---------------------------------------------------------------------- arithmetic
+# (Dekker's splitting constant and the range in which TwoProduct is exact)
+_SPLIT = 134217729.0  # 2**27 + 1
+_BIG = 2.0 ** 995
+_TINY = 2.0 ** -969
+
+
+def _round_pair(p: float, e: float | None) -> _Ival:
+    """The tightest float bounds of ``p + e`` (``e`` the exact error of ``p``, ``None``
+    when unknown: one float outward each way)."""
+    if e is None:
+        return _dn(p), _up(p)
+    if e == 0.0:
+        return p, p
+    return (p, _up(p)) if e > 0.0 else (_dn(p), p)
+
+
+def _two_sum(a: float, b: float) -> _Ival:
+    """Bounds of the exact ``a + b`` (Knuth's TwoSum: no widening when it is exact)."""
+    s = a + b
+    if not math.isfinite(s):
+        return _dn(s), _up(s)
+    bv = s - a
+    av = s - bv
+    return _round_pair(s, (a - av) + (b - bv))
+
+
+def _split(a: float) -> tuple[float, float]:
+    t = _SPLIT * a
+    hi = t - (t - a)
+    return hi, a - hi
+
+
+def _two_prod(a: float, b: float) -> _Ival:
+    """Bounds of the exact ``a * b`` (Dekker's TwoProduct where it is exact, i.e. away
+    from overflow and underflow; one float outward each way elsewhere)."""
+    if a == 0.0 or b == 0.0:  # (0 * inf is 0 for a bound: the other factor is finite)
+        return 0.0, 0.0
+    p = a * b
+    if not (abs(a) < _BIG and abs(b) < _BIG and _TINY < abs(p) < _BIG):
+        lo, hi = _dn(p), _up(p)
+        if p == 0.0 or abs(p) < _TINY:  # (underflow: the sign is still known)
+            lo, hi = (0.0, hi) if (a > 0) == (b > 0) else (lo, 0.0)
+        return lo, hi
+    ah, al = _split(a)
+    bh, bl = _split(b)
+    return _round_pair(p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+
+
 def _exact_or_enclosed(q: Fraction) -> _Ival:
     """The tightest float interval holding the rational ``q``."""
-    f = float(q)
+    try:
+        f = float(q)
+    except OverflowError:
+        mag = math.log10(abs(q.numerator)) - math.log10(q.denominator)
+        raise MagnitudeError(
+            f"a constant of about {'-' if q < 0 else ''}1e{mag:.0f} is beyond the double "
+            "range (|c| > 1.8e308): the interval evaluator works in double precision; "
+            "rescale the model") from None
     if Fraction(f) == q:
         return f, f
     return (_dn(f), f) if Fraction(f) > q else (f, _up(f))
 
 
-# ---------------------------------------------------------------------- arithmetic
 def _add(a: _Ival, b: _Ival) -> _Ival:
-    lo, hi = a[0] + b[0], a[1] + b[1]
-    return _dn(lo), _up(hi)
-
-
-def _mul_ends(x: float, y: float) -> float:
-    if x == 0.0 or y == 0.0:  # (0 * inf is 0 for a bound: the other factor is finite)
-        return 0.0
-    return x * y
+    return _two_sum(a[0], b[0])[0], _two_sum(a[1], b[1])[1]
 
 
 def _mul(a: _Ival, b: _Ival) -> _Ival:
     if a[0] == a[1] == 0.0 or b[0] == b[1] == 0.0:
         return 0.0, 0.0
-    p = (_mul_ends(a[0], b[0]), _mul_ends(a[0], b[1]), _mul_ends(a[1], b[0]),
-         _mul_ends(a[1], b[1]))
-    return _dn(min(p)), _up(max(p))
+    p = (_two_prod(a[0], b[0]), _two_prod(a[0], b[1]), _two_prod(a[1], b[0]),
+         _two_prod(a[1], b[1]))
+    return min(v[0] for v in p), max(v[1] for v in p)
 
 
 def _recip(a: _Ival, where: str) -> _Ival:
@@ -111,28 +174,43 @@ def _recip(a: _Ival, where: str) -> _Ival:
     return _dn(1.0 / a[1]), _up(1.0 / a[0])
 
 
+def _pow_nonneg(x: float, n: int) -> _Ival:
+    """Bounds of ``x ** n`` for a float ``x >= 0`` and an integer ``n >= 0`` of any size:
+    binary exponentiation with every product's bounds directed (exact products stay
+    exact, so ``1 ** n = 1``, ``2 ** 10 = 1024`` exactly), ``O(log n)`` products."""
+    lo = hi = 1.0
+    blo = bhi = x
+    while True:
+        if n & 1:
+            lo, hi = _two_prod(lo, blo)[0], _two_prod(hi, bhi)[1]
+        n >>= 1
+        if not n:
+            break
+        blo, bhi = _two_prod(blo, blo)[0], _two_prod(bhi, bhi)[1]
+    return max(lo, 0.0), hi
+
+
 def _ipow(a: _Ival, n: int) -> _Ival:
-    """``a ** n`` for an integer ``n >= 0`` (exact range: even powers fold at 0)."""
+    """``a ** n`` for an integer ``n >= 0`` of any size (exact range: odd powers are
+    increasing, even ones fold at 0), by :func:`_pow_nonneg` (no ``math.pow``, which
+    rounds an exponent above ``2**53`` to a double and may change its parity)."""
     if n == 0:
         return 1.0, 1.0
     if n == 1:
         return a
-
-    def pw(x: float, up: bool) -> float:
-        try:
-            v = math.pow(x, n)
-        except OverflowError:
-            v = math.copysign(_INF, x) if n % 2 else _INF
-        # (pow is not correctly rounded; n = 2 is one correctly rounded product)
-        k = 1 if n == 2 else LIBM_ULPS
-        return _up(v, k) if up else _dn(v, k)
-
     lo, hi = a
+
+    def at(x: float) -> _Ival:  # bounds of x ** n for a float x of either sign
+        if x >= 0.0:
+            return _pow_nonneg(x, n)
+        pl, ph = _pow_nonneg(-x, n)
+        return (-ph, -pl) if n % 2 else (pl, ph)
+
     if n % 2 or lo >= 0.0:
-        return pw(lo, False), pw(hi, True)
+        return at(lo)[0], at(hi)[1]
     if hi <= 0.0:
-        return pw(hi, False), pw(lo, True)
-    return 0.0, max(pw(lo, True), pw(hi, True))
+        return at(hi)[0], at(lo)[1]
+    return 0.0, max(at(lo)[1], at(hi)[1])
 
 
 def _clamp_nonneg(v: _Ival) -> _Ival:
@@ -165,7 +243,14 @@ def _log(a: _Ival, where: str) -> _Ival:
 def _sqrt(a: _Ival, where: str) -> _Ival:
     if a[0] < 0.0:
         raise DomainError(f"sqrt of {where} over [{a[0]!r}, {a[1]!r}], which reaches below 0")
-    return _dn(math.sqrt(a[0])), _up(math.sqrt(a[1]))  # (sqrt is correctly rounded)
+
+    def root(x: float, up: bool) -> float:
+        # (sqrt is correctly rounded: widened by one float unless r * r == x exactly)
+        r = math.sqrt(x)
+        if _two_prod(r, r) == (x, x):
+            return r
+        return _up(r) if up else max(_dn(r), 0.0)
+    return root(a[0], False), root(a[1], True)
 
 
 def _rpow(b: _Ival, r: _Ival, where: str) -> _Ival:
@@ -199,13 +284,18 @@ def _trig(a: _Ival, fn: Callable[[float], float], phase: float) -> _Ival:
     if not (math.isfinite(lo) and math.isfinite(hi)) or hi - lo >= 2.0 * _PI[0]:
         return -1.0, 1.0
     # extrema of sin(t) at t = pi/2 + j pi, t = x + phase: count them with a margin
+    # (far above the rounding of t: beyond |x| ~ 6e9 the margin alone spans two
+    # extrema, and the answer is [-1, 1] at once; the work is constant in |x|)
     m = 1e-9 * (1.0 + max(abs(lo), abs(hi)))
     t0 = (lo + phase - m) / math.pi - 0.5
     t1 = (hi + phase + m) / math.pi - 0.5
+    j0, j1 = math.ceil(t0), math.floor(t1)
+    if j1 - j0 >= 1:  # (two consecutive extrema: a maximum and a minimum)
+        return -1.0, 1.0
     vals = [fn(lo), fn(hi)]
     out_lo, out_hi = _dn(min(vals), LIBM_ULPS), _up(max(vals), LIBM_ULPS)
-    for j in range(math.ceil(t0), math.floor(t1) + 1):
-        if j % 2 == 0:
+    if j1 == j0:  # one extremum may lie in the box
+        if j0 % 2 == 0:
             out_hi = 1.0
         else:
             out_lo = -1.0
@@ -254,6 +344,10 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
         return lambda X: v
     if e.is_Float:
         f = float(e)
+        if not math.isfinite(f):
+            raise MagnitudeError(
+                f"the constant {sp.Float(e, 4)} is beyond the double range (|c| > 1.8e308): "
+                "the interval evaluator works in double precision; rescale the model")
         r = sp.Rational(e)
         if Fraction(f) == Fraction(int(r.p), int(r.q)):
             v = (f, f)
@@ -285,8 +379,9 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
             n = int(ex)
             if n >= 0:
                 return lambda X: _ipow(base(X), n)
-            den = bwhere if n == -1 else f"({bwhere})**{-n}"
-            return lambda X: _recip(_ipow(base(X), -n), den)
+            # (1 / x) ** |n|: a base whose power underflows (x**-2 over [1e-200,
+            # 1e-199]) is no division by a box holding 0
+            return lambda X: _ipow(_recip(base(X), bwhere), -n)
         if ex == sp.Rational(1, 2):
             return lambda X: _sqrt(base(X), bwhere)
         if ex == sp.Rational(-1, 2):

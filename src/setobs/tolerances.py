@@ -24,6 +24,7 @@ Policy
 from __future__ import annotations
 
 __all__ = [
+    "ALLOWANCE_RTOL",
     "CALIBRATION_ACTIVE_RTOL",
     "CALIBRATION_ATOL",
     "CALIBRATION_CHECK_TOL",
@@ -35,6 +36,7 @@ __all__ = [
     "ELIMINATION_PIVOT_TOL",
     "EQUILIBRATION_FLOOR",
     "EQUILIBRIUM_ATOL",
+    "EXACT_RTOL",
     "FASTLP_BOUNDED_CLEAR",
     "FASTLP_CONSISTENCY_RTOL",
     "FASTLP_GAP_RTOL",
@@ -164,6 +166,17 @@ EQUILIBRATION_FLOOR: float = 1e-10
 #: retried (dual simplex, fresh model, ranged rows) and then the step goes to the
 #: set recursion (still certified, only slower).
 HISTORY_GAP_RTOL: float = 1e-8
+
+# ---- what a step's "ok" promises (setobs.setmembership)
+#: A window step (or exact mode's H-representation step) whose rounding allowances (the
+#: LP certificate's ``|y|^T b_err`` on both ends of a band and ``2 c_err``) exceed this
+#: fraction of a band's reported width is reported ``"inexact"``, not ``"ok"``: the band
+#: is certified, but part of its width is the allowance's, not the set's.
+ALLOWANCE_RTOL: float = 1e-2
+#: Exact mode reports ``"ok"`` only for bounds certified within this fraction of each
+#: band's width of the whole-history set (a certified gap above it, after the multiplier
+#: is refined from the solver's basis: ``"inexact"``, the gap in ``step.gap``).
+EXACT_RTOL: float = 1e-6
 
 # ---- the HiGHS reference LPs (setobs.lp.factor)
 #: Relative certification gap above which duals are recomputed from the basis.

@@ -207,3 +207,49 @@ def test_data_beyond_double_precision_certify_nothing_and_never_nan():
         bound, _, slack = certified_lower_bound(w, A, b, lo, hi, y)
         assert not np.isnan(bound) and not np.isnan(slack)
         assert bound <= -1e300 or bound == -np.inf
+
+
+# ---------------------------------------------------------- shapes of the entry points
+def test_mismatched_shapes_are_refused_by_name():
+    # shared/data/regressions/certificate_shapes.py: a short lo / hi was read past its
+    # end by the compiled certificate, and a long b gave a "certified" 6.0 for an LP
+    # whose optimum is 1
+    import setobs as so
+    from setobs.lp import FactorPolytope, FixedStructureLP
+    from setobs.lp.certificate import lagrangian_lower_bound
+
+    A, b, w = np.array([[1.0, 1.0, 1.0]]), np.array([1.0]), np.ones(3)
+    lo, hi, y = -np.ones(3), np.ones(3), np.ones(1)
+    bound = certified_lower_bound(w, A, b, lo, hi, y)[0]
+    assert bound <= 1.0 and bound > 1.0 - 1e-12  # (the optimum is 1)
+    bad = [dict(lo=-np.ones(2)), dict(hi=np.ones(2)), dict(w=np.ones(2)),
+           dict(b=np.array([1.0, 5.0]), y=np.ones(2)), dict(y=np.ones(2)),
+           dict(b_err=np.zeros(2)), dict(w_err=np.zeros(4))]
+    for kw in bad:
+        args = dict(w=w, A=A, b=b, lo=lo, hi=hi, y=y) | kw
+        name = next(iter(kw))
+        with pytest.raises(so.DimensionError, match=f"^{name} must have shape"):
+            certified_lower_bound(args.pop("w"), args.pop("A"), args.pop("b"),
+                                  args.pop("lo"), args.pop("hi"), args.pop("y"), **args)
+    for kw, match in ((dict(b=np.array([np.nan])), "b holds NaN"),
+                      (dict(w=np.array([np.inf, 1, 1])), "w must be finite"),
+                      (dict(lo=np.array([2.0, -1, -1])), "lo <= hi")):
+        args = dict(w=w, A=A, b=b, lo=lo, hi=hi, y=y) | kw
+        with pytest.raises(so.InvalidValueError, match=match):
+            certified_lower_bound(**args)
+    with pytest.raises(so.DimensionError, match=r"^h must have shape"):
+        lagrangian_lower_bound(w, A, b, np.ones(2), y)
+    with pytest.raises(so.DimensionError, match="FactorPolytope needs the shapes"):
+        FactorPolytope(A, b, np.ones(2))
+    P = FactorPolytope(A, b, np.ones(3))
+    with pytest.raises(so.DimensionError, match="w and w_err must have shape"):
+        P.minimize(np.ones(2))
+    with pytest.raises(so.DimensionError, match="FixedStructureLP needs the shapes"):
+        FixedStructureLP(A, np.ones((2, 2)), np.zeros(3, dtype=bool))
+    F = FixedStructureLP(A, np.vstack([w, -w]), np.zeros(3, dtype=bool))
+    with pytest.raises(so.DimensionError, match=r"^b must have shape"):
+        F.minimize_all(np.ones(2), np.ones(3))
+    with pytest.raises(so.InvalidValueError, match="b holds NaN"):
+        F.minimize_all(np.array([np.nan]), np.ones(3))
+    bounds, ok = F.minimize_all(b, np.ones(3))
+    assert ok.all() and bounds[0] <= 1.0 and bounds[0] > 1.0 - 1e-12

@@ -297,3 +297,15 @@ def test_bad_input():
         obs.update([0.5])
     with pytest.raises(so.DimensionError):
         obs.update([0.5, 0.1], [0.0])
+
+
+@pytest.mark.parametrize("f", [["x**3 + 1"], ["10*x"]])
+def test_a_diverging_run_says_so(f):
+    # the set left the double range inside a linear map, and the
+    # error named the map's matrix M or its result's c: data the user never passed
+    obs = so.NonlinearSetObserver(f, ["x"], ["x"], process_noise=1e-3,
+                                  measurement_noise=0.01,
+                                  initial_state_set=so.Box([1.0], [2.0]))
+    with pytest.raises(so.UnboundedSetError, match="diverged at step"):
+        for _ in range(400):
+            obs.update([np.nan])

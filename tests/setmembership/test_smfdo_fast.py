@@ -252,6 +252,35 @@ def test_the_window_lps_early_stop_is_outward_and_small(monkeypatch):
     assert sum(obs.simplex_iterations) < sum(exact.simplex_iterations)
 
 
+def test_the_early_stops_excess_is_the_documented_one(monkeypatch):
+    """The README and ``WINDOW_REL_GAP``'s comment once said "within 0.2 %" (twice the
+    gap): carried by the restarts the excess over the stop off is larger. On the plant
+    with the widest excess of ``benchmarks/results/early_stop.json`` (seed 28 of
+    ``tests.datasets.random_stable_record``: 1.1 %) it is above 0.2 % and within the
+    documented 1.1 % (after the first window; outward)."""
+    from setobs.setmembership import _window
+    from tests.datasets import random_stable_record
+
+    sys, Y, rw, rv = random_stable_record(28)
+    n = sys.n
+    kw = dict(window=10, restart="box", process_noise=rw, measurement_noise=rv,
+              state_bounds=True, initial_state_set=so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n)))
+    rf = so.SMFDO(sys, **kw).run(Y)
+    monkeypatch.setattr(_window, "WINDOW_REL_GAP", 0.0)
+    r0 = so.SMFDO(sys, **kw).run(Y)
+    w1, w0 = (rf.state_hi - rf.state_lo)[10:], (r0.state_hi - r0.state_lo)[10:]
+    excess = (w1 - w0) / w0
+    assert excess.min() >= -1e-9
+    assert 2e-3 < excess.max() <= 0.011
+    # and the documentation states the measured figure, not twice the gap
+    from pathlib import Path
+
+    readme = " ".join(Path(__file__).parents[2].joinpath("README.md").read_text().split())
+    assert "to within 0.2 %" not in readme
+    assert "1.1 % at most" in readme
+    assert "largest 1.1 %" in Path(_window.__file__).read_text()
+
+
 def _with_outlier():
     sc, trs = _chang_runs(1)
     Y = trs[0].Y.copy()

@@ -75,6 +75,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from ..exceptions import DimensionError, InvalidValueError
 from ..tolerances import UNBOUNDED_RADIUS, UNBOUNDED_REDUCED_COST_TOL
 
 __all__ = ["certified_lower_bound", "csc_of", "lagrangian_lower_bound", "lower_bound"]
@@ -432,6 +433,40 @@ def _as_csc(A) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64
     return csc_of(np.ascontiguousarray(A, dtype=np.float64))
 
 
+def check_lp_shapes(m: int, n: int, **arrays) -> None:
+    """Raise :class:`~setobs.exceptions.DimensionError` naming the argument whose shape
+    does not fit an LP with ``m`` rows and ``n`` columns, and
+    :class:`~setobs.exceptions.InvalidValueError` for one holding NaN (or, for ``b``,
+    ``w``, ``b_err``, ``w_err``, an infinite entry; ``lo`` may hold ``-inf`` and
+    ``hi`` ``+inf``, ``h`` ``+inf``). ``None`` arguments are skipped. The compiled
+    kernels do no bounds checks: a short ``lo`` or ``hi`` was read past its end.
+    The multiplier ``y`` is checked for its shape only: any values are allowed (a
+    non-finite one certifies nothing)."""
+    want = {"w": (n,), "b": (m,), "y": (m,), "lo": (n,), "hi": (n,), "h": (n,),
+            "b_err": (m,), "w_err": (n,)}
+    for name, a in arrays.items():
+        if a is None:
+            continue
+        shape = np.shape(a)
+        if shape != want[name]:
+            raise DimensionError(f"{name} must have shape {want[name]} for an LP of {m} rows "
+                                 f"and {n} columns (A is {m} x {n}), got {shape}")
+        if name == "y":
+            continue
+        v = np.asarray(a, dtype=np.float64)
+        if np.isnan(v).any():
+            raise InvalidValueError(f"{name} holds NaN")
+        if name in ("w", "b", "b_err", "w_err") and not np.isfinite(v).all():
+            raise InvalidValueError(f"{name} must be finite")
+        if name in ("b_err", "w_err", "h") and (v < 0).any():
+            raise InvalidValueError(f"{name} must be nonnegative")
+    lo, hi = arrays.get("lo"), arrays.get("hi")
+    if lo is not None and hi is not None:
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        if (lo > hi).any() or (lo == np.inf).any() or (hi == -np.inf).any():
+            raise InvalidValueError("the bounds need lo <= hi, lo < inf and hi > -inf")
+
+
 def certified_lower_bound(
     w: NDArray[np.float64],
     A,
@@ -487,10 +522,26 @@ def certified_lower_bound(
         The refined multiplier the bound was certified for.
     slack : float
         The part of a gap that precision alone explains (see :func:`lower_bound`).
+
+    Raises
+    ------
+    DimensionError
+        An argument whose shape does not fit ``A`` (named).
+    InvalidValueError
+        NaN, an infinite ``w``, ``b`` or error bound, or ``lo > hi``.
     """
+    if np.ndim(A) != 2:
+        raise DimensionError(f"A must be a matrix (m, n), got shape {np.shape(A)}")
+    m, n = (int(d) for d in A.shape)
+    check_lp_shapes(m, n, w=w, b=b, lo=lo, hi=hi, y=y, b_err=b_err, w_err=w_err)
+    if w_pair is not None and (np.ndim(w_pair[0]) != 2 or np.shape(w_pair[0])[1] != n
+                               or np.shape(w_pair[1]) != (np.shape(w_pair[0])[0],)):
+        raise DimensionError(f"w_pair must be (M, v) with M of shape (k, {n}) and v of shape "
+                             f"(k,), got {np.shape(w_pair[0])} and {np.shape(w_pair[1])}")
+    if csc is not None and (len(csc[0]) != n + 1):
+        raise DimensionError(f"csc must have the shape of A's (indptr, indices, data): "
+                             f"{n + 1} column pointers, got {len(csc[0])}")
     w = np.ascontiguousarray(w, dtype=np.float64)
-    n = w.size
-    m = int(np.shape(b)[0])
     indptr, indices, data = csc if csc is not None else _as_csc(A)
     unb = np.isinf(lo) & np.isinf(hi)
     fidx = np.flatnonzero(unb).astype(np.int64) if unb.any() else _EMPTY_I
@@ -556,6 +607,9 @@ def lagrangian_lower_bound(
         The refined multiplier used.
     """
     h = np.asarray(h, dtype=np.float64)
+    if np.ndim(A) != 2:
+        raise DimensionError(f"A must be a matrix (m, n), got shape {np.shape(A)}")
+    check_lp_shapes(A.shape[0], A.shape[1], h=h)
     bound, yy, _ = certified_lower_bound(
         w, A, b, -h, h, y, b_err=b_err, w_err=w_err, w_pair=w_pair,
         unbounded_radius=unbounded_radius, unbounded_pinv=unbounded_pinv,

@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from .._blas import with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
 from .._rounding import gamma, round_down, two_prod
-from ..exceptions import EmptySetError
+from ..exceptions import DimensionError, EmptySetError
 from ..tolerances import (
     FASTLP_GAP_RTOL,
     FEASIBILITY_TOL,
@@ -270,6 +270,12 @@ class FactorPolytope:
         unbounded_radius: float = UNBOUNDED_RADIUS,
         b_err: NDArray[np.float64] | None = None,
     ) -> None:
+        if A.ndim != 2 or b.shape != (A.shape[0],) or h.shape != (A.shape[1],) or (
+                b_err is not None and np.shape(b_err) != b.shape):
+            raise DimensionError(
+                f"FactorPolytope needs the shapes A (m, n), b (m,), h (n,), b_err (m,): got A "
+                f"{A.shape}, b {b.shape}, h {h.shape}, b_err "
+                f"{None if b_err is None else np.shape(b_err)}")
         # (count_nonzero: ~0.3 us against ~1.4 for np.any, on every set's first query)
         b_err = None if b_err is None or not np.count_nonzero(b_err) else b_err
         if A.shape[0]:
@@ -478,8 +484,14 @@ class FactorPolytope:
         ------
         EmptySetError
             If the polytope is certified empty (see :meth:`emptiness`).
+        DimensionError
+            ``w`` (or ``w_err``) not of length ``n_g``.
         """
         w = np.asarray(w, dtype=np.float64)
+        if w.shape != (self.n_g,) or (w_err is not None and np.shape(w_err) != (self.n_g,)):
+            raise DimensionError(f"w and w_err must have shape ({self.n_g},) (the polytope's "
+                                 f"factors), got {w.shape} and "
+                                 f"{None if w_err is None else np.shape(w_err)}")
         with self._lock:
             return self.minimize_under_lock(w, w_err, w_pair)
 

@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 from .._blas import with_single_threaded_blas, with_single_threaded_blas_unless_small
 from .._lazy import lazy_module
 from .._rounding import pow2_inverse
-from ..exceptions import InvalidValueError
+from ..exceptions import DimensionError, InvalidValueError
 from ..tolerances import (
     EQUILIBRATION_FLOOR,
     FASTLP_BOUNDED_CLEAR,
@@ -202,9 +202,16 @@ class FixedStructureLP:
     def __init__(self, A: NDArray[np.float64], W: NDArray[np.float64],
                  free: NDArray[np.bool_], unbounded_radius: float = UNBOUNDED_RADIUS) -> None:
         self.A = np.ascontiguousarray(A, dtype=np.float64)
-        self.csc = _certificate.csc_of(self.A)  # (the certificate's form of A)
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         self.free = np.asarray(free, dtype=bool)
+        if self.A.ndim != 2 or self.W.ndim != 2 or self.W.shape[1] != self.A.shape[1] \
+                or self.free.shape != (self.A.shape[1],):
+            raise DimensionError(
+                f"FixedStructureLP needs the shapes A (m, n), W (n_lp, n), free (n,): got A "
+                f"{self.A.shape}, W {self.W.shape}, free {self.free.shape}")
+        if not (np.isfinite(self.A).all() and np.isfinite(self.W).all()):
+            raise InvalidValueError("FixedStructureLP: A and W must be finite")
+        self.csc = _certificate.csc_of(self.A)  # (the certificate's form of A)
         self.unbounded_radius = float(unbounded_radius)
         m, n = self.A.shape
         self.m, self.n = m, n
@@ -428,6 +435,7 @@ class FixedStructureLP:
             The simplex objectives (only with ``return_duals``).
         """
         h = np.asarray(h, dtype=np.float64)
+        _certificate.check_lp_shapes(self.m, self.n, b=b, h=h, b_err=b_err)
         if not np.array_equal(np.isinf(h), self.free):
             raise InvalidValueError("the unbounded factors differ from the structure's")
         st = self.new_state() if state is None else state

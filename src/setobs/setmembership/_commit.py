@@ -9,10 +9,12 @@ unobservable part (:mod:`._unobservable`).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .._lazy import lazy_module
-from ..exceptions import EmptySetError
+from ..exceptions import EmptySetError, SolverWarning
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import trusted_box
 from ..geometry.zonotope import hull_with_status
@@ -59,6 +61,15 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMF
             del s.hist[:len(s.hist) - m.window]
     if status == "ok" and not finite:
         status = "unbounded"
+    if status == "inexact" and not s.warned_inexact:
+        s.warned_inexact = True
+        what = ("the window's rounding allowances (the closed form's c_err / b_err)"
+                if m.window is not None else "the certificate's gap (an inexact multiplier)")
+        warnings.warn(
+            f"SMFDO step k={k}: {what} take {100 * out.gap:.3g} % of a band's width; the "
+            "bounds are certified but wider than the mode's exact bounds, flagged "
+            "status='inexact' with the fraction in step.gap (warned once per observer)",
+            SolverWarning, stacklevel=5)
     x_lo = x_hi = None
     if box_x is not None:
         x_lo, x_hi = m.outward(box_x.lo, box_x.hi)
@@ -68,7 +79,7 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMF
             x_lo, x_hi = add_unobservable(m, s, k, e, box_o, x_lo, x_hi)
     # (first_inconsistent: the first skipped or reset step since k = 0)
     return SMFDOStep(k, est, lo, hi, rad, out.Zd, status, x_lo, x_hi,
-                     s.first_inconsistent is not None)
+                     s.first_inconsistent is not None, float(out.gap))
 
 
 def add_unobservable(m, s, k: int, e: Entry, box_o: Box, x_lo, x_hi):

@@ -10,6 +10,8 @@ from .._rounding import gamma, round_down, round_up
 from ..geometry import ConstrainedZonotope
 from ..geometry.zonotope import hull_with_status
 from ..tolerances import (
+    ALLOWANCE_RTOL,
+    EXACT_RTOL,
     HREP_CONVERT_RTOL,
     UNBOUNDED_RADIUS,
 )
@@ -24,7 +26,7 @@ from ._hrep import (
 )
 from ._setup import MODEL_CACHE, Entry, SMFDOModel
 from ._state import Outcome, SMFDOState
-from ._window import WindowModel
+from ._window import WindowModel, allowance_fraction
 
 __all__ = ["HISTORY_RETRY", "H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS",
            "H_MAX_VERTICES", "HRepEngine", "HistoryEngine"]
@@ -71,6 +73,7 @@ class HRepEngine:
         self._h_images: list[NDArray[np.float64]] | None = None
         self._h_floor_value: float | None = None
         self._h_noise: dict[bytes, list] = {}
+        self._last_gap = 0.0
 
     def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
                  e: Entry) -> Outcome | None:
@@ -82,7 +85,12 @@ class HRepEngine:
             return None
         s.stats["fast"] += 1
         hst, box, box_o, Zd, box_x = out
-        return Outcome(hst, box, box_o, Zd, box_x, "ok", 0, e)
+        gap = self._last_gap
+        # (the H-representation's bounds are the exact set's up to the rounding of one
+        # step, which its allowances cover: flagged only where they take a visible
+        # part of a band, as in window mode)
+        return Outcome(hst, box, box_o, Zd, box_x,
+                       "inexact" if gap > ALLOWANCE_RTOL else "ok", 0, e, gap=gap)
 
     # ------------------------------------------------------------------ exact mode
     def _to_hstate(self, m: SMFDOModel, s: SMFDOState, Z: ConstrainedZonotope) -> HState | None:
@@ -245,7 +253,8 @@ class HRepEngine:
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
-        lo, hi = out
+        lo, hi, alw = out
+        self._last_gap = allowance_fraction(lo, hi, alw, m.margin, m.reported_rows())
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return None
         box_o, box, box_x, at = m.split_hull(lo, hi)
@@ -304,7 +313,12 @@ class HistoryEngine:
             return self._fallback(m, s, k, mode, e, H)
         box_o, box, box_x, _ = m.split_hull(*out)
         s.stats["fast"] += 1
-        return Outcome(H, box, box_o, None, box_x, "ok", 0, e)
+        # "ok" only when every band is certified within EXACT_RTOL of its width of the
+        # whole-history set (the multipliers refined from the basis where the solver's
+        # left a gap: lp.boxlp.BoxLP.refined_multiplier); else "inexact", with the gap
+        gap = allowance_fraction(*out, H.gaps, m.margin, m.reported_rows())
+        return Outcome(H, box, box_o, None, box_x, "inexact" if gap > EXACT_RTOL else "ok",
+                       0, e, gap=gap)
 
     @staticmethod
     def _start(m: SMFDOModel, s: SMFDOState, k: int) -> HistoryLP | None:
@@ -346,7 +360,7 @@ class HistoryEngine:
             s.Z_src = H  # (the observer is left as before the step)
             raise
         box = out.box_o
-        if out.status in ("ok", "fallback", "skipped") and box is not None and \
+        if out.status in ("ok", "inexact", "fallback", "skipped") and box is not None and \
                 np.isfinite(box.lo).all() and np.isfinite(box.hi).all():
             H.push(out.entry)  # (a skipped step's measurement dropped)
             H.box = (box.lo.copy(), box.hi.copy())

@@ -109,6 +109,7 @@ class HistoryLP:
     """
 
     def __init__(self, A_o, Gamma_o, C_o, B_o, E_o, rows, data_rtol: float) -> None:
+        self.gaps = np.zeros(0)  # (the certified gap of each band: hull)
         self.A_o, self.Gamma_o, self.C_o = A_o, Gamma_o, C_o
         self.B_o, self.E_o = B_o, E_o
         self.N = A_o.shape[0]
@@ -319,6 +320,10 @@ class HistoryLP:
             return None
         lo, hi = mins[0::2], -mins[1::2]
         self.box = (lo[:self.N].copy(), hi[:self.N].copy())
+        g = self.box_lp.last_gaps
+        #: the certified gap of each band (lower plus upper end): the exact set's band
+        #: lies within it of ``[lo, hi]``, inside
+        self.gaps = g[0::2] + g[1::2]
         return lo, hi
 
     # ------------------------------------------------------------------ as a set

@@ -43,8 +43,8 @@ def _affine(k, Mc, c_S, Mu, u):
 
 @njit(cache=True)
 def assemble(c_S, b_S, h_S, Yf, y_idx, u, b_S_err, c_S_err, Y_err,
-             b_const, b_c, b_u, b_const_a, b_c_a, b_u_a, b_abs_err, y_pos,
-             c_const, c_c, c_u, c_const_a, c_c_a, c_u_a, c_abs_err, h_D,
+             b_const, b_c, b_u, b_const_a, b_c_a, b_u_a, b_c_m, b_u_m, b_abs_err, y_pos,
+             c_const, c_c, c_u, c_const_a, c_c_a, c_u_a, c_c_m, c_u_m, c_abs_err, h_D,
              gK, data_rtol):
     """``c, b, h, c_err, b_err`` of the window's closed form for the data (the
     arithmetic of :meth:`WindowModel.assemble`, which documents the error terms) and
@@ -53,22 +53,21 @@ def assemble(c_S, b_S, h_S, Yf, y_idx, u, b_S_err, c_S_err, Y_err,
     ``Yf`` is the window's measurements flattened and ``y_idx`` the entries of it the
     structure reads (in its row order); ``u`` is empty without inputs; ``b_S_err``
     and ``c_S_err`` are empty when the start set is exact; ``Y_err`` (like ``Yf``)
-    is empty without a further measurement uncertainty.
+    is empty without a further measurement uncertainty. The ``*_a`` arrays are the
+    coefficients' error bounds (their rounding and that of this evaluation), the
+    ``*_m`` arrays bounds on their exact magnitudes (an uncertainty of ``c_S`` or
+    ``u`` is carried with them).
     """
     nS, nt, N = b_S.size, b_const.size, c_const.size
     has_u = u.size > 0
     au = np.abs(u)
     acS = np.abs(c_S)
-    # b's tail and c: affine in the data; their error bounds: the same on magnitudes
+    # b's tail and c: affine in the data; their error bounds: the error twins on the
+    # data's magnitudes
     bt = _affine(b_const, b_c, c_S, b_u, u)
     c = _affine(c_const, c_c, c_S, c_u, u)
     eb = _affine(b_const_a, b_c_a, acS, b_u_a, au)
     ec = _affine(c_const_a, c_c_a, acS, c_u_a, au)
-    g = gK + 3.0 * _U
-    for i in range(nt):
-        eb[i] *= g
-    for i in range(N):
-        ec[i] *= g
     # the measurement rows: y added, its representation error, the rounding of the
     # addition (none where the rest is zero) and the model allowance gK |y|
     y_scale = 0.0
@@ -90,11 +89,11 @@ def assemble(c_S, b_S, h_S, Yf, y_idx, u, b_S_err, c_S_err, Y_err,
     for i in range(N):
         ec[i] += c_abs_err[i]
     if has_u and data_rtol != 0.0:
-        _matvec_add(eb, b_u_a, au, data_rtol)
-        _matvec_add(ec, c_u_a, au, data_rtol)
+        _matvec_add(eb, b_u_m, au, data_rtol)
+        _matvec_add(ec, c_u_m, au, data_rtol)
     if c_S_err.size and np.any(c_S_err != 0.0):
-        _matvec_add(eb, b_c_a, c_S_err, 1.0)
-        _matvec_add(ec, c_c_a, c_S_err, 1.0)
+        _matvec_add(eb, b_c_m, c_S_err, 1.0)
+        _matvec_add(ec, c_c_m, c_S_err, 1.0)
     gf = 1.0 + gK  # rounding of the bounds themselves
     b = np.empty(nS + nt)
     b_err = np.empty(nS + nt)
@@ -215,13 +214,16 @@ def _center_radius(lo, hi):
 
 
 @njit(cache=True)
-def restart_rows(lo_b, hi_b, avail, lo_t, hi_t, F, row_lag, G, G_a, P, K, K_a, K_e, S, S_a,
-                 unbounded, Hu, Hu_a, U, data_rtol, g, g_t):
+def restart_rows(lo_b, hi_b, avail, lo_t, hi_t, F, row_lag, G, G_a, G_e, K, K_err, K_e, S,
+                 S_err, unbounded, Hu, Hu_e, Hu_m, U, data_rtol, g, g_t):
     """Ranges of the restart polytope's rows (the arithmetic of
     :meth:`setobs.setmembership._restart.RestartPolytope.rows`, which documents it):
     row ``r`` from the earlier hull ``lo_b[row_lag[r]]``, ``hi_b[...]`` (``avail``:
     known), else, or when that is unbounded, over the hull ``[lo_t, hi_t]`` itself
-    (``g_t``: the rounding factor ``gamma(N + 3)`` of that product)."""
+    (``g_t``: the rounding factor ``gamma(N + 3)`` of that product). ``G_e``,
+    ``K_err``, ``S_err``, ``Hu_e``: the coefficients' error bounds; ``K_e``: the
+    carried error of the sets' centres; ``Hu_m``: the inputs' coefficients'
+    magnitudes; ``g``: the rounding of this evaluation."""
     L, N = lo_b.shape
     R = F.shape[0]
     c0 = np.zeros((L, N))
@@ -239,20 +241,24 @@ def restart_rows(lo_b, hi_b, avail, lo_t, hi_t, F, row_lag, G, G_a, P, K, K_a, K
     for k in range(R):
         j = row_lag[k]
         b = unbounded[k] or not avail[j]
-        mid, rad, mag = K[k], S[k], K_a[k] + S_a[k]
+        mid, rad = K[k], S[k]
+        mag = abs(K[k]) + S[k]
+        err = K_e[k] + K_err[k] + S_err[k]
         for i in range(N):
-            if P[k, i] != 0.0 and not fin[j, i]:
+            if (G_a[k, i] != 0.0 or G_e[k, i] != 0.0) and not fin[j, i]:
                 b = True
+            z = abs(c0[j, i]) + r0[j, i]
             mid += G[k, i] * c0[j, i]
             rad += G_a[k, i] * r0[j, i]
-            mag += (P[k, i] + G_a[k, i]) * (abs(c0[j, i]) + r0[j, i])
-        err = K_e[k]
+            mag += G_a[k, i] * z
+            err += G_e[k, i] * z
         if U.size:
             tu = 0.0
             for i in range(U.size):
                 mid += Hu[k, i] * U[i]
-                tu += Hu_a[k, i] * aU[i]
-            mag += 2.0 * tu
+                mag += abs(Hu[k, i]) * aU[i]
+                err += Hu_e[k, i] * aU[i]
+                tu += Hu_m[k, i] * aU[i]
             err += data_rtol * tu
         err += g * mag
         # the range's own assembly (three roundings of terms up to its magnitude)

@@ -24,10 +24,12 @@ with ``B = B_step`` and ``(c_D, G_D, h_D)`` the per-step uncertainty set (its
 constraints dropped: an outer bound). Each term is bounded over a box in
 closed form, so ``[l_j, u_j]`` is a valid range of ``F_j z_t`` and
 ``X_t ⊆ S_t``. Every matrix here is a float matrix taken as exact; the
-computed products ``F_j A_o^i`` differ from the exact ones by at most
-``gamma |F_j| |A_o|^i`` elementwise (Higham, Lemma 3.5 iterated), and the
-ranges are widened by those bounds, by the data's representation error and
-by the rounding of their own assembly. A row with an unbounded term (an
+computed products ``F_j A_o^i`` (``fl(F_j Â_i)`` with the computed powers) differ
+from the exact ones by at most ``|F_j| E_i + gamma_N |F_j| |Â_i|`` elementwise, with
+``E_i`` the powers' own bound of :mod:`._powers` (which decays with ``A_o^i`` instead
+of growing like ``|A_o|^i``, the bound this module used before), and the ranges are
+widened by those bounds, by the data's representation error and by the rounding of
+their own assembly. A row with an unbounded term (an
 unbounded increment factor or an unbounded hull coordinate) is left out.
 
 Support values. The window's step at ``t`` also bounds ``F_j z`` over its own posterior
@@ -62,6 +64,7 @@ from .._lazy import lazy_module
 from .._rounding import gamma
 from ..geometry import ConstrainedZonotope
 from ..geometry.box import box_center_radius
+from ._powers import power_table, quiet, up
 
 __all__ = ["DEFAULT_RESTART_DEPTH", "RestartPolytope"]
 
@@ -122,6 +125,7 @@ class RestartPolytope:
         Relative representation error of every input.
     """
 
+    @quiet  # (overflowing rows of an unstable plant: inf, the rows then left out)
     def __init__(self, A_o, Gamma_o, B_step, step_set: ConstrainedZonotope, depth: int,
                  data_rtol: float) -> None:
         N, p = A_o.shape[0], Gamma_o.shape[1]
@@ -136,26 +140,32 @@ class RestartPolytope:
             self.F_all = np.zeros((0, N))
             return
         Ainv = np.linalg.inv(A_o)
-        absA, absGam = np.abs(A_o), np.abs(Gamma_o)
+        tab = power_table(A_o, lags)
+        absGam = np.abs(Gamma_o)
         absB = np.abs(B_step)
         cD, GD, hD = step_set.c, step_set.G, step_set.h
-        cD_err = step_set.c_err
-        BcD, BcD_a = B_step @ cD, absB @ np.abs(cD)
-        BcD_e = absB @ cD_err
+        gN = 2.0 * gamma(N + 2)
+        gD = 2.0 * gamma(max(N, GD.shape[1]) + 2)
+        BcD = B_step @ cD
+        BcD_err = gD * (absB @ np.abs(cD))      # rounding of B c_D
+        BcD_e = absB @ step_set.c_err            # the set's centre error
         BG = B_step @ GD
         absBG = absB @ np.abs(GD)
+        BG_err = gD * absBG
         hD_f = np.where(np.isinf(hD), 0.0, hD)
         inf_cols = np.isinf(hD)
-        # Per lag j = 1..lags (stacked, then the kept rows taken): F_j, fl(F_j A_o^j)
-        # and |F_j| |A_o|^j (its rounding scale), the inputs' map [F_j Gamma, F_j A
-        # Gamma, ...] (by u age) and its magnitude, sum_i F_j A^i B c_D with its
-        # magnitude and carried error, the reach sum_i |F_j A^i B G_D| h_D with its
-        # rounding scale, and whether a row reaches an unbounded factor.
-        F, Gj, Pj = [], [], []
+        # Per lag j = 1..lags (stacked, then the kept rows taken): F_j and fl(F_j A_o^j)
+        # with its error bound (:mod:`._powers`: it does not compound with j), the
+        # inputs' map [F_j Gamma, F_j A Gamma, ...] (by u age) with its error and
+        # magnitude, sum_i F_j A^i B c_D with its error and carried set error, the
+        # reach sum_i |F_j A^i B G_D| h_D with its error, and whether a row reaches an
+        # unbounded factor.
+        F, Gj, Ej = [], [], []
         Hu = np.zeros((lags, N, lags * p))
-        Hu_a = np.zeros((lags, N, lags * p))
-        K, K_a, K_e = np.zeros((lags, N)), np.zeros((lags, N)), np.zeros((lags, N))
-        S, S_a = np.zeros((lags, N)), np.zeros((lags, N))
+        Hu_e = np.zeros((lags, N, lags * p))
+        Hu_m = np.zeros((lags, N, lags * p))
+        K, K_err, K_e = np.zeros((lags, N)), np.zeros((lags, N)), np.zeros((lags, N))
+        S, S_err = np.zeros((lags, N)), np.zeros((lags, N))
         unb = np.zeros((lags, N), dtype=bool)
         # Rows nearly parallel to a row of a smaller lag (or to an axis) are left out:
         # for a plant with one fast-decaying mode the rows of A_o^-j converge to its
@@ -176,22 +186,35 @@ class RestartPolytope:
                 keep_rows.append(bool(ok))
                 if ok:
                     kept = np.vstack([kept, v])
-            H, Ha = Fj, np.abs(Fj)
-            for i in range(j):  # H = F_j A^i, Ha = |F_j| |A|^i
+            k_abs = np.zeros(N)
+            for i in range(j):  # H = fl(F_j Â_i), EH >= |H - F_j A^i|
+                H, EH = tab.left(Fj, i)
+                aH = np.abs(H)
+                mH = aH + EH
                 if p:
-                    Hu[j - 1][:, i * p:(i + 1) * p] = H @ Gamma_o
-                    Hu_a[j - 1][:, i * p:(i + 1) * p] = Ha @ absGam
-                K[j - 1] += H @ BcD
-                K_a[j - 1] += np.abs(H) @ np.abs(BcD) + Ha @ BcD_a
-                K_e[j - 1] += Ha @ BcD_e
-                S[j - 1] += np.abs(H @ BG) @ hD_f
-                S_a[j - 1] += (Ha @ absBG) @ hD_f
+                    X = H @ Gamma_o
+                    Xe = up(EH @ absGam + gN * (aH @ absGam), N)
+                    Hu[j - 1][:, i * p:(i + 1) * p] = X
+                    Hu_e[j - 1][:, i * p:(i + 1) * p] = Xe
+                    Hu_m[j - 1][:, i * p:(i + 1) * p] = up(np.abs(X) + Xe, 1)
+                t = H @ BcD
+                K[j - 1] += t
+                k_abs += np.abs(t)
+                K_err[j - 1] += up(EH @ np.abs(BcD) + gN * (aH @ np.abs(BcD))
+                                   + mH @ BcD_err, N) + gamma(j + 1) * k_abs
+                K_e[j - 1] += up(mH @ BcD_e, N)
+                HB = H @ BG
+                S[j - 1] += np.abs(HB) @ hD_f
+                eHB = EH @ absBG + gN * (aH @ np.abs(BG)) + mH @ BG_err
+                S_err[j - 1] += up(eHB @ hD_f + gamma(N + 2) * (np.abs(HB) @ hD_f), N)
                 if inf_cols.any():
-                    unb[j - 1] |= ((Ha @ absBG)[:, inf_cols] != 0).any(axis=1)
-                H, Ha = H @ A_o, Ha @ absA
+                    unb[j - 1] |= ((mH @ absBG)[:, inf_cols] != 0).any(axis=1)
+            H, EH = tab.left(Fj, j)
             F.append(Fj)
             Gj.append(H)
-            Pj.append(Ha)
+            Ej.append(EH)
+        # (the sums of S over the lags: their own rounding)
+        S_err += gamma(lags + 2) * S
         Fall = np.array(F).reshape(-1, N)
         keep = np.array(keep_rows, dtype=bool)
         self.F_all = Fall[keep]
@@ -205,16 +228,16 @@ class RestartPolytope:
         self.lags = used = int(self.row_lag.max()) + 1
         self.G = np.array(Gj).reshape(-1, N)[keep]
         self.G_a = np.abs(self.G)
-        self.P = np.array(Pj).reshape(-1, N)[keep]
-        Hu, Hu_a = Hu[:J].reshape(J * N, lags * p), Hu_a[:J].reshape(J * N, lags * p)
-        self.Hu = np.ascontiguousarray(Hu[keep][:, :used * p])
-        self.Hu_a = np.ascontiguousarray(Hu_a[keep][:, :used * p])
-        self.K, self.K_a, self.K_e = (M[:J].reshape(-1)[keep] for M in (K, K_a, K_e))
-        self.S, self.S_a = S[:J].reshape(-1)[keep], S_a[:J].reshape(-1)[keep]
+        self.G_e = np.array(Ej).reshape(-1, N)[keep]
+        Hu, Hu_e, Hu_m = (M[:J].reshape(J * N, lags * p)[keep][:, :used * p]
+                          for M in (Hu, Hu_e, Hu_m))
+        self.Hu, self.Hu_e, self.Hu_m = (np.ascontiguousarray(M) for M in (Hu, Hu_e, Hu_m))
+        self.K, self.K_err, self.K_e = (M[:J].reshape(-1)[keep] for M in (K, K_err, K_e))
+        self.S, self.S_err = S[:J].reshape(-1)[keep], S_err[:J].reshape(-1)[keep]
         self.unbounded = unb[:J].reshape(-1)[keep]
-        # Depth of every product above (j <= lags steps of N-, p- and nD-term sums,
-        # plus assembly): Higham's gamma, doubled for the products' own rounding.
-        self._g = 2.0 * gamma((used + 2) * (N + p + GD.shape[1] + 3) + 8)
+        # the evaluation of a row's range in :meth:`rows` (sums of 1 + N + lags p
+        # terms), doubled for the bounds' own rounding
+        self._g = 2.0 * gamma(N + used * p + 6)
 
     def rows(self, box_t, boxes, inputs):
         """Ranges of ``F_j z_t`` (the carried-back rows) from the earlier hulls.
@@ -251,9 +274,9 @@ class RestartPolytope:
             U[:n_u * self.p] = np.asarray(inputs[:n_u], dtype=float).reshape(-1)
         return _kernels.restart_rows(
             lo_b, hi_b, avail, np.ascontiguousarray(box_t.lo), np.ascontiguousarray(box_t.hi),
-            self.F_all, self.row_lag, self.G, self.G_a, self.P, self.K, self.K_a, self.K_e,
-            self.S, self.S_a, self.unbounded, self.Hu, self.Hu_a, U, self.data_rtol, self._g,
-            gamma(N + 3))
+            self.F_all, self.row_lag, self.G, self.G_a, self.G_e, self.K, self.K_err,
+            self.K_e, self.S, self.S_err, self.unbounded, self.Hu, self.Hu_e, self.Hu_m, U,
+            self.data_rtol, self._g, gamma(N + 3))
 
     @staticmethod
     def start_data(box_lo, box_hi, F, lo, hi):

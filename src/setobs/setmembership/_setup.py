@@ -225,6 +225,23 @@ class SMFDOModel:
                 at += n
         return box_o, box, box_x, at
 
+    def reported_rows(self) -> NDArray[np.int64]:
+        """The rows of the fast paths' hull bounds (:meth:`split_hull`'s order) whose
+        bands the step reports: ``P z`` and, with ``state_bounds``, the states (a state
+        that is a coordinate of ``z`` by that coordinate's row; its band is that row's
+        scaled by a power-free factor, so the same fraction of it)."""
+        N = self.A_o.shape[0]
+        rows = [np.asarray(self.P_coords, dtype=np.int64) if self.P_coords is not None
+                else np.arange(N, N + self.P.shape[0])]
+        at = N + (0 if self.P_coords is not None else self.P.shape[0])
+        if self.state_bounds:
+            if self.X_coords is not None:
+                nz = self.X_scale != 0
+                rows.append(np.asarray(self.X_coords, dtype=np.int64)[nz])
+            else:
+                rows.append(np.arange(at, at + self.sys.n))
+        return np.unique(np.concatenate(rows)) if rows else np.zeros(0, dtype=np.int64)
+
     def coordinate_states(self, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> Box:
         """The states' box from the box of ``z_o`` when the state map has at most one
         nonzero per row (``x_i = s_i z_j``): the products rounded outward (exact for

@@ -33,7 +33,9 @@ class Outcome(NamedTuple):
     step drops its measurement), and whether the step's window was small enough for
     BLAS to stay single-threaded by itself, and (the polytope restart) the certified
     ranges of the restart rows ``F z`` over the posterior (its support values in the
-    carried directions, :mod:`._restart`), or ``None``."""
+    carried directions, :mod:`._restart`), or ``None``, and the step's gap: the largest
+    fraction of a band's width that its bounds may exceed the mode's exact bounds by
+    (the window's rounding allowances, exact mode's certification gap)."""
 
     Z_src: object
     box: Box
@@ -45,6 +47,7 @@ class Outcome(NamedTuple):
     entry: object
     blas_small: bool = False
     support: tuple | None = None
+    gap: float = 0.0
 
     def with_posterior(self, Z_src: object) -> Outcome:
         """The same outcome carrying another representation of its posterior."""
@@ -115,6 +118,7 @@ class SMFDOState:
         self.hist_retry_at = 0  # (the same for exact mode's whole-history LP)
         self.box_o_last: Box | None = None  # certified hull of the last posterior
         self.warned_inconsistent = False
+        self.warned_inexact = False
         self.in_run = False
         self.blas_small = False  # the last step's window is small (see SMFDO.update)
         if previous is None:

@@ -18,7 +18,7 @@ from ..results import error_summary, time_axis, time_index
 __all__ = ["STEP_STATUSES", "SMFDOResult", "SMFDOStep"]
 
 #: Values of :attr:`SMFDOStep.status`.
-STEP_STATUSES = ("ok", "unbounded", "fallback", "reset", "skipped")
+STEP_STATUSES = ("ok", "unbounded", "fallback", "inexact", "reset", "skipped")
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,11 @@ class SMFDOStep:
     status : str
         ``"ok"``; ``"unbounded"`` (some bound is infinite, e.g. before the data
         pin the disturbance down); ``"fallback"`` (an LP failed under every
-        solver setting: the bounds are still certified, but wider); ``"reset"``
+        solver setting: the bounds are still certified, but wider); ``"inexact"``
+        (certified, but the step's own bound on how much wider than the mode's
+        exact bounds they may be, :attr:`gap`, is above its tolerance: the window's
+        rounding allowances above ``ALLOWANCE_RTOL`` = 1 % of a band's width, or
+        exact mode's certification gap above ``EXACT_RTOL`` = 1e-6); ``"reset"``
         (the posterior was empty and ``on_inconsistent="reset"`` restarted the
         filter: the guarantee is lost at this step); ``"skipped"`` (the
         posterior was empty and ``on_inconsistent="skip"`` dropped the
@@ -58,6 +62,11 @@ class SMFDOStep:
         Whether a step up to this one (this one included) was skipped or reset
         (``on_inconsistent``): the bands then hold for the model with the skipped
         samples discarded (or from the reset set), not for the record itself.
+    gap : float
+        The largest fraction of a band's width by which the bounds may exceed the
+        mode's exact bounds, as far as the step knows: the window's rounding
+        allowances (the LP certificate's ``|y|^T b_err`` at both ends and
+        ``2 c_err``), exact mode's certification gap; 0 for the set recursion.
     """
 
     k: int
@@ -70,6 +79,7 @@ class SMFDOStep:
     state_lo: NDArray[np.float64] | None = None
     state_hi: NDArray[np.float64] | None = None
     after_skip: bool = False
+    gap: float = 0.0
 
     radius = renamed("radius", "error_bound")
 
@@ -141,6 +151,13 @@ class SMFDOResult:
     after_skip: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     radius = renamed("radius", "error_bound")
+
+    @property
+    def gap(self) -> NDArray[np.float64]:
+        """Per-step :attr:`SMFDOStep.gap`, shape ``(N,)``: the largest fraction of a band
+        by which the step's bounds may exceed its mode's exact bounds (status
+        ``"inexact"`` above the tolerance)."""
+        return np.array([st.gap for st in self.steps], dtype=np.float64)
 
     @property
     def time(self) -> NDArray[np.float64]:

@@ -17,11 +17,31 @@ have a fixed structure and go through
 :class:`setobs.lp.fastlp.FixedStructureLP`.
 
 Rounding. ``c`` and ``b`` are affine in the data with coefficient matrices
-computed once (``-C_o A_o^j``, ...). Their rounding errors, and those of
-assembling ``c`` and ``b``, are bounded elementwise by Higham's ``gamma``
-bounds on the matching products of absolute values (``|C_o| |A_o|^j |c_S|``,
-...), computed alongside; the representation error of the data (a relative
-``data_rtol`` on every ``y`` and ``u``) is added. The rounding of the generator
+computed once (``Mc = A_o^j``, ``-C_o A_o^j``, ``A_o^(j-1-i) Gamma_o``,
+``sum_t A_o^t B c_D``). Each computed coefficient ``X`` carries an elementwise bound
+``E >= |X - X*|`` on its distance to the exact ``X*`` of the float model, and
+``|X| + E >= |X*|``. The powers are the computed ``Â_j`` of
+:class:`~._powers.PowerTable`, whose bound ``F_j`` sums the rounding of each product
+carried by the *exact* later powers (``F_j = sum_i P_(j-i) D_i``, ``P >= |A_o^k|``:
+see :mod:`._powers` for the proof); every other coefficient is one product of a
+bounded power with a float matrix (``E = |M| F + gamma |M| |Â|``) or a sum of such
+(recursive summation, Higham (4.4)). So, for data ``c_S``, ``u`` known to ``c_S_err``,
+``data_rtol |u|``,
+
+.. math::  |c - c^*| \\le E_c |c_S| + E_u |u| + E_\\kappa
+           + (|M_c| + E_c) c_{S,err} + (|M_u| + E_u)\\,\\mathrm{data\\_rtol}\\,|u|
+           + \\gamma\\,(|M_c| |c_S| + |M_u| |u| + |\\kappa|),
+
+the last term the rounding of evaluating ``c`` itself (the kernel's sums), and the same
+for ``b``; the kernel (:func:`._kernels.assemble`) adds exactly these terms, rounded up.
+None of them grows with ``|A_o|^j``: on a stable plant they decay with the powers
+(before, the textbook ``gamma |A_o|^j`` grew like ``rho(|A_o|)^j``, 48 per step on a
+7-state plant with ``cond(A_o) = 2e4``, and window 10 bands reached ``1e5``;
+``tests/setmembership/test_window_allowance.py``). A restart carries no error: its
+box and rows are certified hulls, exact data. Where the allowances still take more
+than ``ALLOWANCE_RTOL`` of a reported band (large ``|y|`` against a narrow band) the
+step says ``"inexact"`` (:func:`allowance_fraction`); the representation error of the
+data (a relative ``data_rtol`` on every ``y`` and ``u``) is added. The rounding of the generator
 and constraint matrices (``C_o A_o^j G_S``, relative ``gK``) acts on the
 factors; their image in a measurement row has the size of ``y`` unless the
 prediction cancels, so ``gK |y|`` is added on every measurement row (the
@@ -42,6 +62,7 @@ from ..exceptions import InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..geometry.zonotope import trusted_cz
 from ..lp.fastlp import FixedStructureLP, LPState, hull_objectives
+from ._powers import power_table, quiet, up
 
 # The compiled assembly (numba) loads on the first window, not on import.
 _kernels = lazy_module("setobs.setmembership._kernels")
@@ -50,14 +71,44 @@ _EMPTY = np.zeros(0)
 #: The window's hull LPs stop when their duality gap is at most this fraction of the
 #: coordinate's width at the previous window step (``rel_gap`` of
 #: :meth:`setobs.lp.fastlp.FixedStructureLP.minimize_all_unchecked`): each bound is
-#: certified, and within that gap of the window LP's optimum, so a band is at most
-#: ``2 WINDOW_REL_GAP`` of its width wider than the window's exact hull (more through
-#: the restarts that carry it). Measured at window 10, box restart, against 0 (development
-#: runs; ``benchmarks/state_estimation.py`` has the plants): simplex iterations per step
+#: certified, and within that gap of the window LP's optimum: within one step a band is
+#: at most ``2 WINDOW_REL_GAP`` of its width *at the previous step* wider than the
+#: window's exact hull, and the restarts carry that into later windows. Measured
+#: (``benchmarks/results/early_stop.json``: 30 random stable plants, 120 steps, window 10,
+#: restarts auto and box, against the stop off): each run's widest excess has median
+#: 0.18 %, 95th percentile 0.52 %, largest 1.1 % of the band's width; against the larger
+#: of the band's width and its width a step before at most 0.37 %. An absolute amount,
+#: not a fraction of the band: where the set collapses to a point at a step (every state
+#: measured, noise on the corners: 2 of the 60 runs) that band is thousands of times its
+#: own (rounding-level) width wider. At 1e-4 the figures are 0.047 % (95th percentile)
+#: and 0.09 %. Simplex iterations per step
 #: on the 30-tank cascade with 21 outputs 1 327 -> 635 (1e-4: 731; 1e-2: 537), bands
 #: 0.035 % wider on average and 0.21 % at most (1e-2: 0.35 % and 1.7 %); on the random
 #: 6-state plant 799 -> 536, 0.07 % and 0.26 %.
 WINDOW_REL_GAP = 1e-3
+
+
+def allowance_fraction(lo, hi, alw, margin: float, rows=None) -> float:
+    """The largest fraction of a finite band's reported width (``hi - lo`` plus the
+    reported outward margin ``2 margin max(1, |lo|, |hi|)``) taken by its rounding
+    allowances ``alw`` (:meth:`WindowModel.hull`), over the bands ``rows`` (default
+    all: the reported ones, :meth:`~._setup.SMFDOModel.reported_rows`); allowances
+    within the margin ``margin max(1, |lo|, |hi|)`` count as 0."""
+    if rows is not None:
+        lo, hi, alw = lo[rows], hi[rows], alw[rows]
+    width = hi - lo
+    fin = np.isfinite(width)
+    if not fin.any():
+        return 0.0
+    scale = np.maximum(1.0, np.maximum(np.abs(lo[fin]), np.abs(hi[fin])))
+    rep = width[fin] + 2.0 * margin * scale
+    a = alw[fin]
+    # (an allowance within the reported margin, margin * max(1, |end|), is the rounding
+    # that margin is there for: a band pinned to a point by its data, whose width is
+    # that margin, is not "inexact" for a rounding-level allowance)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.where((rep > 0) & (a > margin * scale), a / rep, 0.0)
+    return float(np.max(frac, initial=0.0))
 
 
 def model_rtol(s: int, N: int, p: int, nD: int) -> float:
@@ -108,6 +159,7 @@ class WindowModel:
         with nothing measured is a pure prediction.
     """
 
+    @quiet  # (overflowing coefficients of an unstable plant: inf, the LPs then decline)
     def __init__(self, A_o, B_o, C_o, Gamma_o, *, increment: ConstrainedZonotope,
                  G_S, A_S, free_S, s: int, first_posterior: bool,
                  P: NDArray[np.float64] | None, unbounded_radius: float,
@@ -128,32 +180,43 @@ class WindowModel:
         n_g = n_x + n_noisy * nV
         self.s, self.first_posterior, self.N = s, first_posterior, N
         self.l, self.p = l, p
-        absA, absB, absC, absGam = np.abs(A_o), np.abs(B_o), np.abs(C_o), np.abs(Gamma_o)
+        absB, absC = np.abs(B_o), np.abs(C_o)
+        # The powers A_o^j with rounding bounds that do not compound (:mod:`._powers`).
+        # Every coefficient below is a float matrix X with an error bound E >= |X - X*|
+        # (X* its exact value from the float model) and the magnitude |X| + E >= |X*|.
+        tab = power_table(A_o, s)
+        gN = 2.0 * gamma(N + 2)                 # one product with an N-term sum
+        gev = 2.0 * gamma(N + s * p + 4)        # assemble's evaluation of c and b
         # Rows: start constraints, then per posterior: increment rows (for steps
         # >= 1), the noise set's own rows and the measured C_o rows.
         # b = b0 + Bc c_S + Bu u + scatter(y); the start set's own b_S enters
         # through b0 (set per call by the caller's b_S). Each coefficient has an
-        # absolute-value twin (the rounding-error scale); ``berr0`` collects
-        # absolute errors carried by the sets' centres and right-hand sides.
+        # error twin (its rounding error plus the rounding of its evaluation in
+        # assemble) and the two matrix coefficients a magnitude twin (what an
+        # uncertainty of c_S or u is carried with); ``e0`` collects absolute errors
+        # carried by the sets' centres and right-hand sides.
         rows_A = [np.hstack([A_S, np.zeros((A_S.shape[0], n_g - nS))])]
         self.nS_rows = A_S.shape[0]
-        blocks: list[tuple[NDArray[np.float64], ...]] = []  # (b0, Bc, Bu, |b0|, |Bc|, |Bu|, e0)
+        blocks: list[tuple[NDArray[np.float64], ...]] = []
+        # (b0, Bc, Bu, err(b0), err(Bc), err(Bu), |Bc|*, |Bu|*, e0)
         y_pos: list[int] = []
         G = np.zeros((N, n_x))
         G[:, :nS] = G_S
-        Mc = np.eye(N)                 # c_j = Mc c_S + Mu u_flat + kappa
-        Mu = np.zeros((N, s * p))
-        kappa = np.zeros(N)
-        Mc_a, Mu_a, kappa_a = np.eye(N), np.zeros((N, s * p)), np.zeros(N)
-        kappa_e = np.zeros(N)          # absolute error carried by kappa (the sets' c_err)
-        row = self.nS_rows
+        # c_j = Mc c_S + Mu u_flat + kappa with Mc = A^j, Mu's block i = A^(j-1-i) Gamma,
+        # kappa = sum_(t<j) A^t B c_D
+        Mc, Ec = np.eye(N), np.zeros((N, N))
+        Mu, Eu = np.zeros((N, s * p)), np.zeros((N, s * p))
+        kappa, Ek, kappa_e = np.zeros(N), np.zeros(N), np.zeros(N)
+        AG = [tab.apply(t, Gamma_o) for t in range(s)] if p else []
         BcD = B_o @ cD
-        BcD_a = absB @ np.abs(cD)
-        BcD_e = absB @ increment.c_err
+        BcD_err = gN * (absB @ np.abs(cD))      # BcD's own rounding
+        BcD_e = absB @ increment.c_err          # the increment set's centre error
+        kappa_sum_abs = np.zeros(N)
+        row = self.nS_rows
         v_col = n_x
         if nV:
             GV, AV, cV = noise.G, noise.A, noise.c
-            cV_a, cV_e = np.abs(cV), noise.c_err
+            cV_e = noise.c_err
         y_sel: list[bool] = []
 
         def posterior(mask) -> None:
@@ -169,19 +232,28 @@ class WindowModel:
                     rows_A.append(Arow)
                     zN0, zU0 = np.zeros((AV.shape[0], N)), np.zeros((AV.shape[0], s * p))
                     blocks.append((noise.b.copy(), zN0, zU0, np.zeros(AV.shape[0]), zN0,
-                                   zU0, noise.b_err.copy()))
+                                   zU0, zN0, zU0, noise.b_err.copy()))
                     row += AV.shape[0]
             Arow = np.zeros((m, n_g))
             Arow[:, :n_x] = C_o[mask] @ G
-            b0, b0_a = -C_o[mask] @ kappa, absC[mask] @ kappa_a
-            e0 = absC[mask] @ kappa_e
+            Cm, aC = C_o[mask], absC[mask]
+            b0 = -(Cm @ kappa)
+            b0_err = aC @ Ek + gN * (aC @ np.abs(kappa))
+            e0 = aC @ kappa_e
             if nV:
                 Arow[:, v_col:v_col + nV] = GV[mask]
-                b0, b0_a, e0 = b0 - cV[mask], b0_a + cV_a[mask], e0 + cV_e[mask]
+                b0 = b0 - cV[mask]
+                b0_err = b0_err + gN * np.abs(b0)
+                e0 = e0 + cV_e[mask]
                 v_col += nV
             rows_A.append(Arow)
-            blocks.append((b0, -C_o[mask] @ Mc, -C_o[mask] @ Mu, b0_a, absC[mask] @ Mc_a,
-                           absC[mask] @ Mu_a, e0))
+            bc, bu = -(Cm @ Mc), -(Cm @ Mu)
+            bc_err = aC @ Ec + gN * (aC @ np.abs(Mc)) + gev * np.abs(bc)
+            bu_err = aC @ Eu + gN * (aC @ np.abs(Mu)) + gev * np.abs(bu)
+            b0_err = b0_err + gev * np.abs(b0)
+            blocks.append((b0, bc, bu, up(b0_err, N), up(bc_err, N), up(bu_err, N),
+                           up(aC @ (np.abs(Mc) + Ec), N), up(aC @ (np.abs(Mu) + Eu), N),
+                           up(e0, N)))
             y_pos.extend(range(row, row + m))
             row += m
 
@@ -191,40 +263,49 @@ class WindowModel:
             blk = slice(nS + (j - 1) * nD, nS + j * nD)
             G = A_o @ G
             G[:, blk] += B_o @ GD
-            Mc, Mc_a = A_o @ Mc, absA @ Mc_a
-            Mu, Mu_a = A_o @ Mu, absA @ Mu_a
-            if p:
-                Mu[:, (j - 1) * p:j * p] += Gamma_o
-                Mu_a[:, (j - 1) * p:j * p] += absGam
-            kappa, kappa_a = A_o @ kappa + BcD, absA @ kappa_a + BcD_a
-            kappa_e = absA @ kappa_e + BcD_e
+            Mc, Ec = tab.powers[j], tab.F[j]
+            if p:  # block i of the inputs: A^(j-1-i) Gamma
+                for i in range(j):
+                    Mu[:, i * p:(i + 1) * p], Eu[:, i * p:(i + 1) * p] = AG[j - 1 - i]
+            # kappa += fl(A^(j-1) B c_D), recursive summation (Higham (4.4))
+            v, ev = tab.apply(j - 1, BcD)
+            kappa = kappa + v
+            kappa_sum_abs = kappa_sum_abs + np.abs(v)
+            Ek = up(Ek + ev + tab.P[j - 1] @ BcD_err, N) + gamma(j + 1) * kappa_sum_abs
+            kappa_e = up(kappa_e + tab.P[j - 1] @ BcD_e, N)
             if AD.shape[0]:
                 Arow = np.zeros((AD.shape[0], n_g))
                 Arow[:, blk] = AD
                 rows_A.append(Arow)
                 zN, zU = np.zeros((AD.shape[0], N)), np.zeros((AD.shape[0], s * p))
                 blocks.append((increment.b.copy(), zN, zU, np.zeros(AD.shape[0]), zN, zU,
-                               increment.b_err.copy()))
+                               zN, zU, increment.b_err.copy()))
                 row += AD.shape[0]
             posterior(masks[j - 1 + int(first_posterior)])
+        Mc_err = up(Ec + gev * np.abs(Mc), N)
+        Mu_err = up(Eu + gev * np.abs(Mu), N)
+        kappa_err = up(Ek + gev * np.abs(kappa), N)
         self.A = np.vstack(rows_A) if rows_A else np.zeros((0, n_g))
         m = self.A.shape[0]
         nz = m - self.nS_rows
-        parts = [np.concatenate([blk[i] for blk in blocks]) if nz else None for i in range(7)]
+        parts = [np.concatenate([blk[i] for blk in blocks]) if nz else None for i in range(9)]
         self.b_const = parts[0] if nz else np.zeros(0)
         self.b_c = parts[1] if nz else np.zeros((0, N))
         self.b_u = parts[2] if nz else np.zeros((0, s * p))
         self._b_const_a = parts[3] if nz else np.zeros(0)
         self._b_c_a = parts[4] if nz else np.zeros((0, N))
         self._b_u_a = parts[5] if nz else np.zeros((0, s * p))
-        self._b_abs_err = parts[6] if nz else np.zeros(0)
+        self._b_c_m = parts[6] if nz else np.zeros((0, N))
+        self._b_u_m = parts[7] if nz else np.zeros((0, s * p))
+        self._b_abs_err = parts[8] if nz else np.zeros(0)
         self.y_pos = np.asarray(y_pos, dtype=np.int64) - self.nS_rows
         self._y_idx = np.flatnonzero(np.asarray(y_sel, dtype=bool)).astype(np.int64)
         self.masks = tuple(masks)
         self.n_y = n_y
         self.G = np.hstack([G, np.zeros((N, n_g - n_x))])
-        self.c_c, self.c_u, self.c_const = Mc, Mu, kappa
-        self._c_c_a, self._c_u_a, self._c_const_a = Mc_a, Mu_a, kappa_a
+        self.c_c, self.c_u, self.c_const = Mc.copy(), Mu, kappa
+        self._c_c_a, self._c_u_a, self._c_const_a = Mc_err, Mu_err, kappa_err
+        self._c_c_m, self._c_u_m = up(np.abs(Mc) + Ec, N), up(np.abs(Mu) + Eu, N)
         self._c_abs_err = kappa_e
         # Depth of the products (s steps of N-term sums, plus assembly) for gamma.
         self._gK = model_rtol(s, N, p, nD + nV)
@@ -288,8 +369,9 @@ class WindowModel:
             empty if c_S_err is None else np.ascontiguousarray(c_S_err, dtype=f64),
             empty if Y_err is None else np.ascontiguousarray(Y_err, dtype=f64).reshape(-1),
             self.b_const, self.b_c, self.b_u, self._b_const_a, self._b_c_a, self._b_u_a,
-            self._b_abs_err, self.y_pos, self.c_const, self.c_c, self.c_u, self._c_const_a,
-            self._c_c_a, self._c_u_a, self._c_abs_err, self.h_D, self._gK, float(data_rtol))
+            self._b_c_m, self._b_u_m, self._b_abs_err, self.y_pos, self.c_const, self.c_c,
+            self.c_u, self._c_const_a, self._c_c_a, self._c_u_a, self._c_c_m, self._c_u_m,
+            self._c_abs_err, self.h_D, self._gK, float(data_rtol))
 
     def hull(self, c, b, h, y_scale: float, state: LPState, b_err, c_err):
         """Certified hull bounds of ``Z`` (and of ``P Z``), or ``None`` if any LP failed.
@@ -297,8 +379,10 @@ class WindowModel:
         ``y_scale`` is the magnitude of the measurements (``b`` is ``y - C_o c_j``,
         where the two cancel; its rounding is relative to them). The bounds hold
         for every ``b`` within ``b_err`` and every centre within ``c_err``.
-        Returns ``(lo, hi)`` of length ``N`` (+ ``q`` with ``P``), rounded
-        outward exactly as :meth:`ConstrainedZonotope.interval_hull` does.
+        Returns ``(lo, hi, alw)``: the bounds of length ``N`` (+ ``q`` with ``P``),
+        rounded outward exactly as :meth:`ConstrainedZonotope.interval_hull` does, and
+        the rounding allowances in each band (``|y_lo|^T b_err + |y_hi|^T b_err +
+        2 c_err``, ``y`` the certified multipliers: :func:`allowance_fraction`).
         """
         bounds, ok = self.lp.minimize_all_unchecked(b, h, state, y_scale, b_err,
                                                     WINDOW_REL_GAP)
@@ -312,7 +396,10 @@ class WindowModel:
             pe = (self._absP @ (c_err + gamma(k + 1) * np.abs(c))) * (1.0 + gamma(k + 2))
             cc, cc_err = np.concatenate([c, Pc]), np.concatenate([c_err, pe])
         lo, hi, crossed_not = _kernels.hull_bounds(bounds, cc, cc_err)
-        return (lo, hi) if crossed_not else None
+        if not crossed_not:
+            return None
+        alw = np.abs(state.ys) @ b_err if b_err.size else np.zeros(bounds.size)
+        return lo, hi, alw[0::2] + alw[1::2] + 2.0 * cc_err
 
     def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""

@@ -8,11 +8,11 @@ import numpy as np
 from .._lazy import lazy_module
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.zonotope import trusted_cz
-from ..tolerances import UNBOUNDED_RADIUS
+from ..tolerances import ALLOWANCE_RTOL, UNBOUNDED_RADIUS
 from ._restart import RestartPolytope
 from ._setup import MODEL_CACHE, Entry, SMFDOModel
 from ._state import Outcome, SMFDOState
-from ._window import WindowModel
+from ._window import WindowModel, allowance_fraction
 
 # The compiled restart data (numba) loads on the first window, not on import.
 _kernels = lazy_module("setobs.setmembership._kernels")
@@ -220,15 +220,16 @@ class WindowEngine:
         if fast is None:
             return None
         s.stats["fast"] += 1
-        Z_src, box, box_o, box_x, _, support = fast
+        Z_src, box, box_o, box_x, _, support, gap = fast
         Zd = None
         if m.keep_sets:
             model, c, b, h, c_err, b_err = Z_src
             Z_src = model.to_cz(c, b, h, c_err, b_err)
             Zd = m.P @ Z_src
         depth = k if mode == "init" else m.window
-        return Outcome(Z_src, box, box_o, Zd, box_x, "ok", depth, e,
-                       fast[0][0].blas_small, support)
+        status = "inexact" if gap > ALLOWANCE_RTOL else "ok"
+        return Outcome(Z_src, box, box_o, Zd, box_x, status, depth, e,
+                       fast[0][0].blas_small, support, gap)
 
     def _closed_form(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, entry: Entry):
         """Hulls of ``Z_k``, ``P Z_k`` (and of the state, ``state_bounds``) by the closed
@@ -270,7 +271,7 @@ class WindowEngine:
             other = self._window_solve(m, s, k, mode, hist, Y, measured, masks, mkey, True,
                                        support=False)
             if other is not None:
-                wo, wf = other[-2], first[-2]
+                wo, wf = other[4], first[4]
                 fin = np.isfinite(wo) & np.isfinite(wf) & (wo > 0.0)
                 gain = float(np.mean((wo[fin] - wf[fin]) / wo[fin])) if fin.any() else 0.0
                 s.sup_miss = 0 if gain > SUPPORT_GAIN else s.sup_miss + 1
@@ -294,7 +295,7 @@ class WindowEngine:
             s.auto_next = s.auto_count + AUTO_PROBE
             return first
         poly_out, box_out = (first, other) if s.auto_poly else (other, first)
-        keep = polytope_pays(poly_out[-2], box_out[-2])
+        keep = polytope_pays(poly_out[4], box_out[4])
         # (the interval doubles while the probes agree with the choice)
         s.auto_period = (min(2 * s.auto_period, AUTO_PROBE_MAX) if keep == s.auto_poly
                          else AUTO_PROBE)
@@ -365,8 +366,10 @@ class WindowEngine:
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
+        frac = allowance_fraction(*out, m.margin, m.reported_rows())
+        out = out[:2]
         box_o, box, box_x, at = m.split_hull(*out)
         n_sup = sup_rows.shape[0]
         support = (out[0][at:at + n_sup], out[1][at:at + n_sup]) if n_sup else None
         return ((model, c, b, h, c_err, b_err), box, box_o, box_x, out[1][:at] - out[0][:at],
-                support)
+                support, frac)

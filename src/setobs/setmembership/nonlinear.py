@@ -83,6 +83,7 @@ from ..exceptions import (
     DomainError,
     EmptySetError,
     InvalidValueError,
+    MagnitudeError,
     ModelInvalidatedError,
     UnboundedSetError,
 )
@@ -387,6 +388,19 @@ class NonlinearSetObserver:
         if self.p and u is None:
             raise ArgumentError(f"u is required: the model has {self.p} inputs")
         uv = as_vector("u", u, size=self.p) if self.p else np.zeros(0)
+        try:
+            return self._advance(yv, uv)
+        except (MagnitudeError, InvalidValueError) as exc:
+            # (a set that grows past the double range fails in an operation the user never
+            # called -- a linear map, a bound named lo -- : say what happened instead)
+            raise UnboundedSetError(
+                f"the state set diverged at step {self.k}: its data left the double "
+                "range (the model's enclosure over the set grows faster than the data "
+                "bound it); bound the initial state set tighter, give a state_domain, or "
+                f"measure more (from: {exc})") from exc
+
+    def _advance(self, yv, uv) -> SMFDOStep:
+        """:meth:`update` for checked data."""
         X = self.prior
         status = "fallback" if self.pred_fallback else "ok"
         msk = ~np.isnan(yv)
