@@ -63,15 +63,6 @@ WARM_PRIMAL_LIMIT = 2000
 HIGHS_SCALING = False
 
 sparse = lazy_module("scipy.sparse")
-
-
-def _ld_matvec(M, v):
-    """``M @ v`` for a CSR matrix of floats and an extended-precision vector, summed in
-    extended precision."""
-    prod = M.data.astype(np.longdouble) * v[M.indices]
-    out = np.zeros(M.shape[0], dtype=np.longdouble)
-    np.add.at(out, np.repeat(np.arange(M.shape[0]), np.diff(M.indptr)), prod)
-    return out
 _certificate = lazy_module("setobs.lp.certificate")
 
 
@@ -104,8 +95,6 @@ class BoxLP:
         #: bound may lie below the LP's minimum (``obj - bound`` plus what the solver's
         #: point misses of its rows, :meth:`_gap`)
         self.last_gaps = np.zeros(0)
-        #: solves whose multiplier was refined from the basis (:meth:`refined_multiplier`)
-        self.refinements = 0
 
     # ------------------------------------------------------------------ building
     def begin(self) -> None:
@@ -425,7 +414,6 @@ class BoxLP:
                 if y2 is not None:
                     b2 = self.certify(cols, w, y2)
                     if np.isfinite(b2) and not b2 <= bound:
-                        self.refinements += 1
                         bound, y = b2, y2
             if np.isfinite(bound) and (obj - bound <= tol
                                        or obj - bound <= tol + self._explained(hs, cols, w, y)):
@@ -436,13 +424,11 @@ class BoxLP:
 
     def refined_multiplier(self, hs, cols: NDArray[np.int64], w: NDArray[np.float64]
                            ) -> NDArray[np.float64] | None:
-        """The multiplier of the solver's final basis, recomputed: ``B^T y = w_B`` (``B``
-        the basic columns and the unit columns of the basic rows' slacks, whose
-        multipliers are then 0) by a sparse LU, with one step of iterative refinement
-        whose residual is summed in extended precision (``numpy.longdouble``). The
-        solver's own duals carry its tolerances (1e-10 relative to its scaled model);
-        this one makes the basic columns' reduced costs vanish to rounding, which is what
-        the certificate charges for.
+        """The multiplier of the solver's final basis, recomputed and refined in extended
+        precision (:func:`setobs.lp.highs.basis_duals`, by a sparse LU here). The solver's
+        own duals carry its tolerances (1e-10 relative to its scaled model); this one
+        makes the basic columns' reduced costs vanish to rounding, which is what the
+        certificate charges for.
 
         Parameters
         ----------
@@ -458,47 +444,30 @@ class BoxLP:
         ndarray or None
             The row multiplier, or ``None`` when the basis is not square or singular.
         """
-        import scipy.sparse.linalg as spla
-
         A = self.arrays()[4]
-        try:
-            basic, brow = highs.basis(hs)
-        except Exception:  # (no basis: nothing to refine)
-            return None
-        m = A.shape[0]
-        if basic.size != A.shape[1] or brow.size != m or int(basic.sum() + brow.sum()) != m:
-            return None
         wf = np.zeros(A.shape[1])
         wf[cols] = w
-        eye = sparse.identity(m, format="csc")
-        B = sparse.hstack([A[:, np.flatnonzero(basic)], eye[:, np.flatnonzero(brow)]],
-                          format="csc")
-        rhs = np.concatenate([wf[basic], np.zeros(int(brow.sum()))])
-        try:
-            lu = spla.splu(B.T.tocsc())
-            y = lu.solve(rhs)
-            if not np.isfinite(y).all():
-                return None
-            Bl = B.T.tocsr()
-            r = (rhs.astype(np.longdouble)
-                 - _ld_matvec(Bl, y.astype(np.longdouble))).astype(np.float64)
-            y = y + lu.solve(r)
-        except (RuntimeError, ValueError):  # (singular, or not square)
-            return None
-        return y if np.isfinite(y).all() else None
+        return highs.basis_duals(hs, A, wf)
 
     def _gap(self, hs, obj: float, bound: float, y: NDArray[np.float64]) -> float:
         """The certified gap of an accepted bound: ``obj - bound`` plus the cost of the
         solver's point's residual, ``|y|^T max(|A x - b| - b_err, 0)`` (at a point off
         its rows the objective may undercut the minimum by about that). The LP's minimum
         lies within that of the bound, above it."""
-        lo, _, b, berr, A, _, _ = self.arrays()
-        x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
-        gap = max(obj - bound, 0.0)
-        if x.size == lo.size:
-            x = x * np.concatenate(self._s)
-            gap += float(np.abs(y) @ np.maximum(np.abs(A @ x - b) - berr, 0.0))
+        x = self._point(hs)
+        gap = max(obj - bound, 0.0) + (0.0 if x is None else self._point_cost(x, y))
         return round_up(gap) if gap > 0 else 0.0
+
+    def _point(self, hs) -> NDArray[np.float64] | None:
+        """The solver's point in this LP's (unscaled) columns, or ``None``."""
+        x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
+        return x * np.concatenate(self._s) if x.size == self.n_col else None
+
+    def _point_cost(self, x: NDArray[np.float64], y: NDArray[np.float64]) -> float:
+        """``|y|^T max(|A x - b| - b_err, 0)``: how much a point off its rows may let the
+        objective undercut the minimum."""
+        _, _, b, berr, A, _, _ = self.arrays()
+        return float(np.abs(y) @ np.maximum(np.abs(A @ x - b) - berr, 0.0))
 
     def _explained(self, hs, cols, w: NDArray[np.float64], y: NDArray[np.float64]) -> float:
         """What the solver's precision explains of a certification gap ``obj - bound``:
@@ -518,12 +487,11 @@ class BoxLP:
         each). A wrong basis leaves dual-infeasible *nonbasic* columns or a gross
         residual, which this does not excuse; a point off its box is not accepted. The
         bound itself is certified either way."""
-        lo, hi, b, berr, A, _, _ = self.arrays()
+        lo, hi, _, _, A, _, _ = self.arrays()
         basic, _ = highs.basis(hs)
-        x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
-        if basic.size != lo.size or x.size != lo.size:
+        x = self._point(hs)
+        if basic.size != lo.size or x is None:
             return 0.0
-        x = x * np.concatenate(self._s)
         slop = 1e-9 * (1.0 + np.maximum(np.abs(lo), np.abs(hi)))
         if not (np.isfinite(x).all() and (x >= lo - slop).all() and (x <= hi + slop).all()):
             return 0.0
@@ -531,8 +499,7 @@ class BoxLP:
         wf[cols] = w
         r = wf - A.T @ y
         multiplier = float(np.sum(np.abs(r[basic]) * (hi[basic] - lo[basic])))
-        point = float(np.abs(y) @ np.maximum(np.abs(A @ x - b) - berr, 0.0))
-        return (multiplier + point) * (1.0 + 1e-6)
+        return (multiplier + self._point_cost(x, y)) * (1.0 + 1e-6)
 
     # ------------------------------------------------------------------ pickling
     def __getstate__(self) -> dict:

@@ -406,7 +406,7 @@ class FactorPolytope:
     def _basis_bound(self, w, w_err, w_pair, hs, y, bound: float):
         """``(bound, y)``, or the certified bound of the duals of the optimal basis of
         ``hs`` (refined in extended precision) with those duals, when it is higher."""
-        y_ref = self._basis_duals(hs, w)
+        y_ref = highs.basis_duals(hs, self.A, w)
         if y_ref is not None:
             b_ref = self.certify(w, y_ref, w_err, w_pair)
             if b_ref > bound:
@@ -893,36 +893,6 @@ class FactorPolytope:
         if not np.isfinite(bound):
             return None
         return LPResult(bound, float(objs[0]), None, "optimal")
-
-    def _basis_duals(self, hs: highspy.Highs, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
-        """Duals recomputed from HiGHS's optimal basis, refined in extended precision.
-
-        Solves ``A[N, B]^T y_N = w_B`` (``B`` basic columns, ``N`` nonbasic rows;
-        ``y = 0`` on rows whose slack is basic). Only a candidate multiplier:
-        the bound is certified by :meth:`certify` like any other.
-        """
-        basic_col, basic_row = highs.basis(hs)
-        bc = np.flatnonzero(basic_col)
-        nbr = np.flatnonzero(~basic_row)
-        if bc.size != nbr.size:
-            return None
-        M = self.A[np.ix_(nbr, bc)].T
-        try:
-            yn = np.linalg.solve(M, w[bc])
-            # Iterative refinement with residuals in extended precision (long
-            # double where the platform has it): the duals of the basis to
-            # working precision, also on ill-conditioned bases.
-            Ml, wl = M.astype(np.longdouble), w[bc].astype(np.longdouble)
-            for _ in range(3):
-                r = np.asarray(wl - Ml @ yn.astype(np.longdouble), dtype=np.float64)
-                if not r.any():
-                    break
-                yn = yn + np.linalg.solve(M, r)
-        except np.linalg.LinAlgError:
-            return None
-        y = np.zeros(self.n_c)
-        y[nbr] = yn
-        return y
 
     @_blas_unless_small
     @_quiet_overflow

@@ -15,8 +15,9 @@ from numpy.typing import NDArray
 
 from .._lazy import lazy_module
 
-__all__ = ["RETRY_SETTINGS", "basis", "highspy", "new_model", "option", "pass_csc",
-           "pass_dense", "set_basis", "simplex_limit", "solve", "status", "status_name"]
+__all__ = ["RETRY_SETTINGS", "basis", "basis_duals", "highspy", "new_model", "option",
+           "pass_csc", "pass_dense", "set_basis", "simplex_limit", "solve", "status",
+           "status_name"]
 
 # HiGHS loads on the first LP, not on ``import setobs``.
 highspy = lazy_module("highspy")
@@ -205,6 +206,71 @@ def basis(hs) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     basic = highspy.HighsBasisStatus.kBasic
     return (np.array([st == basic for st in b.col_status], dtype=bool),
             np.array([st == basic for st in b.row_status], dtype=bool))
+
+
+def basis_duals(hs, A, w: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """Row duals recomputed from the last solve's basis, refined in extended precision.
+
+    Solves ``A[N, B]^T y_N = w_B`` (``B`` the basic columns, ``N`` the nonbasic rows;
+    ``y = 0`` on rows whose slack is basic), then up to three rounds of iterative
+    refinement with the residual in extended precision (long double where the platform
+    has it): the duals of the basis to working precision, also on ill-conditioned
+    bases. Only a candidate multiplier: a bound from it is certified like any other.
+
+    Parameters
+    ----------
+    hs : highspy.Highs
+        A model that has been run, of the LP ``A x = b`` in ``A``'s columns.
+    A : ndarray or scipy.sparse array, shape (m, n)
+        The constraint matrix (sparse: the basis is factorized by a sparse LU).
+    w : ndarray, shape (n,)
+        The objective.
+
+    Returns
+    -------
+    ndarray or None
+        ``y`` of shape ``(m,)``, or ``None`` when the basis does not fit ``A``, is not
+        square or is singular.
+    """
+    basic_col, basic_row = basis(hs)
+    m, n = A.shape
+    if basic_col.size != n or basic_row.size != m:
+        return None
+    bc = np.flatnonzero(basic_col)
+    nbr = np.flatnonzero(~basic_row)
+    if bc.size != nbr.size:
+        return None
+    wb = np.asarray(w, dtype=np.float64)[bc]
+    if hasattr(A, "tocsc"):
+        import scipy.sparse.linalg as spla
+
+        M = A.tocsr()[nbr][:, bc].T.tocsc()
+        try:
+            solve = spla.splu(M).solve
+        except RuntimeError:  # (singular)
+            return None
+        Ml = M.astype(np.longdouble)
+    else:
+        M = A[np.ix_(nbr, bc)].T
+
+        def solve(r):
+            return np.linalg.solve(M, r)
+        Ml = M.astype(np.longdouble)
+    try:
+        yn = solve(wb)
+        wl = wb.astype(np.longdouble)
+        for _ in range(3):
+            r = np.asarray(wl - Ml @ yn.astype(np.longdouble), dtype=np.float64)
+            if not r.any():
+                break
+            yn = yn + solve(r)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.isfinite(yn).all():
+        return None
+    y = np.zeros(m)
+    y[nbr] = yn
+    return y
 
 
 def status_name(hs) -> str:
