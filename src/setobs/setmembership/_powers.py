@@ -31,15 +31,12 @@ is carried with.
 Overflow (an unstable plant over a long window) gives ``inf``, never ``NaN``:
 an infinite bound is sound, and the bands that use it are infinite.
 
-The table of one matrix is computed once and extended on demand (``O(k^2)``
-products of ``N x N`` matrices up to ``k``); it is shared by every window structure
-of a process through a small locked cache keyed by the matrix's bytes.
+A table is built by the structure that reads it (a window's closed form, a restart's
+rows: ``O(k^2)`` products of ``N x N`` matrices up to ``k``, once per structure, and
+the structures are cached) and extended on demand; nothing is kept at module level.
 """
 
 from __future__ import annotations
-
-import threading
-from collections import OrderedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -76,8 +73,7 @@ class PowerTable:
     Notes
     -----
     See the module docstring for the recursion and its proof. Grows on demand
-    (:meth:`extend`); the lists only grow, so readers of ``k <= K`` are not
-    disturbed by a concurrent extension (which holds the table's lock).
+    (:meth:`extend`); owned by the structure that builds it.
     """
 
     def __init__(self, A: NDArray[np.float64]) -> None:
@@ -88,33 +84,29 @@ class PowerTable:
         self.F: list[NDArray[np.float64]] = [np.zeros((N, N))]
         self.P: list[NDArray[np.float64]] = [np.eye(N)]
         self._D: list[NDArray[np.float64]] = []
-        self._lock = threading.Lock()
         # gamma of one product's rounding (N terms), doubled for the bound's own rounding
         self._gN = 2.0 * gamma(N + 2)
 
     @quiet
     def extend(self, K: int) -> PowerTable:
         """Make sure the table reaches ``k = K`` (returns ``self``)."""
-        if len(self.powers) > K:
-            return self
-        with self._lock:
-            N = self.N
-            while len(self.powers) <= K:
-                k = len(self.powers)
-                prev = self.powers[-1]
-                Ak = self.A @ prev
-                D = self._gN * (self.absA @ np.abs(prev))
-                self._D.append(up(D, N))
-                # F_k = sum_{i=1..k} P_(k-i) D_i  (P_(k-1), ..., P_0 against D_1, ..., D_k)
-                Pst = np.array(self.P[::-1])
-                Fk = np.matmul(Pst, np.array(self._D)).sum(axis=0)
-                Fk = up(Fk, k * (N + 1))
-                if not np.isfinite(Ak).all():
-                    Ak = np.where(np.isnan(Ak), np.inf, Ak)
-                    Fk = np.full((N, N), np.inf)
-                self.F.append(Fk)
-                self.P.append(up(np.abs(Ak) + Fk, 1))
-                self.powers.append(Ak)
+        N = self.N
+        while len(self.powers) <= K:
+            k = len(self.powers)
+            prev = self.powers[-1]
+            Ak = self.A @ prev
+            D = self._gN * (self.absA @ np.abs(prev))
+            self._D.append(up(D, N))
+            # F_k = sum_{i=1..k} P_(k-i) D_i  (P_(k-1), ..., P_0 against D_1, ..., D_k)
+            Pst = np.array(self.P[::-1])
+            Fk = np.matmul(Pst, np.array(self._D)).sum(axis=0)
+            Fk = up(Fk, k * (N + 1))
+            if not np.isfinite(Ak).all():
+                Ak = np.where(np.isnan(Ak), np.inf, Ak)
+                Fk = np.full((N, N), np.inf)
+            self.F.append(Fk)
+            self.P.append(up(np.abs(Ak) + Fk, 1))
+            self.powers.append(Ak)
         return self
 
     @quiet
@@ -141,31 +133,6 @@ class PowerTable:
         return out, up(err, self.N + 2)
 
 
-class _TableCache:
-    """Power tables by matrix (its shape and bytes), least recently used out."""
-
-    def __init__(self, size: int = 8) -> None:
-        self._items: OrderedDict[tuple, PowerTable] = OrderedDict()
-        self._lock = threading.Lock()
-        self.size = size
-
-    def get(self, A: NDArray[np.float64]) -> PowerTable:
-        A = np.ascontiguousarray(A, dtype=np.float64)
-        key = (A.shape, A.tobytes())
-        with self._lock:
-            hit = self._items.get(key)
-            if hit is not None:
-                self._items.move_to_end(key)
-                return hit
-            table = self._items[key] = PowerTable(A)
-            while len(self._items) > self.size:
-                self._items.popitem(last=False)
-            return table
-
-
-_TABLES = _TableCache()
-
-
 def power_table(A: NDArray[np.float64], K: int) -> PowerTable:
-    """The (shared) :class:`PowerTable` of ``A``, extended to ``k = K``."""
-    return _TABLES.get(A).extend(K)
+    """A :class:`PowerTable` of ``A`` extended to ``k = K``."""
+    return PowerTable(A).extend(K)
