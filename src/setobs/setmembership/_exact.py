@@ -73,7 +73,6 @@ class HRepEngine:
         self._h_images: list[NDArray[np.float64]] | None = None
         self._h_floor_value: float | None = None
         self._h_noise: dict[bytes, list] = {}
-        self._last_gap = 0.0
 
     def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
                  e: Entry) -> Outcome | None:
@@ -84,8 +83,7 @@ class HRepEngine:
         if out is None:
             return None
         s.stats["fast"] += 1
-        hst, box, box_o, Zd, box_x = out
-        gap = self._last_gap
+        hst, box, box_o, Zd, box_x, gap = out
         # (the H-representation's bounds are the exact set's up to the rounding of one
         # step, which its allowances cover: flagged only where they take a visible
         # part of a band, as in window mode)
@@ -186,8 +184,10 @@ class HRepEngine:
         s.h_retry_at = step + min(2 ** s.h_fails, 64)
 
     def _hrep_step(self, m: SMFDOModel, s: SMFDOState, e: Entry):
-        """One exact step by the H-representation recursion (:mod:`._hrep`), or
-        ``None`` (the reference path decides it)."""
+        """One exact step by the H-representation recursion (:mod:`._hrep`): the
+        posterior, its hulls, the disturbance set and the gap of its bands
+        (:func:`._window.allowance_fraction`), or ``None`` (the reference path decides
+        it)."""
         st = s.Z_src
         if not isinstance(st, HState):
             if not isinstance(st, ConstrainedZonotope) or s.k + 1 < s.h_retry_at:
@@ -254,7 +254,7 @@ class HRepEngine:
         if out is None:
             return None
         lo, hi, alw = out
-        self._last_gap = allowance_fraction(lo, hi, alw, m.margin, m.reported_rows())
+        gap = allowance_fraction(lo, hi, alw, m.margin, m.reported_rows)
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return None
         box_o, box, box_x, at = m.split_hull(lo, hi)
@@ -276,8 +276,8 @@ class HRepEngine:
             # {H z <= g} would be an outer set from the next step on. This step's
             # bounds are exact (its LPs ran over the exact set); carry that set.
             self._h_back_off(s, s.k + 1)
-            return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x
-        return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x
+            return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x, gap
+        return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x, gap
 
 
 class HistoryEngine:
@@ -316,7 +316,7 @@ class HistoryEngine:
         # "ok" only when every band is certified within EXACT_RTOL of its width of the
         # whole-history set (the multipliers refined from the basis where the solver's
         # left a gap: lp.boxlp.BoxLP.refined_multiplier); else "inexact", with the gap
-        gap = allowance_fraction(*out, H.gaps, m.margin, m.reported_rows())
+        gap = allowance_fraction(*out, H.gaps, m.margin, m.reported_rows)
         return Outcome(H, box, box_o, None, box_x, "inexact" if gap > EXACT_RTOL else "ok",
                        0, e, gap=gap)
 

@@ -225,7 +225,7 @@ class SMFDOModel:
                 at += n
         return box_o, box, box_x, at
 
-    def reported_rows(self) -> NDArray[np.int64]:
+    def _reported_rows(self) -> NDArray[np.int64]:
         """The rows of the fast paths' hull bounds (:meth:`split_hull`'s order) whose
         bands the step reports: ``P z`` and, with ``state_bounds``, the states (a state
         that is a coordinate of ``z`` by that coordinate's row; its band is that row's
@@ -554,6 +554,9 @@ class SMFDOModel:
                 self.A_o, self.Gamma_o, self.B_step, self.step_set, restart_depth,
                 self.data_rtol)
         self.restart_lags = 0 if self.restart_poly is None else self.restart_poly.lags
+        #: the rows of the fast paths' hull bounds whose bands a step reports
+        #: (:meth:`_reported_rows`): what a step's gap is measured on
+        self.reported_rows = self._reported_rows()
         self._frozen = True
 
     def __setattr__(self, name: str, value: object) -> None:

@@ -92,7 +92,7 @@ def allowance_fraction(lo, hi, alw, margin: float, rows=None) -> float:
     """The largest fraction of a finite band's reported width (``hi - lo`` plus the
     reported outward margin ``2 margin max(1, |lo|, |hi|)``) taken by its rounding
     allowances ``alw`` (:meth:`WindowModel.hull`), over the bands ``rows`` (default
-    all: the reported ones, :meth:`~._setup.SMFDOModel.reported_rows`); allowances
+    all: the reported ones, :attr:`~._setup.SMFDOModel.reported_rows`); allowances
     within the margin ``margin max(1, |lo|, |hi|)`` count as 0."""
     if rows is not None:
         lo, hi, alw = lo[rows], hi[rows], alw[rows]

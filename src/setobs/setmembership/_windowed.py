@@ -366,7 +366,7 @@ class WindowEngine:
         out = model.hull(c, b, h, y_scale, state, b_err, c_err)
         if out is None:
             return None
-        frac = allowance_fraction(*out, m.margin, m.reported_rows())
+        frac = allowance_fraction(*out, m.margin, m.reported_rows)
         out = out[:2]
         box_o, box, box_x, at = m.split_hull(*out)
         n_sup = sup_rows.shape[0]
