@@ -454,17 +454,25 @@ def check_lp_shapes(m: int, n: int, **arrays) -> None:
         if name == "y":
             continue
         v = np.asarray(a, dtype=np.float64)
-        if np.isnan(v).any():
-            raise InvalidValueError(f"{name} holds NaN")
-        if name in ("w", "b", "b_err", "w_err") and not np.isfinite(v).all():
-            raise InvalidValueError(f"{name} must be finite")
+        bad = np.isnan(v)
+        if bad.any():
+            raise InvalidValueError(f"{name} holds NaN (first at index {int(np.argmax(bad))})"
+                                    ": pass numbers")
+        bad = ~np.isfinite(v)
+        if name in ("w", "b", "b_err", "w_err") and bad.any():
+            i = int(np.argmax(bad))
+            raise InvalidValueError(f"{name} must be finite, got {v[i]} at index {i}")
         if name in ("b_err", "w_err", "h") and (v < 0).any():
-            raise InvalidValueError(f"{name} must be nonnegative")
+            i = int(np.argmax(v < 0))
+            raise InvalidValueError(f"{name} must be nonnegative, got {v[i]} at index {i}")
     lo, hi = arrays.get("lo"), arrays.get("hi")
     if lo is not None and hi is not None:
         lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-        if (lo > hi).any() or (lo == np.inf).any() or (hi == -np.inf).any():
-            raise InvalidValueError("the bounds need lo <= hi, lo < inf and hi > -inf")
+        bad = (lo > hi) | (lo == np.inf) | (hi == -np.inf)
+        if bad.any():
+            j = int(np.argmax(bad))
+            raise InvalidValueError(f"the bounds need lo <= hi, lo < inf and hi > -inf: "
+                                    f"column {j} has [{lo[j]}, {hi[j]}]")
 
 
 def certified_lower_bound(

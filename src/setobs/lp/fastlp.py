@@ -209,8 +209,11 @@ class FixedStructureLP:
             raise DimensionError(
                 f"FixedStructureLP needs the shapes A (m, n), W (n_lp, n), free (n,): got A "
                 f"{self.A.shape}, W {self.W.shape}, free {self.free.shape}")
-        if not (np.isfinite(self.A).all() and np.isfinite(self.W).all()):
-            raise InvalidValueError("FixedStructureLP: A and W must be finite")
+        for name, M in (("A", self.A), ("W", self.W)):
+            if not np.isfinite(M).all():
+                i = np.unravel_index(int(np.argmax(~np.isfinite(M))), M.shape)
+                raise InvalidValueError(f"FixedStructureLP: {name} must be finite, got "
+                                        f"{M[i]} at index {tuple(map(int, i))}")
         self.csc = _certificate.csc_of(self.A)  # (the certificate's form of A)
         self.unbounded_radius = float(unbounded_radius)
         m, n = self.A.shape
