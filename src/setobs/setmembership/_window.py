@@ -38,16 +38,16 @@ None of them grows with ``|A_o|^j``: on a stable plant they decay with the power
 (before, the textbook ``gamma |A_o|^j`` grew like ``rho(|A_o|)^j``, 48 per step on a
 7-state plant with ``cond(A_o) = 2e4``, and window 10 bands reached ``1e5``;
 ``tests/setmembership/test_window_allowance.py``). A restart carries no error: its
-box and rows are certified hulls, exact data. Where the allowances still take more
-than ``ALLOWANCE_RTOL`` of a reported band (large ``|y|`` against a narrow band) the
-step says ``"inexact"`` (:func:`allowance_fraction`); the representation error of the
-data (a relative ``data_rtol`` on every ``y`` and ``u``) is added. The rounding of the generator
+box and rows are certified hulls, exact data. The representation error of the data
+(a relative ``data_rtol`` on every ``y`` and ``u``) is added. The rounding of the generator
 and constraint matrices (``C_o A_o^j G_S``, relative ``gK``) acts on the
 factors; their image in a measurement row has the size of ``y`` unless the
 prediction cancels, so ``gK |y|`` is added on every measurement row (the
 *model allowance*). The LP certificate covers the resulting ``b_err`` and the
 hull covers ``c_err``, so the bounds contain the set for the exact data even
-when large states cancel against large measurements (``|y| ~ 1e15``).
+when large states cancel against large measurements (``|y| ~ 1e15``). Where the
+allowances take more than ``ALLOWANCE_RTOL`` of a reported band (large ``|y|`` against
+a narrow band) the step says ``"inexact"`` (:func:`allowance_fraction`).
 """
 
 from __future__ import annotations
