@@ -636,3 +636,114 @@ def nonlinear_inner_bounds(F, H, X0, rw, rv, Y, U, X, k, states, shrink=0.999):
                 v = traj(z)[k][i]
                 lo[i], hi[i] = min(lo[i], v), max(hi[i], v)
     return lo, hi
+
+
+def nonlinear_inner_bounds_ms(F, H, X0, rw, rv, Y, U, X, k, states, shrink=0.999,
+                              starts=2, seed=0, maxiter=400):
+    """An *inner* bound of the exact state set at step ``k`` of ``x+ = F(x, u) + w``,
+    ``y = H(x, u) + v`` (``|w| <= rw``, ``|v| <= rv`` elementwise; ``x_0`` in ``X0``, a
+    box ``(lo, hi)`` or a zonotope ``("zonotope", c, G)`` of ``c + G xi``, ``|xi| <= 1``),
+    by *multiple* shooting: SLSQP over ``x_0``'s parameters and ``x_1 .. x_k``, with the
+    process and measurement bounds as inequality constraints (shrunk by ``shrink`` so the
+    optimizer's answer is strictly feasible; Jacobians by central differences, block by
+    block), minimising and maximising ``x_k[i]`` for ``i`` in ``states``, from the true
+    history and from ``starts - 1`` others (the truth with its noise redrawn). A value is
+    kept only when its history is feasible for the unshrunk bounds, checked in floating
+    point from the optimizer's states (``w_j = x_(j+1) - F(x_j, u_j)``, ``v_j = y_j -
+    H(x_j, u_j)``, ``x_0`` in ``X0``): every value returned is attained by a history
+    consistent with the data, so ``[lo, hi]`` lies inside the exact set's hull."""
+    from scipy.optimize import minimize
+
+    X = np.asarray(X, float)
+    Y = np.asarray(Y, float)
+    n = X.shape[1]
+    rw = np.broadcast_to(np.asarray(rw, float), (n,)).copy()
+    rv = np.broadcast_to(np.asarray(rv, float), (Y.shape[1],)).copy()
+    if isinstance(X0[0], str):
+        c0, G0 = np.asarray(X0[1], float), np.asarray(X0[2], float)
+        m = G0.shape[1]
+        p_lo, p_hi = -np.ones(m), np.ones(m)
+        xi_true = np.linalg.lstsq(G0, X[0] - c0, rcond=None)[0]
+    else:
+        c0, G0 = np.zeros(n), np.eye(n)
+        m = n
+        p_lo, p_hi = np.asarray(X0[0], float), np.asarray(X0[1], float)
+        xi_true = X[0].copy()
+    meas = [np.flatnonzero(~np.isnan(Y[j])) for j in range(k + 1)]
+
+    def states_of(z):
+        x0 = c0 + G0 @ z[:m]
+        return np.vstack([x0, z[m:].reshape(k, n)])
+
+    def cons(z, s):
+        xs = states_of(z)
+        w = np.array([xs[j + 1] - F(xs[j], U[j]) for j in range(k)]).reshape(k, n)
+        v = [Y[j][meas[j]] - H(xs[j], U[j])[meas[j]] for j in range(k + 1)]
+        out = [(s * rw - w).ravel(), (s * rw + w).ravel()]
+        for j in range(k + 1):
+            out += [s * rv[meas[j]] - v[j], s * rv[meas[j]] + v[j]]
+        return np.concatenate(out)
+
+    def jac_block(fun, x, u, eps=1e-7):
+        cols = []
+        for i in range(n):
+            d = np.zeros(n)
+            d[i] = eps * max(1.0, abs(x[i]))
+            cols.append((fun(x + d, u) - fun(x - d, u)) / (2 * d[i]))
+        return np.array(cols).T
+
+    def cons_jac(z, s):
+        xs = states_of(z)
+        nz = m + k * n
+        rows_w = np.zeros((k * n, nz))
+        for j in range(k):
+            Jf = jac_block(F, xs[j], U[j])
+            rows_w[j * n:(j + 1) * n, m + j * n:m + (j + 1) * n] = np.eye(n)
+            if j == 0:
+                rows_w[:n, :m] = -Jf @ G0
+            else:
+                rows_w[j * n:(j + 1) * n, m + (j - 1) * n:m + j * n] = -Jf
+        blocks = [-rows_w, rows_w]
+        for j in range(k + 1):
+            Jh = jac_block(H, xs[j], U[j])[meas[j]]
+            r = np.zeros((meas[j].size, nz))
+            if j == 0:
+                r[:, :m] = -Jh @ G0
+            else:
+                r[:, m + (j - 1) * n:m + j * n] = -Jh
+            blocks += [-r, r]
+        return np.vstack(blocks)
+
+    def feasible(z):
+        if np.any(z[:m] < p_lo) or np.any(z[:m] > p_hi):
+            return False
+        return bool(cons(z, 1.0).min() >= 0.0)
+
+    rng = np.random.default_rng(seed)
+    inits = [np.concatenate([xi_true, X[1:k + 1].ravel()])]
+    for _ in range(starts - 1):
+        x = X[0].copy()
+        traj = []
+        for j in range(k):
+            x = F(x, U[j]) + rw * rng.uniform(-1, 1, n)
+            traj.append(x)
+        inits.append(np.concatenate([xi_true, np.ravel(traj)]))
+    bounds = list(zip(np.concatenate([p_lo, np.full(k * n, -np.inf)]),
+                      np.concatenate([p_hi, np.full(k * n, np.inf)]), strict=True))
+    lo, hi = X[k].copy(), X[k].copy()
+    for i in states:
+        for sgn in (1.0, -1.0):
+            e = np.zeros(m + k * n)
+            e[m + (k - 1) * n + i] = -sgn
+            for z0 in inits:
+                res = minimize(lambda z, e=e: e @ z, z0, jac=lambda z, e=e: e, method="SLSQP",
+                               bounds=bounds,
+                               constraints=[{"type": "ineq", "fun": lambda z: cons(z, shrink),
+                                             "jac": lambda z: cons_jac(z, shrink)}],
+                               options={"maxiter": maxiter, "ftol": 1e-12})
+                z = res.x.copy()
+                z[:m] = np.clip(z[:m], p_lo, p_hi)
+                if feasible(z):
+                    v = states_of(z)[k][i]
+                    lo[i], hi[i] = min(lo[i], v), max(hi[i], v)
+    return lo, hi

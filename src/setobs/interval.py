@@ -46,6 +46,7 @@ Supported: sums, products, integer and real powers, ``sqrt``, ``exp``, ``log``,
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Callable, Sequence
 from fractions import Fraction
@@ -68,6 +69,10 @@ __all__ = ["IntervalFunction", "interval_function"]
 #: Units in the last place by which results of the C library's elementary functions
 #: are widened outward (glibc documents at most 1-2 for the functions used here).
 LIBM_ULPS = 4
+
+#: The functions the evaluator encloses (besides sums, products and powers).
+KNOWN_FUNCTIONS = ("sqrt", "exp", "log", "sin", "cos", "tan", "sinh", "cosh", "tanh", "atan",
+                   "Abs", "Min", "Max")
 
 _INF = math.inf
 _Ival = tuple[float, float]
@@ -234,15 +239,21 @@ def _exp(a: _Ival) -> _Ival:
     return _monotone(math.exp, a, lo_cap=0.0)
 
 
-def _log(a: _Ival, where: str) -> _Ival:
+def _log(a: _Ival, where: str, clip: bool = False) -> _Ival:
     if a[0] <= 0.0:
-        raise DomainError(f"log of {where} over [{a[0]!r}, {a[1]!r}], which reaches 0 or below")
+        if not clip or a[1] <= 0.0:
+            raise DomainError(f"log of {where} over [{a[0]!r}, {a[1]!r}], which reaches 0 "
+                              "or below" + (" everywhere" if a[1] <= 0.0 else ""))
+        return -_INF, _monotone(math.log, (a[1], a[1]))[1]
     return _monotone(math.log, a)
 
 
-def _sqrt(a: _Ival, where: str) -> _Ival:
+def _sqrt(a: _Ival, where: str, clip: bool = False) -> _Ival:
     if a[0] < 0.0:
-        raise DomainError(f"sqrt of {where} over [{a[0]!r}, {a[1]!r}], which reaches below 0")
+        if not clip or a[1] < 0.0:
+            raise DomainError(f"sqrt of {where} over [{a[0]!r}, {a[1]!r}], which reaches "
+                              "below 0" + (" everywhere" if a[1] < 0.0 else ""))
+        a = (0.0, a[1])  # (the model holds at the truth: its argument is >= 0 there)
 
     def root(x: float, up: bool) -> float:
         # (sqrt is correctly rounded: widened by one float unless r * r == x exactly)
@@ -253,11 +264,13 @@ def _sqrt(a: _Ival, where: str) -> _Ival:
     return root(a[0], False), root(a[1], True)
 
 
-def _rpow(b: _Ival, r: _Ival, where: str) -> _Ival:
+def _rpow(b: _Ival, r: _Ival, where: str, clip: bool = False) -> _Ival:
     """``x ** r`` for a real, non-integer exponent (sympy's principal branch: real only
     for ``x >= 0``, and ``x > 0`` when ``r`` may be 0 or negative). For ``x > 0`` it is
     monotone in ``x`` and in ``r`` separately, so its range over the box is at a
-    corner."""
+    corner. ``clip``: a base reaching below 0 is cut to ``x >= 0`` when ``r > 0``."""
+    if clip and b[0] < 0.0 <= b[1] and r[0] > 0.0:
+        b = (0.0, b[1])
     if b[0] < 0.0 or (b[0] == 0.0 and r[0] <= 0.0):
         raise DomainError(f"power of {where} over [{b[0]!r}, {b[1]!r}] with exponent in "
                           f"[{r[0]!r}, {r[1]!r}]: not real (or not finite) over the box")
@@ -331,8 +344,9 @@ def _abs(a: _Ival) -> _Ival:
 
 
 # ---------------------------------------------------------------------- compiling
-def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
-    """A closure evaluating ``e`` over the boxes of its symbols."""
+def _compile(e: Any, index: dict[Any, int], sp: Any, clip: bool = False) -> _Node:
+    """A closure evaluating ``e`` over the boxes of its symbols (``clip``: the arguments
+    of ``sqrt``, ``log`` and real powers cut to their domain, :class:`IntervalFunction`)."""
     where = str(e)
     if e.is_Symbol:
         if e not in index:
@@ -361,7 +375,7 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
         return lambda X: v
     if e.is_Number:
         raise NotSupportedError(f"the number {e} has no real interval enclosure here")
-    args = [_compile(a, index, sp) for a in e.args]
+    args = [_compile(a, index, sp, clip) for a in e.args]
     if e.is_Add or e.is_Mul:
         # (a quotient is a product with a negative power: 1 / x^n, its domain checked)
         op = _add if e.is_Add else _mul
@@ -383,13 +397,13 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
             # 1e-199]) is no division by a box holding 0
             return lambda X: _ipow(_recip(base(X), bwhere), -n)
         if ex == sp.Rational(1, 2):
-            return lambda X: _sqrt(base(X), bwhere)
+            return lambda X: _sqrt(base(X), bwhere, clip)
         if ex == sp.Rational(-1, 2):
-            return lambda X: _recip(_sqrt(base(X), bwhere), f"sqrt({bwhere})")
+            return lambda X: _recip(_sqrt(base(X), bwhere, clip), f"sqrt({bwhere})")
         expo = args[1]
 
         def real_pow(X: Sequence[_Ival]) -> _Ival:
-            return _rpow(base(X), expo(X), bwhere)
+            return _rpow(base(X), expo(X), bwhere, clip)
         return real_pow
     fname = type(e).__name__
     one = {"exp": _exp, "sin": lambda a: _trig(a, math.sin, 0.0),
@@ -403,7 +417,7 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
         return lambda X: f1(a0(X))
     if fname == "log" and len(args) == 1:
         a0, aw = args[0], str(e.args[0])
-        return lambda X: _log(a0(X), aw)
+        return lambda X: _log(a0(X), aw, clip)
     if fname == "tan":
         a0, aw = args[0], str(e.args[0])
         return lambda X: _tan(a0(X), aw)
@@ -414,6 +428,11 @@ def _compile(e: Any, index: dict[Any, int], sp: Any) -> _Node:
             vs = [a(X) for a in args]
             return pick(v[0] for v in vs), pick(v[1] for v in vs)
         return minmax
+    if isinstance(type(e), sp.core.function.UndefinedFunction):
+        close = difflib.get_close_matches(fname, KNOWN_FUNCTIONS, n=1)
+        raise NotSupportedError(f"{fname} (in {where}) is not a known function"
+                                + (f": did you mean {close[0]}?" if close else "")
+                                + f" (the evaluator knows {', '.join(KNOWN_FUNCTIONS)})")
     raise NotSupportedError(f"interval evaluation of {fname} ({where}) is not supported")
 
 
@@ -423,22 +442,39 @@ class IntervalFunction:
     Call it with a box, ``F(lo, hi)``, for ``(flo, fhi)`` (arrays of shape ``(m,)``):
     ``flo <= f(x) <= fhi`` for every ``x`` with ``lo <= x <= hi``.
 
+    Parameters
+    ----------
+    exprs : sequence of sympy expressions or strings
+    variables : sequence of sympy symbols or names
+    clip_domain : bool
+        Enclose ``f`` only at the points of the box where it is defined: the argument
+        box of ``sqrt``, ``log`` or a real power that reaches below its domain is cut to
+        the domain (``sqrt`` over ``[-1e-3, 4]`` is ``[0, 2]``) instead of raising
+        :class:`~setobs.exceptions.DomainError` (still raised when the whole argument
+        box lies outside). Sound wherever ``f`` is known to be defined at the point of
+        interest -- a model evaluated at its true state -- not for derivatives, whose
+        mean-value argument needs the whole segment in the domain.
+
     Attributes
     ----------
     exprs : tuple
         The expressions.
     variables : tuple
         Their variables, in the order of the box's entries.
+    clip_domain : bool
+        As given.
     """
 
-    def __init__(self, exprs: Sequence[Any], variables: Sequence[Any]) -> None:
+    def __init__(self, exprs: Sequence[Any], variables: Sequence[Any],
+                 clip_domain: bool = False) -> None:
         sp = optional_import("sympy", extra="nonlinear", feature="interval evaluation")
+        self.clip_domain = bool(clip_domain)
         self.variables = tuple(sp.Symbol(v) if isinstance(v, str) else v for v in variables)
         if len(set(self.variables)) != len(self.variables):
             raise ArgumentError("the variables must be distinct")
         self.exprs = tuple(sp.sympify(e) for e in exprs)
         index = {v: i for i, v in enumerate(self.variables)}
-        self._nodes = [_compile(e, index, sp) for e in self.exprs]
+        self._nodes = [_compile(e, index, sp, self.clip_domain) for e in self.exprs]
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -463,7 +499,7 @@ class IntervalFunction:
 
     def __reduce__(self):
         # (the compiled closures do not pickle: rebuilt from the expressions)
-        return (type(self), (self.exprs, self.variables))
+        return (type(self), (self.exprs, self.variables, self.clip_domain))
 
     def __repr__(self) -> str:
         m, n = self.shape

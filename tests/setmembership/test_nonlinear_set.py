@@ -114,8 +114,9 @@ def test_the_truth_is_inside_on_a_pendulum(method):
 
 def test_a_linear_model_contains_the_exact_set():
     """Linear f and h: the bands contain the whole-history LP's (independent oracle),
-    and are within the measured distance of it (the bounded complexity's price: mean
-    1.19, worst 1.39 times at the defaults on these steps)."""
+    and at the defaults (sizes that grow while a reduction widens the hull) they are
+    that LP's to 1 % (measured: mean 1.00001, worst 1.0002 times; the previous fixed
+    sizes 16 / 4 gave 1.40 and 1.83)."""
     A = np.array([[0.9, 0.2], [-0.1, 0.8]])
     C = np.array([[1.0, 0.0]])
     B = np.array([[0.0], [0.1]])
@@ -145,7 +146,7 @@ def test_a_linear_model_contains_the_exact_set():
                                   noise_v=(np.eye(1), np.full(1, rv)))
         assert np.all(res.state_lo[k] <= lo + 1e-9) and np.all(res.state_hi[k] >= hi - 1e-9)
         ratios.append((res.state_hi[k] - res.state_lo[k]) / (hi - lo))
-    assert np.mean(ratios) < 1.35 and np.max(ratios) < 1.7
+    assert np.max(ratios) < 1.01
 
 
 @pytest.mark.parametrize("method", ["taylor", "mean-value"])
@@ -203,18 +204,25 @@ def test_an_inconsistent_record_is_certified():
 
 
 def test_a_box_outside_the_models_domain_is_reported():
+    """A box entirely outside ``sqrt``'s domain cannot hold a true state (the model holds
+    there): a domain error names the expression."""
     f, h, xs, us = tank_cascade(3)
     obs = so.NonlinearSetObserver(f, h, xs, us, process_noise=0.002, measurement_noise=0.01,
-                                  initial_state_set=so.Box(-np.ones(3), 3.0 * np.ones(3)))
-    with pytest.raises(so.DomainError, match=r"sqrt of x0 over \[-1.0\d*, 3.0\d*\]"):
+                                  initial_state_set=so.Box(-3.0 * np.ones(3), -np.ones(3)))
+    with pytest.raises(so.DomainError, match=r"sqrt of x0 over \[-3\.0\d*, -(1\.0|0\.9)\d*\], "
+                                             "which reaches below 0 everywhere.*no true state"):
         obs.update([np.nan, np.nan], [1.0])
 
 
-def test_a_state_domain_keeps_the_enclosures_inside_it():
-    """Low levels: the initial box of the levels touches 0 and the first prediction's
-    reaches below it, where ``sqrt`` is not real; with ``state_domain`` (levels >= 0, true
-    here) the run goes on with the truth inside; without it the domain error names the
-    expression."""
+def test_a_box_reaching_below_the_domain_goes_on():
+    """Low levels: the initial box reaches below 0, where ``sqrt`` is not real, and the
+    first predictions reach below it too. The model holds at the true state, so ``sqrt``
+    is enclosed over the box's part inside its domain; its derivative has no enclosure
+    there, so the mean-value form's next predictions fall back to the interval enclosure
+    (status ``fallback``, the note naming the expression); the default form's polyhedral
+    relaxation (secant and tangents of ``sqrt`` over the argument's box cut to the
+    domain) carries them (status ``ok``). With ``state_domain`` (levels >= 0, true here)
+    the same; the truth inside every run, and the bands bounded."""
     f, h, xs, us = tank_cascade(3)
     rng = np.random.default_rng(5)
     N = 30
@@ -222,9 +230,14 @@ def test_a_state_domain_keeps_the_enclosures_inside_it():
     X, Y = simulate(f, h, xs, us, [0.3, 0.2, 0.1], U, 0.0, 0.05, rng, False)
     assert X.min() > 0.0
     kw = dict(process_noise=None, measurement_noise=0.05,
-              initial_state_set=so.Box(np.zeros(3), 0.5 * np.ones(3)))
-    with pytest.raises(so.DomainError, match=r"sqrt of x1 over \[-"):
-        so.NonlinearSetObserver(f, h, xs, us, **kw).run(Y, U)
+              initial_state_set=so.Box(-0.2 * np.ones(3), 0.5 * np.ones(3)))
+    res = so.NonlinearSetObserver(f, h, xs, us, method="mean-value", **kw).run(Y, U)
+    assert inside(X, res) and np.isfinite(res.state_hi - res.state_lo).all()
+    assert res.status[0] == "ok" and res.status[1] == "fallback"
+    assert "sqrt of x1" in res.stats["note"][1] and "interval box carries" in res.stats["note"][1]
+    res = so.NonlinearSetObserver(f, h, xs, us, **kw).run(Y, U)
+    assert inside(X, res) and res.status[1] == "ok"
+    assert all(res.stats["note"][res.status == "fallback"])  # (each says why)
     res = so.NonlinearSetObserver(f, h, xs, us, state_domain=so.Box(np.zeros(3),
                                                                     np.full(3, np.inf)),
                                   **kw).run(Y, U)
@@ -234,19 +247,20 @@ def test_a_state_domain_keeps_the_enclosures_inside_it():
 def test_a_pole_of_the_derivative_falls_back_to_the_interval_enclosure():
     """``x+ = x - 0.1 sqrt(x) + 0.05`` from ``[0, 1]``: ``sqrt`` is defined on the box but
     its derivative has a pole at 0, so the first prediction (no measurement at step 0) is
-    ``f``'s interval enclosure alone (the next step says ``fallback``); the truth stays
-    inside."""
+    ``f``'s interval enclosure alone with the Taylor form (the next step says
+    ``fallback``), its polyhedral relaxation with the default; the truth stays inside."""
     x = sp.Symbol("x")
     f = [x - 0.1 * sp.sqrt(x) + 0.05]
     rng = np.random.default_rng(0)
     X, Y = simulate(f, [x], [x], [], [0.02], np.zeros((10, 0)), 0.0, 0.01, rng, True)
     Y[0] = np.nan  # (no measurement at first: the posterior is [0, 1] itself)
-    obs = so.NonlinearSetObserver(f, [x], [x], process_noise=None, measurement_noise=0.01,
-                                  initial_state_set=so.Box([0.0], [1.0]),
-                                  state_domain=so.Box([0.0], [np.inf]))
-    res = obs.run(Y)
+    kw = dict(process_noise=None, measurement_noise=0.01,
+              initial_state_set=so.Box([0.0], [1.0]), state_domain=so.Box([0.0], [np.inf]))
+    res = so.NonlinearSetObserver(f, [x], [x], method="taylor", **kw).run(Y)
     assert inside(X, res)
     assert res.status[0] == "ok" and res.status[1] == "fallback"
+    res = so.NonlinearSetObserver(f, [x], [x], **kw).run(Y)
+    assert inside(X, res) and set(res.status) == {"ok"}
 
 
 def test_an_observer_pickles_mid_run_and_goes_on_the_same():

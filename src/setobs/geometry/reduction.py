@@ -563,7 +563,7 @@ def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np
     err = 2.0 * gamma(A.shape[1] + 8) * (np.abs(b) + absA @ (np.abs(m) + r))
     if b_err is not None:
         err = err + b_err
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         centre = (b[:, None] - S[:, None] + A * m[None, :]) / A
         rad = (np.maximum(Rr[:, None] - absA * r[None, :], 0.0) + err[:, None]) / absA
         rad *= 1.0 + 4.0 * UNIT_ROUNDOFF
@@ -674,7 +674,9 @@ def hausdorff_heuristics(Z: ConstrainedZonotope, r: NDArray[np.float64]) -> NDAr
     return out
 
 
-def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int) -> ConstrainedZonotope:
+def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int,
+                    refine: int = FAST_ELIMINATION_REFINE, batch: int = 1
+                    ) -> ConstrainedZonotope:
     """:func:`eliminate_constraints` with overshoots from interval propagation."""
     # exact first: factors already unbounded go with a row each (no LP needed)
     G, c, A, b, h, cerr, berr = Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err
@@ -698,21 +700,66 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int) -> Constrained
         reach = np.maximum(-R_lo, R_hi)  # (inside the one-sweep range, which is finite)
         reach = np.where(np.isfinite(reach), reach, np.maximum(-R0_lo, R0_hi))
         r = np.full(Z.n_gen, np.inf)
-        r[cand] = np.maximum(0.0, reach[cand] / h[cand] - 1.0)
+        with np.errstate(over="ignore"):  # (a tiny bound: inf, never chosen)
+            r[cand] = np.maximum(0.0, reach[cand] / h[cand] - 1.0)
         score = hausdorff_heuristics(Z, r)
         # the propagated overshoots rank; the exact ones of the best few decide
-        top = np.argsort(score, kind="stable")[:FAST_ELIMINATION_REFINE]
+        top = np.argsort(score, kind="stable")[:refine]
         top = top[np.isfinite(score[top])]
         if top.size > 1:
             score = hausdorff_heuristics(Z, relaxed_overshoots(Z, top))
-        Z, eliminated = _drop_best_bound(Z, score, budgets)
+        if batch > 1:
+            Z, eliminated = _drop_bounds(Z, score, budgets,
+                                         min(batch, Z.n_con - max_constraints))
+        else:
+            Z, eliminated = _drop_best_bound(Z, score, budgets)
         if not eliminated:
             break  # no candidate could be eliminated
     return Z
 
 
+def _drop_bounds(Z: ConstrainedZonotope, score: NDArray[np.float64],
+                 budgets: tuple[float, float], count: int) -> tuple[ConstrainedZonotope, int]:
+    """Up to ``count`` eliminations in the order of one ``score`` (a batch of
+    :func:`_drop_best_bound` without recomputing the scores): before each, the candidate
+    is checked again on the current rows (bounded, in a row, and bounded by some row
+    through the other factors' own bounds, so the result stays bounded). Returns the set
+    and the number eliminated."""
+    G, c, A, b, h, cerr, berr = Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err
+    ids = np.arange(Z.n_gen)
+    done = 0
+    for j0 in np.argsort(score, kind="stable"):
+        if done >= count or not np.isfinite(score[j0]) or not A.shape[0]:
+            break
+        where = np.flatnonzero(ids == j0)
+        if not where.size:
+            continue
+        j = int(where[0])
+        if not (np.isfinite(h[j]) and h[j] > 0 and A[:, j].any()):
+            continue
+        R0_lo, R0_hi = _row_ranges(A, np.abs(A), b, -h, h)
+        if not (np.isfinite(R0_lo[j]) and np.isfinite(R0_hi[j])):
+            continue
+        hj = h.copy()
+        hj[j] = np.inf
+        free = np.zeros(h.size, dtype=bool)
+        free[j] = True
+        G1, c1, A1, b1, h1, cerr1, berr1, steps = _eliminate_free(
+            G, c, A, b, hj, cerr, berr, free, budgets, max_steps=1)
+        if not steps:
+            continue
+        A1, b1, berr1 = _drop_zero_rows(A1, b1, berr1)
+        G, c, A, b, h, cerr, berr = G1, c1, A1, b1, h1, cerr1, berr1
+        ids = np.delete(ids, j)
+        done += 1
+    if not done:
+        return Z, 0
+    return trusted_cz(G, c, A, b, h, Z.unbounded_radius, cerr, berr), done
+
+
 def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
-                          method: str = "auto") -> ConstrainedZonotope:
+                          method: str = "auto", refine: int | None = None,
+                          batch: int = 1) -> ConstrainedZonotope:
     """Outer constraint elimination down to ``max_constraints`` (Scott et al. 2016, Sec. 4.2).
 
     With ``method="lp"``, first :func:`reduce_exact` removes what can be removed
@@ -752,6 +799,15 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
         the exact overshoots of the best few (``"fast"``, milliseconds). ``"auto"``
         (default) uses ``"fast"`` when ``n_gen * n_con`` exceeds
         :data:`FAST_ELIMINATION_SIZE`.
+    refine : int, optional
+        With ``"fast"``: how many of the best-ranked candidates get their exact
+        overshoots (default :data:`FAST_ELIMINATION_REFINE`; 0 or 1: none, interval
+        propagation alone decides, no LP).
+    batch : int
+        With ``"fast"``: eliminations per evaluation of the heuristics (default 1: the
+        scores are recomputed after each). A larger batch takes the next candidates in
+        the same order, each checked again on the current rows, so one factorisation
+        and one propagation serve up to ``batch`` eliminated constraints.
 
     Returns
     -------
@@ -796,8 +852,14 @@ def eliminate_constraints(Z: ConstrainedZonotope, max_constraints: int,
         raise InvalidValueError(f"method must be 'auto', 'fast' or 'lp', got {method!r}")
     if Z.n_con <= max_constraints:
         return Z
+    if int(batch) != batch or batch < 1:
+        raise InvalidValueError(f"batch must be a positive integer, got {batch!r}")
+    if refine is not None and (int(refine) != refine or refine < 0):
+        raise InvalidValueError(f"refine must be a nonnegative integer, got {refine!r}")
     if method == "fast" or (method == "auto" and Z.n_gen * Z.n_con > FAST_ELIMINATION_SIZE):
-        return _eliminate_fast(Z, max_constraints)
+        return _eliminate_fast(Z, max_constraints,
+                               FAST_ELIMINATION_REFINE if refine is None else int(refine),
+                               int(batch))
     Z = reduce_exact(Z)
     budgets = _budgets(Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err)
     while Z.n_con > max_constraints:

@@ -67,6 +67,10 @@ class SMFDOStep:
         mode's exact bounds, as far as the step knows: the window's rounding
         allowances (the LP certificate's ``|y|^T b_err`` at both ends and
         ``2 c_err``), exact mode's certification gap; 0 for the set recursion.
+    stats : dict or None
+        The estimator's own diagnostics of the step, where it keeps any
+        (:class:`setobs.NonlinearSetObserver`: the sizes kept, the reduction's growth
+        of the hull, the re-linearizations, a note on what fell back).
     """
 
     k: int
@@ -80,6 +84,7 @@ class SMFDOStep:
     state_hi: NDArray[np.float64] | None = None
     after_skip: bool = False
     gap: float = 0.0
+    stats: dict[str, Any] | None = None
 
     radius = renamed("radius", "error_bound")
 
@@ -158,6 +163,22 @@ class SMFDOResult:
         by which the step's bounds may exceed its mode's exact bounds (status
         ``"inexact"`` above the tolerance)."""
         return np.array([st.gap for st in self.steps], dtype=np.float64)
+
+    @property
+    def stats(self) -> dict[str, NDArray[Any]]:
+        """The steps' :attr:`SMFDOStep.stats` as arrays of shape ``(N,)``, one per key
+        (NaN, or ``""`` for text, where a step has none); empty when no step keeps any."""
+        keys: dict[str, None] = {}
+        for st in self.steps:
+            keys.update(dict.fromkeys(st.stats or ()))
+        out: dict[str, NDArray[Any]] = {}
+        for key in keys:
+            vals = [None if st.stats is None else st.stats.get(key) for st in self.steps]
+            if all(isinstance(v, str) or v is None for v in vals):
+                out[key] = np.array(["" if v is None else v for v in vals], dtype=object)
+            else:
+                out[key] = np.array([np.nan if v is None else v for v in vals], dtype=float)
+        return out
 
     @property
     def time(self) -> NDArray[np.float64]:

@@ -47,17 +47,61 @@ hull of the unreduced one, which holds the truth); the reductions are outer
 reported only when certified (:meth:`setobs.ConstrainedZonotope.is_empty`), as
 :class:`setobs.ModelInvalidatedError`.
 
-Where a derivative of ``f`` or ``h`` has no enclosure over the box while the function
-has one (``sqrt`` of a level whose box touches 0: the derivative's pole), the step
-uses the natural interval enclosure alone: ``f``'s box as the prediction, and the
-measurement is left for later steps; such steps report ``status = "fallback"``
-(certified, wider).
+The default, and the polyhedral relaxation
+------------------------------------------
+``method="auto"`` (the default) takes both forms and keeps, row by row, the one whose
+interval image of ``B`` (``|M_i| r + rad_i``) is narrower: each row holds for every
+``x`` in ``B`` whichever form gave it, so the combination is an enclosure too. After the
+measurement, when the posterior's certified hull is narrower than the box ``h`` was
+linearized over by more than ``RELINEARIZE_GAIN`` (10 %) in some coordinate, ``h`` is
+linearized again over that hull (which holds the truth) and the prior is cut by the new
+enclosure; the step's box is the meet of both hulls (at most ``RELINEARIZATIONS`` = 2
+times a step). On sets of at most ``POLYHEDRAL_MAX_DIM`` dimensions, a map whose linear
+remainder is more than ``POLYHEDRAL_SHARE`` of a row's image (a wide box on a curved
+map: the first steps from a wide initial set) is enclosed by its polyhedral relaxation
+instead.
 
-Limits: the sets are only as tight as the linearization over the current box (a
-large ``X_0`` on a strongly nonlinear ``f`` gives wide bands until the data shrink
-it); a function outside its domain over the box (``sqrt`` of a level box reaching
-below 0) raises :class:`setobs.DomainError` naming it -- bound the state there
-(``initial_state_set``) or rewrite the model.
+``method="polyhedral"``: McCormick's relaxations of the factorable expression tree
+(one auxiliary variable per nonlinear node, its interval bounds over ``B`` and the
+linear inequalities that hold on ``B``: the four envelopes of a bilinear term, secant
+and tangents of a convex or concave univariate function, the mean-value lines of any
+other one), lifted into the constrained zonotope and outward rounded
+(:mod:`setobs.setmembership._relax`; Rego, Raffo, Terra, Scott 2025 use the same
+relaxations). Its lifted sets carry a factor and a row per inequality, several times
+the linear forms' cost per step.
+
+Domains
+-------
+The model holds at the true state, so a function whose argument box reaches outside
+its domain (``sqrt`` of a level box reaching below 0) is enclosed over the box's part
+inside it (:class:`~setobs.interval.IntervalFunction`'s ``clip_domain``): the natural
+enclosure is sound there. The derivatives are not clipped (the mean value theorem needs
+the segment in the domain): where no linear form has an enclosure over the box, the
+step uses the natural interval enclosure alone -- ``f``'s box as the prediction, and
+the measurement waits for later steps -- and reports ``status = "fallback"`` with
+``stats["note"]`` naming the form and the expression that failed. A box entirely
+outside a function's domain cannot hold a true state: :class:`setobs.DomainError`
+says so (the model, its noise bounds or the initial set are wrong). A pole inside the
+box (``1 / (4 + x)`` over a box holding ``-4``) has no enclosure in any form; the error
+then names it (give a ``state_domain`` or a tighter initial set). ``state_domain`` at a
+function's exact domain edge (``x >= -1`` for ``sqrt(x + 1)``) is accepted.
+
+Complexity
+----------
+Each step's posterior is reduced once (constraints by
+:func:`~setobs.geometry.reduction.eliminate_constraints`, generators by
+:func:`~setobs.geometry.reduction.reduce_order`) to the current sizes. Then the reduced
+set's certified hull is compared with the unreduced one's (the step's bands): while the
+reduction widens a coordinate by more than ``reduction_growth`` (default
+``REDUCTION_GROWTH`` = 2 %) of its width, the sizes grow by ``GROWTH_FACTOR`` (up to the
+caps) and the posterior is reduced again from itself; the sizes never shrink. The
+defaults (:meth:`NonlinearSetObserver.default_sizes`) start at ``START_STEPS`` = 8
+steps' worth of the model's generators and constraints and cap the constraints so a
+posterior stays within the compiled simplex's rows (``COMPILED_MAX_ROWS`` = 64, less a
+step's measurement rows), the generators at the model's ratio. At the caps the growth
+is measured every ``GROWTH_CHECK_EVERY`` steps. ``stats`` (per step, and
+:attr:`~setobs.SMFDOResult.stats`) holds the sizes, the sizes before the reduction,
+the measured growth (NaN where not measured), the re-linearizations and the notes.
 
 Disturbances
 ------------
@@ -92,18 +136,68 @@ from ..geometry.box import box_center_radius
 from ..geometry.reduction import eliminate_constraints, reduce_order
 from ..geometry.zonotope import hull_with_status
 from ..interval import IntervalFunction
+from ..lp.factor import COMPILED_MAX_ROWS
+from ._relax import Relaxation
 from ._setup import as_set, noise_set
 from ._steps import SMFDOResult, SMFDOStep
 
 __all__ = ["METHODS", "NonlinearSetObserver"]
 
-#: The enclosures of ``f`` and ``h`` (module docstring).
-METHODS = ("mean-value", "taylor")
+#: The enclosures of ``f`` and ``h`` (module docstring): ``"auto"`` takes, row by row,
+#: the narrower of the mean-value and Taylor forms, each cut by the natural interval
+#: enclosure.
+METHODS = ("auto", "mean-value", "taylor", "polyhedral")
 
 #: The prediction is cut by ``f``'s natural interval enclosure in the coordinates where
 #: that box is narrower than the linearization's interval image by more than this
 #: fraction (:meth:`NonlinearSetObserver._cut`).
 CUT_GAIN = 0.05
+
+#: The measurement is taken again with ``h`` re-linearized over the posterior's hull
+#: when that hull is narrower than the box ``h`` was linearized over by more than this
+#: fraction in some coordinate (at most :data:`RELINEARIZATIONS` times a step).
+RELINEARIZE_GAIN = 0.1
+
+#: ``method="auto"`` takes the polyhedral relaxation (:mod:`._relax`) instead of the
+#: linear forms for a map whose linear remainder is more than this share of some row's
+#: interval image of the box, on sets of at most :data:`POLYHEDRAL_MAX_DIM` dimensions
+#: (its lifted sets cost several times the linear forms' step). Measured on the Rego
+#: example: the first steps' mean hull radius 0.142 / 0.095 against 0.147 / 0.099.
+POLYHEDRAL_SHARE = 0.25
+POLYHEDRAL_MAX_DIM = 4
+
+#: Largest number of re-linearizations of ``h`` in a step.
+RELINEARIZATIONS = 2
+
+#: A reduction is kept when it widens no coordinate of the posterior's hull by more than
+#: this fraction of that coordinate's width; otherwise the set keeps more generators and
+#: constraints (by :data:`GROWTH_FACTOR`, up to the caps) and is reduced again.
+REDUCTION_GROWTH = 0.02
+
+#: Factor by which the sizes grow when a reduction widens the hull too much.
+GROWTH_FACTOR = 1.5
+
+#: Steps of the model's constraints the default sizes start from
+#: (:meth:`NonlinearSetObserver.default_sizes`).
+START_STEPS = 8
+
+
+#: Candidates whose exact overshoots (two LPs each) decide the constraint eliminations
+#: of a set of at most :data:`REFINE_MAX_DIM` dimensions; above it interval propagation
+#: alone ranks them (:func:`setobs.geometry.reduction.eliminate_constraints`'s
+#: ``refine``). Measured (``benchmarks/nonlinear_set.py``): on the two-state oscillator
+#: the exact overshoots took the late unmeasured band from 3.9 to 2.2 times an inner
+#: bound for 7 ms a step; on six and thirty tanks they moved the bands by under 1 % and
+#: 7 % for 1.3 and 2.7 times the time.
+ELIMINATION_REFINE = 8
+REFINE_MAX_DIM = 4
+
+#: Eliminations per evaluation of the heuristics (``batch``).
+ELIMINATION_BATCH = 64
+
+#: At the caps the sizes cannot grow: the reduction's growth of the hull (two LPs per
+#: coordinate) is then measured every this many steps only (NaN in between).
+GROWTH_CHECK_EVERY = 10
 
 
 class _Sparse:
@@ -129,38 +223,70 @@ class _Sparse:
 class _Map:
     """``g(z, u)`` (``f`` or ``h``) with its enclosures over a box of ``z``."""
 
-    def __init__(self, sp: Any, exprs: list[Any], zs: list[Any], us: list[Any],
-                 method: str) -> None:
+    def __init__(self, sp: Any, exprs: list[Any], zs: list[Any], us: list[Any]) -> None:
         self.n, self.m = len(zs), len(exprs)
         variables = [*zs, *us]
-        self.value = IntervalFunction(exprs, variables)
+        self.value = IntervalFunction(exprs, variables, clip_domain=True)
         J = sp.Matrix(exprs).jacobian(zs)
         self.jac = _Sparse(list(J), (self.m, self.n), variables)
-        self.hess = None
-        if method == "taylor":
-            H = [sp.hessian(e, zs) for e in exprs]
-            self.hess = _Sparse([h for Hi in H for h in Hi], (self.m, self.n, self.n), variables)
+        zset = set(zs)
+        # affine in z (the Jacobian depends on u at most): every form is exact
+        self.affine = all(not (sp.sympify(e).free_symbols & zset) for e in J)
+        # the Hessian from the Jacobian's nonzero entries, each differentiated only by the
+        # variables it holds (a cascade's (n, n, n) array has O(n) nonzeros)
+        H = [0] * (self.m * self.n * self.n)
+        for i in range(self.m):
+            for j in range(self.n):
+                e = J[i, j]
+                if e == 0:
+                    continue
+                for k, zk in enumerate(zs):
+                    if zk in e.free_symbols:
+                        H[(i * self.n + j) * self.n + k] = sp.diff(e, zk)
+        self.hess = _Sparse(H, (self.m, self.n, self.n), variables)
+        self._args = (exprs, zs, us)
+        self._relax: Relaxation | None = None
 
-    def enclose(self, box: Box, u: NDArray[np.float64]
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The natural interval enclosure ``[g](B)`` over the box, at the input ``u``."""
-        return self.value(np.concatenate([box.lo, u]), np.concatenate([box.hi, u]))
+    @property
+    def relaxation(self) -> Relaxation:
+        """The polyhedral relaxation (:mod:`setobs.setmembership._relax`), compiled on
+        first use."""
+        if self._relax is None:
+            sp = optional_import("sympy", extra="nonlinear", feature="NonlinearSetObserver")
+            self._relax = Relaxation(sp, *self._args)
+        return self._relax
+
+    def __getstate__(self) -> dict[str, Any]:
+        # (the relaxation keeps sympy's Dummy and compiled closures: rebuilt on first use)
+        return {**self.__dict__, "_relax": None}
+
+    def enclose(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
+                u: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The natural interval enclosure ``[g](B)`` over the box, at the input ``u``, at
+        the points where ``g`` is defined (the model holds at the truth:
+        :class:`~setobs.interval.IntervalFunction`'s ``clip_domain``)."""
+        return self.value(np.concatenate([lo, u]), np.concatenate([hi, u]))
 
     def linearize(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
-                  u: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                                   NDArray[np.float64]]:
+                  u: NDArray[np.float64], form: str
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(M, offset, rad)`` with ``g(z, u) in M z + offset + [-rad, rad]`` for every
-        ``z`` in ``[lo, hi]`` (module docstring; all rounding inside ``rad``)."""
+        ``z`` in ``[lo, hi]`` by the ``form`` (``"mean-value"`` or ``"taylor"``; module
+        docstring; all rounding inside ``rad``). Raises :class:`DomainError` where a
+        derivative has no enclosure over the box and :class:`UnboundedSetError` where
+        it is not finite."""
         c = 0.5 * lo + 0.5 * hi  # (in the box: the mean value theorem's segment stays in it)
         r = round_up(np.maximum(hi - c, c - lo))
         zc = np.concatenate([c, u])
         gc_lo, gc_hi = self.value(zc, zc)
-        if self.hess is None:  # mean value: the Jacobian over the box
+        if form == "mean-value" or self.affine:  # the Jacobian over the box
             J_lo, J_hi = self.jac(np.concatenate([lo, u]), np.concatenate([hi, u]))
             rem_c, rem_r = np.zeros(self.m), np.zeros(self.m)
         else:  # Taylor: the Jacobian at c, the Hessian over the box
             J_lo, J_hi = self.jac(zc, zc)
             H_lo, H_hi = self.hess(np.concatenate([lo, u]), np.concatenate([hi, u]))
+            if not (np.isfinite(H_lo).all() and np.isfinite(H_hi).all()):
+                raise UnboundedSetError("the Hessian's enclosure over the box is not finite")
             rem_c, rem_r = _quadratic_remainder(H_lo, H_hi, r)
         if not (np.isfinite(J_lo).all() and np.isfinite(J_hi).all()
                 and np.isfinite(gc_lo).all() and np.isfinite(gc_hi).all()):
@@ -177,6 +303,34 @@ class _Map:
         rad = R @ r + g_rad + rem_r + gamma(k) * (np.abs(M) @ np.abs(c) + np.abs(g_mid)
                                                   + np.abs(rem_c) + np.abs(offset) + R @ r)
         return M, offset, round_up(rad * (1.0 + gamma(4)))
+
+    def enclosure(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
+                  u: NDArray[np.float64], forms: Sequence[str]
+                  ) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64],
+                                   NDArray[np.float64]] | None, dict[str, str]]:
+        """The linear enclosure over the box from the ``forms``, row by row the one whose
+        interval image of the box (``|M_i| r + rad_i``) is narrowest (each row holds
+        for every ``z`` in the box whichever form gave it), and the forms that failed
+        with why; ``None`` when none has an enclosure there."""
+        got, failed = [], {}
+        lin_forms = [f for f in forms if f != "polyhedral"] or ["mean-value", "taylor"]
+        for form in (("mean-value",) if self.affine else lin_forms):
+            try:
+                got.append(self.linearize(lo, hi, u, form))
+            except (DomainError, UnboundedSetError) as exc:
+                failed[form] = str(exc)
+        if not got:
+            return None, failed
+        if len(got) == 1:
+            return got[0], failed
+        _, r = box_center_radius(lo, hi)
+        width = np.array([np.abs(M) @ r + rad for M, _, rad in got])
+        pick = np.argmin(width, axis=0)
+        rows = np.arange(self.m)
+        M = np.array([got[pick[i]][0][i] for i in rows]).reshape(self.m, self.n)
+        offset = np.array([got[pick[i]][1][i] for i in rows])
+        rad = np.array([got[pick[i]][2][i] for i in rows])
+        return (M, offset, rad), failed
 
 
 def _quadratic_remainder(H_lo: NDArray[np.float64], H_hi: NDArray[np.float64],
@@ -243,8 +397,10 @@ class NonlinearSetObserver:
         ``V`` (in output space).
     initial_state_set : ConstrainedZonotope or Box
         ``X_0``; bounded.
-    method : {"mean-value", "taylor"}
-        The enclosure of ``f`` and ``h`` (module docstring).
+    method : {"auto", "mean-value", "taylor"}
+        The enclosure of ``f`` and ``h`` (module docstring). ``"auto"`` (default): row
+        by row the narrower of the two over the current box, and ``h`` re-linearized
+        over the posterior's hull while it shrinks.
     disturbances : sequence of sympy symbols or names
         ``d``, with ``d+ = d + dd`` (default none).
     increment_set : ConstrainedZonotope, Box or radii
@@ -256,10 +412,14 @@ class NonlinearSetObserver:
         predicted set is cut by it where its hull leaves it, so the enclosures are
         evaluated inside it (``sqrt`` of a level). Sound only if the true states never
         leave it; a prediction entirely outside it is reported as inconsistent.
-    max_generators : int, optional
-        Generators kept after each step (default ``8 (n + q)``).
-    max_constraints : int, optional
-        Constraints kept after each step (default ``2 (n + q)``).
+    max_generators, max_constraints : int, optional
+        The caps of the set's complexity (defaults: :meth:`default_sizes`, from ``n``,
+        the outputs and the noise sets' generators). The sizes start lower and grow
+        while a reduction would widen the posterior's hull by more than
+        ``reduction_growth`` (module docstring, "Complexity").
+    reduction_growth : float or None
+        The fraction of a band's width a reduction may add (default
+        :data:`REDUCTION_GROWTH`, 2 %); ``None``: fixed sizes at the caps, no check.
     dt : float, optional
         Sampling time (the results' time axis).
 
@@ -283,10 +443,12 @@ class NonlinearSetObserver:
 
     def __init__(self, f: Any, h: Any, states: Sequence[Any], inputs: Sequence[Any] = (), *,
                  process_noise: Any, measurement_noise: Any, initial_state_set: Any,
-                 method: str = "mean-value", disturbances: Sequence[Any] = (),
+                 method: str = "auto", disturbances: Sequence[Any] = (),
                  increment_set: Any = None, initial_disturbance_set: Any = None,
                  state_domain: Any = None, max_generators: int | None = None,
-                 max_constraints: int | None = None, dt: float | None = None) -> None:
+                 max_constraints: int | None = None,
+                 reduction_growth: float | None = REDUCTION_GROWTH,
+                 dt: float | None = None) -> None:
         sp = optional_import("sympy", extra="nonlinear", feature="NonlinearSetObserver")
         if method not in METHODS:
             raise InvalidValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -310,11 +472,12 @@ class NonlinearSetObserver:
                 raise ArgumentError(f"{what} uses {sorted(map(str, extra))}, which are not "
                                     "among the states, inputs or disturbances")
         self.method = method
+        self.forms = ("mean-value", "taylor") if method == "auto" else (method,)
         self.n, self.q, self.l, self.p = n, q, len(hx), len(us)
         self.states, self.inputs, self.disturbances = tuple(xs), tuple(us), tuple(ds)
         zs = xs + ds
-        self._f = _Map(sp, fx + list(ds), zs, us, method)  # (d+ = d: the increment is noise)
-        self._h = _Map(sp, hx, zs, us, method)
+        self._f = _Map(sp, fx + list(ds), zs, us)  # (d+ = d: the increment is noise)
+        self._h = _Map(sp, hx, zs, us)
         W = noise_set("process_noise", process_noise, n)
         V = noise_set("measurement_noise", measurement_noise, self.l)
         X0 = as_set("initial_state_set", initial_state_set, n)
@@ -335,6 +498,9 @@ class NonlinearSetObserver:
         elif increment_set is not None or initial_disturbance_set is not None:
             raise ArgumentError("increment_set and initial_disturbance_set need disturbances")
         self.W, self.V, self.X0 = W, V, X0
+        N = n + q
+        self._W_box = hull_with_status(W)[0] if W is not None else Box(np.zeros(N),
+                                                                          np.zeros(N))
         self.domain = None
         if state_domain is not None:
             if not isinstance(state_domain, Box) or state_domain.dim != n:
@@ -343,22 +509,71 @@ class NonlinearSetObserver:
             inf = np.full(q, np.inf)
             self.domain = (np.concatenate([state_domain.lo, -inf]),
                            np.concatenate([state_domain.hi, inf]))
-        N = n + q
-        self.max_generators = int(max_generators) if max_generators is not None else 8 * N
-        self.max_constraints = int(max_constraints) if max_constraints is not None else 2 * N
-        if self.max_generators < N or self.max_constraints < 0:
+        g0, c0, g_cap, c_cap = self.default_sizes(
+            N, self.l, 0 if W is None else W.n_gen, 0 if V is None else V.n_gen)
+        fixed = reduction_growth is None
+        if max_generators is not None:
+            g_cap = int(max_generators)
+        if max_constraints is not None:
+            c_cap = int(max_constraints)
+        if g_cap < N or c_cap < 0:
             raise InvalidValueError(f"max_generators must be at least {N} and "
-                                    "max_constraints nonnegative, got "
-                                    f"{self.max_generators} and {self.max_constraints}")
+                                    f"max_constraints nonnegative, got {g_cap} and {c_cap}")
+        if not fixed and not (0.0 < float(reduction_growth) < np.inf):
+            raise InvalidValueError("reduction_growth must be a positive fraction or None, "
+                                    f"got {reduction_growth!r}")
+        self.max_generators, self.max_constraints = g_cap, c_cap
+        self.reduction_growth = None if fixed else float(reduction_growth)
+        self._start_sizes = (g_cap, c_cap) if fixed else (min(g0, g_cap), min(c0, c_cap))
         self.dt = dt
         self.reset()
+
+    @staticmethod
+    def default_sizes(N: int, l: int, w_gens: int, v_gens: int) -> tuple[int, int, int, int]:
+        """The default sizes ``(generators, constraints)`` to start from and their caps.
+
+        A step adds about ``d_g = N + w_gens + v_gens`` generators (the linearization's
+        remainder box, ``W``'s and ``V``'s generators) and ``d_c = l`` constraints (one
+        per measured output). The constraints are capped so that a posterior (the kept
+        ones and a step's ``l``) stays within the compiled simplex's
+        :data:`~setobs.lp.factor.COMPILED_MAX_ROWS` rows, where a hull's ``2 N`` LPs cost
+        microseconds each (above it every LP goes to HiGHS, about 20 times slower per
+        step); they start at :data:`START_STEPS` steps' worth. The generators follow
+        the constraints at the model's ratio ``d_g / d_c`` (at least ``2 N`` more than
+        the constraints): generators beyond that ratio were measured to buy nothing
+        while the constraints are capped.
+
+        Parameters
+        ----------
+        N : int
+            The set's dimension (states and disturbances).
+        l : int
+            The outputs.
+        w_gens, v_gens : int
+            The generators of the process and measurement noise sets.
+
+        Returns
+        -------
+        tuple of int
+            ``(g0, c0, g_cap, c_cap)``.
+        """
+        dg, dc = N + w_gens + v_gens, max(l, 1)
+        c_cap = COMPILED_MAX_ROWS - dc if 2 * dc <= COMPILED_MAX_ROWS else 2 * N
+        c0 = min(c_cap, max(2, START_STEPS * dc))
+
+        def gens(c: int) -> int:
+            return max(c + 2 * N, int(np.ceil(c * dg / dc)))
+        return gens(c0), c0, gens(c_cap), c_cap
 
     def reset(self) -> None:
         """Back to ``X_0`` at step 0."""
         self.k = 0
         self.prior: ConstrainedZonotope = self.X0
+        self.prior_box: Box | None = None  # (a certified box of the prior, from the model)
         self.posterior: ConstrainedZonotope | None = None
-        self.pred_fallback = False  # (the prior came from f's interval enclosure alone)
+        self.sizes = self._start_sizes
+        self.restarts = 0
+        self.pred_note = ""  # (why the prediction fell back, if it did)
 
     # ------------------------------------------------------------------ one step
     def update(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
@@ -376,13 +591,14 @@ class NonlinearSetObserver:
         -------
         SMFDOStep
             ``state_lo`` / ``state_hi`` (the states), ``lo`` / ``hi`` / ``estimate`` (the
-            disturbances' bands and centres; empty without disturbances).
+            disturbances' bands and centres; empty without disturbances); ``stats``: the
+            sizes kept, the reduction's growth of the hull, the forms that failed.
 
         Raises
         ------
         ModelInvalidatedError
-            The posterior is certified empty: the data contradict the model and its
-            noise bounds.
+            The posterior is certified empty: the data contradict the model, its noise
+            bounds or the initial set.
         """
         yv = as_vector("y", y, size=self.l, allow_nan=True)
         if self.p and u is None:
@@ -399,82 +615,221 @@ class NonlinearSetObserver:
                 "bound it); bound the initial state set tighter, give a state_domain, or "
                 f"measure more (from: {exc})") from exc
 
+    def _invalidated(self, what: str) -> ModelInvalidatedError:
+        return ModelInvalidatedError(
+            f"{what} at step {self.k} contradicts the model: the set of consistent "
+            "states is empty (certified)", self.k,
+            hint="what to do: if the sample is an outlier or a fault, it is found; if the "
+            "model and the record are right, the noise bounds are too small (a larger "
+            "measurement_noise / process_noise)"
+            + (", or initial_state_set does not hold the true initial state (every set "
+               "derives from it; widen it)" if self.k < 50 else
+               ", or initial_state_set missed the true initial state (widen it)"))
+
+    def _hull(self, X: ConstrainedZonotope, what: str) -> tuple[Box, bool]:
+        try:
+            return hull_with_status(X)
+        except EmptySetError:
+            raise self._invalidated(what) from None
+
     def _advance(self, yv, uv) -> SMFDOStep:
         """:meth:`update` for checked data."""
         X = self.prior
-        status = "fallback" if self.pred_fallback else "ok"
+        notes = [self.pred_note] if self.pred_note else []
+        fallback = bool(self.pred_note)
         msk = ~np.isnan(yv)
-        box, fb = hull_with_status(X)
-        status = "fallback" if fb else status
+        box = self.prior_box
+        if box is None or (msk.any() and not self._h.affine):
+            # (h is linearized over the prior's box: its certified hull, the tightest;
+            # an affine h is exact over any box, and the model's box is enough)
+            hb, fb = self._hull(X, "the prediction")
+            fallback |= fb
+            box = hb if box is None else _meet(box, hb)
         X, box = self._in_domain(X, box)
-        lin = self._linearize(self._h, box, uv) if msk.any() else None
-        if lin is None and msk.any():
-            status = "fallback"  # (no linear enclosure of h over the box: the data wait)
-        if lin is not None:
-            M, offset, rad = lin
-            M, offset, rad = M[msk], offset[msk], rad[msk]
-            # M x in y - offset - V - [-rad, rad]
-            ym = yv[msk]
-            centre = ym - offset
-            err = round_up(gamma(2) * (np.abs(ym) + np.abs(offset)))
-            wide = round_up(rad + err)  # (and the box's ends rounded outward)
-            Y = ConstrainedZonotope.from_box(round_down(centre - wide), round_up(centre + wide))
-            if self.V is not None:
-                Y = Y + (-np.eye(msk.sum()) @ self.V.project(np.flatnonzero(msk)))
-            X = X.intersect(Y, M)
-        # the hull of the posterior before its reduction (tighter); its LPs certify an
-        # empty set (EmptySetError) when the data contradict the model
-        try:
-            box, fb = hull_with_status(X)
-        except EmptySetError:
-            raise ModelInvalidatedError(
-                f"the measurement at step {self.k} contradicts the model: the set of "
-                "consistent states is empty (certified)", self.k,
-                hint="what to do: if the sample is an outlier or a fault, it is found; "
-                "if the model and the record are right, the noise bounds are too small "
-                "(a larger measurement_noise / process_noise)") from None
-        status = "fallback" if fb else status
-        X = self._reduce(X)
+        prior = X
+        relin = 0
+        if msk.any():
+            X, note = self._measure(prior, box, yv, uv, msk)
+            if note:
+                fallback, notes = True, [*notes, note]
+        post, fb = self._hull(X, "the measurement")
+        fallback |= fb
+        while (msk.any() and not self._h.affine and relin < RELINEARIZATIONS
+               and self.method in ("auto", "polyhedral")
+               and np.any(post.hi - post.lo < (1.0 - RELINEARIZE_GAIN) * (box.hi - box.lo))):
+            # h linearized again over the posterior's hull, which holds the truth: the
+            # prior cut by that enclosure holds it too (the enclosure holds at the truth,
+            # which lies in the hull), as does the meet of the two hulls
+            box = post
+            X2, note = self._measure(prior, box, yv, uv, msk)
+            relin += 1
+            if note:
+                break
+            post2, fb = self._hull(X2, "the measurement")
+            fallback |= fb
+            X, post = X2, _meet(post, post2)
         if self.domain is not None:  # (X lies in the domain: the cut above, or its prior's
             # hull did; the certified hull may pass its edge by the LP's outward rounding)
-            box = Box(np.maximum(box.lo, self.domain[0]), np.minimum(box.hi, self.domain[1]))
-        if not (np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
+            post = Box(np.maximum(post.lo, self.domain[0]), np.minimum(post.hi, self.domain[1]))
+        if not (np.isfinite(post.lo).all() and np.isfinite(post.hi).all()):
             raise UnboundedSetError(
-                f"the hull of the posterior at step {self.k} is not finite ({box!r}): bound "
+                f"the hull of the posterior at step {self.k} is not finite ({post!r}): bound "
                 "the initial state set tighter, or give a state_domain")
+        unreduced = (X.n_gen, X.n_con)
+        self.restarts = 0
+        X, growth = self._reduce(X, post)
+        if self.restarts:
+            fallback = True
+            notes.append("the constraint elimination stalled at its rounding budget: the "
+                         "set restarted from its certified hull")
         self.posterior = X
-        step = self._step(box, status)
-        # prediction: X+ = M X + offset + P + W, cut by f's natural enclosure over the box
-        lin = self._linearize(self._f, box, uv)
-        self.pred_fallback = lin is None
-        if lin is None:  # (f's natural enclosure over the box alone)
-            Xp = ConstrainedZonotope.from_box(*self._f.enclose(box, uv))
+        stats = {"generators": self.sizes[0], "constraints": self.sizes[1],
+                 "unreduced_generators": unreduced[0], "unreduced_constraints": unreduced[1],
+                 "reduction_growth": growth, "relinearizations": relin,
+                 "note": "; ".join(notes)}
+        step = self._step(post, "fallback" if fallback else "ok", stats)
+        self._predict(X, post, uv)
+        self.k += 1
+        return step
+
+    def _measure(self, X: ConstrainedZonotope, box: Box, yv, uv, msk
+                 ) -> tuple[ConstrainedZonotope, str]:
+        """``X`` intersected with the states whose ``h`` (linearized over ``box``, which
+        holds the truth) is within the noise of the measured outputs; unchanged, with
+        why, when ``h`` has no linear enclosure over the box (the data wait)."""
+        if self._polyhedral(self._h, box, uv):
+            try:
+                Xl, P, q, r, _, _ = self._h.relaxation.lift(X, box.lo, box.hi, uv)
+            except (DomainError, UnboundedSetError) as exc:
+                out, why = self._measure_linear(X, box, yv, uv, msk)
+                if self.method != "polyhedral":
+                    return out, why
+                note = f"h's polyhedral relaxation failed ({exc}); the linear forms carry"
+                return out, note + ("; " + why if why else "")
+            Xl = Xl.intersect(self._observed(yv, msk, q, r), P[msk])
+            return Xl.project(list(range(X.dim))), ""
+        return self._measure_linear(X, box, yv, uv, msk)
+
+    def _polyhedral(self, g: _Map, box: Box, uv) -> bool:
+        """Whether ``g``'s enclosure over the box is the polyhedral relaxation: always with
+        ``method="polyhedral"``; with ``"auto"``, on sets of at most
+        :data:`POLYHEDRAL_MAX_DIM` dimensions while the linear forms' remainder is more
+        than :data:`POLYHEDRAL_SHARE` of some row's interval image of the box (a large box
+        on a curved ``g``: the first steps from a wide initial set)."""
+        if g.affine or self.method not in ("auto", "polyhedral"):
+            return False
+        if self.method == "polyhedral":
+            return True
+        if self.n + self.q > POLYHEDRAL_MAX_DIM:
+            return False
+        lin, _ = g.enclosure(box.lo, box.hi, uv, self.forms)
+        if lin is None:
+            return True
+        M, _, rad = lin
+        _, r = box_center_radius(box.lo, box.hi)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = rad / (np.abs(M) @ r + rad)
+        return bool(np.nanmax(share, initial=0.0) > POLYHEDRAL_SHARE)
+
+    def _observed(self, yv, msk, offset, rad) -> ConstrainedZonotope:
+        """The set ``y - offset - V - [-rad, rad]`` of the measured outputs' ``M x``."""
+        ym = yv[msk]
+        offset, rad = offset[msk], rad[msk]
+        centre = ym - offset
+        err = round_up(gamma(2) * (np.abs(ym) + np.abs(offset)))
+        wide = round_up(rad + err)  # (and the box's ends rounded outward)
+        Y = ConstrainedZonotope.from_box(round_down(centre - wide), round_up(centre + wide))
+        if self.V is not None:
+            Y = Y + (-np.eye(msk.sum()) @ self.V.project(np.flatnonzero(msk)))
+        return Y
+
+    def _measure_linear(self, X: ConstrainedZonotope, box: Box, yv, uv, msk
+                        ) -> tuple[ConstrainedZonotope, str]:
+        """:meth:`_measure` by the linear forms."""
+        lin, failed = self._h.enclosure(box.lo, box.hi, uv, self.forms)
+        if lin is None:
+            self._h.enclose(box.lo, box.hi, uv)  # (raises where h itself is undefined)
+            return X, ("h has no linear enclosure over the box (" + "; ".join(
+                f"{k}: {v}" for k, v in failed.items()) + "): the measurement waits")
+        M, offset, rad = lin
+        # M x in y - offset - V - [-rad, rad]
+        return X.intersect(self._observed(yv, msk, offset, rad), M[msk]), ""
+
+    def _predict(self, X: ConstrainedZonotope, box: Box, uv) -> None:
+        """``X+ = M X + offset + P + W``, cut by ``f``'s natural enclosure over the box,
+        and a certified box of it from the model alone (the interval image of ``box``)."""
+        poly, poly_note = None, ""
+        if self._polyhedral(self._f, box, uv):
+            try:
+                poly = self._f.relaxation.lift(X, box.lo, box.hi, uv)
+            except (DomainError, UnboundedSetError) as exc:
+                if self.method == "polyhedral":
+                    poly_note = (f"f's polyhedral relaxation failed ({exc}); the linear "
+                                 "forms carry")
+        lin, failed = (None, {}) if poly is not None else self._f.enclosure(
+            box.lo, box.hi, uv, self.forms)
+        try:
+            f_lo, f_hi = self._f.enclose(box.lo, box.hi, uv)
+        except DomainError as exc:  # (a pole in the box: the natural form has no bound)
+            if lin is None:
+                why = ("the model is undefined on the whole box, so no true state lies "
+                       "there: the model, its noise bounds or the initial set are wrong"
+                       if "everywhere" in str(exc) else "give a state_domain that keeps "
+                       "the states off the singularity, or bound the initial state set "
+                       "tighter")
+                raise DomainError(
+                    f"f has no enclosure over the posterior's hull at step {self.k} "
+                    f"({box!r}) in any form ({exc}; " + "; ".join(
+                        f"{k}: {v}" for k, v in failed.items()) + f"): {why}") from exc
+            f_lo, f_hi = np.full(self.n + self.q, -np.inf), np.full(self.n + self.q, np.inf)
+            failed["interval"] = str(exc)
+        self.pred_note = poly_note
+        if poly is not None:
+            Xl, P, q, r, L, U = poly
+            Xp = (P @ Xl) + ConstrainedZonotope.from_box(round_down(q - r), round_up(q + r))
+            c, rl = 0.5 * L + 0.5 * U, 0.5 * (U - L)
+            mid = P @ c + q
+            k = P.shape[1] + 2
+            rr = round_up((np.abs(P) @ rl + r + gamma(k) * (np.abs(P) @ np.maximum(
+                np.abs(L), np.abs(U)) + np.abs(q))) * (1.0 + gamma(2)))
+            lo, hi = round_down(mid - rr), round_up(mid + rr)
+            Xp = self._cut(Xp, rr, f_lo, f_hi)
+            fin = np.isfinite(f_lo) & np.isfinite(f_hi)
+            lo, hi = np.where(fin, np.maximum(lo, f_lo), lo), np.where(fin, np.minimum(hi, f_hi),
+                                                                     hi)
+        elif lin is None:  # (f's natural enclosure over the box alone)
+            if not (np.isfinite(f_lo).all() and np.isfinite(f_hi).all()):
+                raise UnboundedSetError(
+                    f"f has no finite enclosure over the posterior's hull at step {self.k}"
+                    f" ({box!r}): " + "; ".join(f"{k}: {v}" for k, v in failed.items()))
+            self.pred_note = poly_note + ("f has no linear enclosure over the box (" + "; ".join(
+                f"{k}: {v}" for k, v in failed.items()) + "): its interval box carries "
+                "the prediction")
+            Xp = ConstrainedZonotope.from_box(f_lo, f_hi)
+            lo, hi = f_lo, f_hi
         else:
             M, offset, rad = lin
             Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
                                                         round_up(offset + rad))
-            Xp = self._cut(Xp, M, rad, box, uv)
+            c, r = box_center_radius(box.lo, box.hi)
+            Xp = self._cut(Xp, np.abs(M) @ r + rad, f_lo, f_hi)
+            mid = M @ c + offset
+            k = self.n + self.q + 2
+            rr = round_up((np.abs(M) @ r + rad + gamma(k) * (np.abs(M) @ (np.abs(c) + r)
+                                                             + np.abs(offset)))
+                          * (1.0 + gamma(2)))
+            lo, hi = round_down(mid - rr), round_up(mid + rr)
+            fin = np.isfinite(f_lo) & np.isfinite(f_hi)
+            lo, hi = np.where(fin, np.maximum(lo, f_lo), lo), np.where(fin, np.minimum(hi, f_hi),
+                                                                     hi)
         if self.W is not None:
             Xp = Xp + self.W
-        self.prior = self._reduce(Xp)
-        self.k += 1
-        return step
-
-    @staticmethod
-    def _linearize(g: _Map, box: Box, u: NDArray[np.float64]
-                   ) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                              NDArray[np.float64]] | None:
-        """``g.linearize`` over the box, or ``None`` when a *derivative* leaves its domain
-        there while ``g`` itself does not (``sqrt`` at a level box touching 0: its
-        derivative has a pole); a domain error of ``g`` itself is raised."""
-        try:
-            return g.linearize(box.lo, box.hi, u)
-        except DomainError:
-            g.enclose(box, u)  # (raises)
-            return None
+            lo, hi = round_down(lo + self._W_box.lo), round_up(hi + self._W_box.hi)
+        self.prior = Xp
+        self.prior_box = Box(lo, hi)
 
     def _in_domain(self, X: ConstrainedZonotope, box: Box) -> tuple[ConstrainedZonotope, Box]:
-        """``X`` and its hull cut by ``state_domain`` where the hull leaves it."""
+        """``X`` and its box cut by ``state_domain`` where the box leaves it."""
         if self.domain is None:
             return X, box
         dlo, dhi = self.domain
@@ -487,40 +842,82 @@ class NonlinearSetObserver:
                 f"the predicted set at step {self.k} lies outside state_domain (certified): "
                 "the model, its noise bounds or the domain are wrong", self.k,
                 hint="what to do: check state_domain and the noise bounds")
-        # (the hull clipped to the domain: finite where the domain is one-sided)
+        # (the box clipped to the domain: finite where the domain is one-sided)
         X = X.intersect(ConstrainedZonotope.from_box(lo[sel], hi[sel]), np.eye(X.dim)[sel])
         return X, Box(lo, hi)
 
-    def _cut(self, Xp: ConstrainedZonotope, M: NDArray[np.float64], rad: NDArray[np.float64],
-             box: Box, u: NDArray[np.float64]) -> ConstrainedZonotope:
+    def _cut(self, Xp: ConstrainedZonotope, lin_rad: NDArray[np.float64],
+             f_lo: NDArray[np.float64], f_hi: NDArray[np.float64]) -> ConstrainedZonotope:
         """``Xp`` intersected with the natural interval enclosure ``[f](B)`` in the
         coordinates where that box is narrower than the interval image of ``B`` under the
-        linearization (by more than :data:`CUT_GAIN` of it): both enclose ``f(X)``, and
-        on a large box with a rational ``f`` the mean-value form alone can be several
-        times wider (the dependency effect in the interval Jacobian)."""
-        f_lo, f_hi = self._f.enclose(box, u)
-        _, r = box_center_radius(box.lo, box.hi)
-        lin_rad = np.abs(M) @ r + rad  # (the linearization's radius over B: the choice only)
+        enclosure (radius ``lin_rad``, by more than :data:`CUT_GAIN` of it): both enclose
+        ``f(X)``, and on a large box with a rational ``f`` the mean-value form alone can
+        be several times wider (the dependency effect in the interval Jacobian)."""
         sel = np.flatnonzero(f_hi - f_lo < (1.0 - CUT_GAIN) * 2.0 * lin_rad)
         if sel.size == 0 or not (np.isfinite(f_lo[sel]).all() and np.isfinite(f_hi[sel]).all()):
             return Xp
         R = np.eye(Xp.dim)[sel]
         return Xp.intersect(ConstrainedZonotope.from_box(f_lo[sel], f_hi[sel]), R)
 
-    def _reduce(self, X: ConstrainedZonotope) -> ConstrainedZonotope:
-        if X.n_con > self.max_constraints:
-            X = eliminate_constraints(X, self.max_constraints)
-        if X.n_gen > self.max_generators:
-            X = reduce_order(X, self.max_generators)
+    def _reduce_to(self, X: ConstrainedZonotope, g: int, c: int, box: Box
+                   ) -> ConstrainedZonotope:
+        """``X`` with at most ``c`` constraints and ``g`` generators (outer). Where the
+        elimination stalls short of ``c`` (its rounding budget: each elimination's
+        certified error would pass it), the set restarts from ``box``, its certified hull
+        (outer too, and the step says so)."""
+        if X.n_con > c:
+            small = X.dim <= REFINE_MAX_DIM
+            X = eliminate_constraints(X, c, method="auto" if small else "fast",
+                                      batch=ELIMINATION_BATCH,
+                                      refine=ELIMINATION_REFINE if small else 0)
+            if X.n_con > c or X.n_gen > g and g < X.dim + X.n_con:
+                self.restarts += 1
+                return ConstrainedZonotope.from_box(box.lo, box.hi)
+        if X.n_gen > g:
+            X = reduce_order(X, g)
         return X
 
-    def _step(self, box: Box, status: str) -> SMFDOStep:
+    def _reduce(self, X: ConstrainedZonotope, box: Box) -> tuple[ConstrainedZonotope, float]:
+        """``X`` reduced to the current sizes; while that widens a coordinate of the hull
+        (``box``, the unreduced set's) by more than ``reduction_growth`` of its width, the
+        sizes grow (up to the caps) and ``X`` is reduced again from itself. Returns the
+        set and the growth (the largest relative widening of the kept reduction; 0
+        without reduction, NaN when not measured)."""
+        g, c = self.sizes
+        Xr = self._reduce_to(X, g, c, box)
+        if Xr is X:
+            return X, 0.0
+        at_caps = g >= self.max_generators and c >= self.max_constraints
+        if self.reduction_growth is None or (at_caps and self.k % GROWTH_CHECK_EVERY):
+            return Xr, float("nan")
+        width = box.hi - box.lo
+        floor = 1e-9 * np.maximum(1.0, np.abs(box.lo) + np.abs(box.hi))
+        while True:
+            try:
+                hb, _ = hull_with_status(Xr)
+                growth = float(np.max(((hb.hi - hb.lo) - width) / np.maximum(width, floor)))
+            except EmptySetError:  # (a superset of a nonempty set: LP trouble)
+                growth = float("inf")
+            if growth <= self.reduction_growth or (g >= self.max_generators
+                                                   and c >= self.max_constraints):
+                break
+            g = min(self.max_generators, max(g + 1, int(np.ceil(GROWTH_FACTOR * g))))
+            c = min(self.max_constraints, max(c + 1, int(np.ceil(GROWTH_FACTOR * c))))
+            g, c = max(g, self.sizes[0]), max(c, self.sizes[1])
+            Xr = self._reduce_to(X, g, c, box)
+            if Xr is X:
+                growth = 0.0
+                break
+        self.sizes = (g, c)
+        return Xr, max(growth, 0.0)
+
+    def _step(self, box: Box, status: str, stats: dict[str, Any]) -> SMFDOStep:
         n = self.n
         lo, hi = box.lo[n:].copy(), box.hi[n:].copy()
         est = 0.5 * lo + 0.5 * hi
         eb = float(np.max(0.5 * (hi - lo), initial=0.0))
         return SMFDOStep(self.k, est, lo, hi, eb, status=status,
-                         state_lo=box.lo[:n].copy(), state_hi=box.hi[:n].copy())
+                         state_lo=box.lo[:n].copy(), state_hi=box.hi[:n].copy(), stats=stats)
 
     # ------------------------------------------------------------------ a record
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
@@ -568,6 +965,14 @@ class NonlinearSetObserver:
     def __repr__(self) -> str:
         return (f"NonlinearSetObserver(n={self.n}, l={self.l}, p={self.p}, q={self.q}, "
                 f"method={self.method!r}, k={self.k})")
+
+
+def _meet(a: Box, b: Box) -> Box:
+    """The intersection of two boxes that both hold the truth (the first where they do
+    not overlap, which only rounding can cause)."""
+    lo, hi = np.maximum(a.lo, b.lo), np.minimum(a.hi, b.hi)
+    bad = lo > hi
+    return Box(np.where(bad, a.lo, lo), np.where(bad, a.hi, hi))
 
 
 def _cartesian(W: ConstrainedZonotope | None, n: int, DD: ConstrainedZonotope | None, q: int
