@@ -45,7 +45,7 @@ def inside(X, res) -> bool:
     return bool(np.all((X >= res.state_lo) & (X <= res.state_hi)))
 
 
-@pytest.mark.parametrize("method", ["mean-value", "taylor"])
+@pytest.mark.parametrize("method", ["auto", "mean-value", "taylor"])
 @pytest.mark.parametrize("corners", [False, True])
 def test_the_truth_is_inside_on_a_tank_cascade(method, corners):
     f, h, xs, us = tank_cascade(6)
@@ -90,7 +90,7 @@ def test_the_bands_are_close_to_an_inner_bound_of_the_exact_set(method):
     assert ratio.mean() <= 1.5
 
 
-@pytest.mark.parametrize("method", ["mean-value", "taylor"])
+@pytest.mark.parametrize("method", ["auto", "mean-value", "taylor"])
 def test_the_truth_is_inside_on_a_pendulum(method):
     """A damped pendulum (angle measured, torque input), a large initial box of the
     rate, noise on the corners."""

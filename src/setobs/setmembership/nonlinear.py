@@ -870,7 +870,7 @@ class NonlinearSetObserver:
             X = eliminate_constraints(X, c, method="auto" if small else "fast",
                                       batch=ELIMINATION_BATCH,
                                       refine=ELIMINATION_REFINE if small else 0)
-            if X.n_con > c or X.n_gen > g and g < X.dim + X.n_con:
+            if X.n_con > c or (X.n_gen > g and g < X.dim + X.n_con):
                 self.restarts += 1
                 return ConstrainedZonotope.from_box(box.lo, box.hi)
         if X.n_gen > g:
