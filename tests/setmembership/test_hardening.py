@@ -218,11 +218,25 @@ def test_the_documented_minimum_window_gives_bounded_sets(fast):
     res = obs.run(Y)
     assert np.isfinite(res.error_bound[2:]).all()  # was +-inf forever
     assert res.violations(D) == 0
-    exact = so.SMFDO(sys_, window=None).run(Y)
-    # windowed contains exact, up to the rounding allowances (which grow with the
-    # exact mode's depth): 1e-8 relative
+    exact = so.SMFDO(sys_, window=None, fast=False).run(Y)
+    # windowed contains exact (the reference engine's: see the next test), up to the
+    # rounding allowances (which grow with the exact mode's depth): 1e-8 relative
     tol = 1e-8 * (1.0 + np.abs(np.nan_to_num(exact.lo, posinf=0, neginf=0)))
     assert (res.lo <= exact.lo + tol).all() and (res.hi >= exact.hi - tol).all()
+
+
+@pytest.mark.xfail(strict=False, reason="known defect, machine-dependent: on some machines "
+                   "exact mode's H-representation step (the first after the conversion, "
+                   "k = 4; the set is flat, y has no noise) is 8e-4 wider than the exact "
+                   "rational LP at k = 4 and 5 while its status says ok; fast=False is exact")
+def test_exact_mode_on_the_minimum_window_plant_equals_the_rational_lp():
+    sys_ = LinearSystem(np.diag([0.5, -0.3]), [[1.0], [1.0]], [[1.0, 1.0]])
+    Y, _ = simulate(sys_, 60, np.random.default_rng(0), [0.0, 0.0], [0.2], 1.0)
+    exact = so.SMFDO(sys_, window=None).run(Y[:8])
+    for k in (4, 5):
+        lo, hi = exact_history_bounds(sys_.Phi, sys_.G, sys_.Xi, Y, k, [1.0])
+        assert abs(exact.lo[k, 0] - float(lo[0])) <= 1e-9 * (1 + abs(float(lo[0])))
+        assert abs(exact.hi[k, 0] - float(hi[0])) <= 1e-9 * (1 + abs(float(hi[0])))
 
 
 # ------------------------------------------------------------------ 8. run() continued

@@ -669,7 +669,8 @@ def hausdorff_heuristics(Z: ConstrainedZonotope, r: NDArray[np.float64]) -> NDAr
     fin = np.isfinite(r)
     tiny = 1e-12 * float(np.abs(np.diag(Qinv)).max(initial=1.0))
     pos = fin & (Sdiag > tiny)
-    out[pos] = r[pos] ** 2 / Sdiag[pos]
+    with np.errstate(over="ignore"):  # (an overshoot past 1e154: inf, never chosen)
+        out[pos] = r[pos] ** 2 / Sdiag[pos]
     out[fin & ~pos & (r == 0.0)] = 0.0  # a factor the constraints fix, inside its bound
     return out
 
