@@ -166,6 +166,11 @@ RELINEARIZE_GAIN = 0.1
 POLYHEDRAL_SHARE = 0.25
 POLYHEDRAL_MAX_DIM = 4
 
+#: ``method="auto"`` skips the mean-value form where the Taylor form's remainder is at
+#: most this share of every row's interval image of the box (the mean-value form's
+#: image is then no narrower, up to about that share: it holds the Jacobian's range).
+AUTO_TAYLOR_SHARE = 0.01
+
 #: Largest number of re-linearizations of ``h`` in a step.
 RELINEARIZATIONS = 2
 
@@ -314,16 +319,25 @@ class _Map:
         with why; ``None`` when none has an enclosure there."""
         got, failed = [], {}
         lin_forms = [f for f in forms if f != "polyhedral"] or ["mean-value", "taylor"]
+        if len(lin_forms) > 1:  # (Taylor first: where its remainder is negligible in every
+            lin_forms = ["taylor"] + [f for f in lin_forms if f != "taylor"]  # row, the
+        _, r = box_center_radius(lo, hi)  # mean-value form cannot be narrower by more)
         for form in (("mean-value",) if self.affine else lin_forms):
             try:
                 got.append(self.linearize(lo, hi, u, form))
             except (DomainError, UnboundedSetError) as exc:
                 failed[form] = str(exc)
+                continue
+            if form == "taylor" and len(lin_forms) > 1:
+                M, _, rad = got[-1]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    share = rad / (np.abs(M) @ r + rad)
+                if np.nanmax(share, initial=0.0) <= AUTO_TAYLOR_SHARE:
+                    break
         if not got:
             return None, failed
         if len(got) == 1:
             return got[0], failed
-        _, r = box_center_radius(lo, hi)
         width = np.array([np.abs(M) @ r + rad for M, _, rad in got])
         pick = np.argmin(width, axis=0)
         rows = np.arange(self.m)
