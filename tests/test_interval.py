@@ -227,3 +227,17 @@ def test_a_wide_initial_set_does_not_hang_the_nonlinear_observer():
     for y in ([0.52], [0.49], [0.47]):
         st = obs.update(y)
         assert np.all(st.state_lo <= st.state_hi)
+
+
+def test_clip_domain_encloses_only_where_the_function_is_defined():
+    """``clip_domain``: ``sqrt`` over an argument box reaching below 0 is its range over
+    the part inside the domain (exact ends here), ``log`` unbounded below at 0; a box
+    entirely outside still raises, and without ``clip_domain`` the partial box raises."""
+    F = so.interval.IntervalFunction(["sqrt(x + 1)", "log(x + 2)"], ["x"], clip_domain=True)
+    lo, hi = F([-2.5], [3.0])
+    assert lo[0] == 0.0 and hi[0] >= 2.0 and hi[0] < 2.0 + 1e-15
+    assert lo[1] == -np.inf and hi[1] >= np.log(5.0)
+    with pytest.raises(so.DomainError, match="everywhere"):
+        F([-4.0], [-3.0])
+    with pytest.raises(so.DomainError, match="sqrt of x \\+ 1"):
+        so.interval.IntervalFunction(["sqrt(x + 1)"], ["x"])([-1.5], [3.0])

@@ -306,6 +306,10 @@ def test_bad_input():
         so.NonlinearSetObserver(["x"], ["x"], ["x"], ["x"], **kw)
     with pytest.raises(so.ArgumentError, match="state_domain must be a Box of the 1 states"):
         so.NonlinearSetObserver(["x"], ["x"], ["x"], state_domain=so.Box([0, 0], [1, 1]), **kw)
+    with pytest.raises(so.InvalidValueError, match="reduction_growth must be a positive"):
+        so.NonlinearSetObserver(["x"], ["x"], ["x"], reduction_growth=-0.1, **kw)
+    with pytest.raises(so.InvalidValueError, match="max_generators must be at least 1"):
+        so.NonlinearSetObserver(["x"], ["x"], ["x"], max_generators=0, **kw)
     obs = so.NonlinearSetObserver(["x + u"], ["x"], ["x"], ["u"], **kw)
     with pytest.raises(so.ArgumentError, match="u is required"):
         obs.update([0.5])
