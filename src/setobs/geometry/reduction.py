@@ -741,16 +741,10 @@ def _drop_bounds(Z: ConstrainedZonotope, score: NDArray[np.float64],
         R0_lo, R0_hi = _row_ranges(A, np.abs(A), b, -h, h)
         if not (np.isfinite(R0_lo[j]) and np.isfinite(R0_hi[j])):
             continue
-        hj = h.copy()
-        hj[j] = np.inf
-        free = np.zeros(h.size, dtype=bool)
-        free[j] = True
-        G1, c1, A1, b1, h1, cerr1, berr1, steps = _eliminate_free(
-            G, c, A, b, hj, cerr, berr, free, budgets, max_steps=1)
-        if not steps:
+        out = _drop_one(G, c, A, b, h, cerr, berr, j, budgets)
+        if out is None:
             continue
-        A1, b1, berr1 = _drop_zero_rows(A1, b1, berr1)
-        G, c, A, b, h, cerr, berr = G1, c1, A1, b1, h1, cerr1, berr1
+        G, c, A, b, h, cerr, berr = out
         ids = np.delete(ids, j)
         done += 1
     if not done:
@@ -880,13 +874,24 @@ def _drop_best_bound(Z: ConstrainedZonotope, score: NDArray[np.float64],
     for j in np.argsort(score, kind="stable"):
         if not np.isfinite(score[j]):
             break
-        h = Z.h.copy()
-        h[j] = np.inf
-        free = np.zeros(Z.n_gen, dtype=bool)
-        free[j] = True
-        G, c, A, b, h, cerr, berr, steps = _eliminate_free(
-            Z.G, Z.c, Z.A, Z.b, h, Z.c_err, Z.b_err, free, budgets, max_steps=1)
-        if steps:
-            A, b, berr = _drop_zero_rows(A, b, berr)
+        out = _drop_one(Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err, int(j), budgets)
+        if out is not None:
+            G, c, A, b, h, cerr, berr = out
             return trusted_cz(G, c, A, b, h, Z.unbounded_radius, cerr, berr), True
     return Z, False
+
+
+def _drop_one(G, c, A, b, h, cerr, berr, j: int, budgets: tuple[float, float]):
+    """Factor ``j``'s bound dropped and the factor eliminated with one row (the relaxed
+    set: a superset), the rows left all zero removed: the new arrays, or ``None`` where
+    no row can take it within the rounding ``budgets``."""
+    hj = h.copy()
+    hj[j] = np.inf
+    free = np.zeros(h.size, dtype=bool)
+    free[j] = True
+    G, c, A, b, h, cerr, berr, steps = _eliminate_free(G, c, A, b, hj, cerr, berr, free,
+                                                       budgets, max_steps=1)
+    if not steps:
+        return None
+    A, b, berr = _drop_zero_rows(A, b, berr)
+    return G, c, A, b, h, cerr, berr

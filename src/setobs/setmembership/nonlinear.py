@@ -319,9 +319,11 @@ class _Map:
         with why; ``None`` when none has an enclosure there."""
         got, failed = [], {}
         lin_forms = [f for f in forms if f != "polyhedral"] or ["mean-value", "taylor"]
-        if len(lin_forms) > 1:  # (Taylor first: where its remainder is negligible in every
-            lin_forms = ["taylor"] + [f for f in lin_forms if f != "taylor"]  # row, the
-        _, r = box_center_radius(lo, hi)  # mean-value form cannot be narrower by more)
+        if len(lin_forms) > 1:
+            # Taylor first: where its remainder is negligible in every row, the
+            # mean-value form cannot be narrower by more (AUTO_TAYLOR_SHARE)
+            lin_forms = ["taylor"] + [f for f in lin_forms if f != "taylor"]
+        _, r = box_center_radius(lo, hi)
         for form in (("mean-value",) if self.affine else lin_forms):
             try:
                 got.append(self.linearize(lo, hi, u, form))
@@ -711,39 +713,42 @@ class NonlinearSetObserver:
         """``X`` intersected with the states whose ``h`` (linearized over ``box``, which
         holds the truth) is within the noise of the measured outputs; unchanged, with
         why, when ``h`` has no linear enclosure over the box (the data wait)."""
-        if self._polyhedral(self._h, box, uv):
+        poly, enc = self._polyhedral(self._h, box, uv)
+        if poly:
             try:
                 Xl, P, q, r, _, _ = self._h.relaxation.lift(X, box.lo, box.hi, uv)
             except (DomainError, UnboundedSetError) as exc:
-                out, why = self._measure_linear(X, box, yv, uv, msk)
+                out, why = self._measure_linear(X, box, yv, uv, msk, enc)
                 if self.method != "polyhedral":
                     return out, why
                 note = f"h's polyhedral relaxation failed ({exc}); the linear forms carry"
                 return out, note + ("; " + why if why else "")
             Xl = Xl.intersect(self._observed(yv, msk, q, r), P[msk])
             return Xl.project(list(range(X.dim))), ""
-        return self._measure_linear(X, box, yv, uv, msk)
+        return self._measure_linear(X, box, yv, uv, msk, enc)
 
-    def _polyhedral(self, g: _Map, box: Box, uv) -> bool:
+    def _polyhedral(self, g: _Map, box: Box, uv) -> tuple[bool, Any]:
         """Whether ``g``'s enclosure over the box is the polyhedral relaxation: always with
         ``method="polyhedral"``; with ``"auto"``, on sets of at most
         :data:`POLYHEDRAL_MAX_DIM` dimensions while the linear forms' remainder is more
         than :data:`POLYHEDRAL_SHARE` of some row's interval image of the box (a large box
-        on a curved ``g``: the first steps from a wide initial set)."""
+        on a curved ``g``: the first steps from a wide initial set). With it, the linear
+        enclosure ``(lin, failed)`` when the decision computed it (else ``None``), for
+        the linear path to reuse."""
         if g.affine or self.method not in ("auto", "polyhedral"):
-            return False
+            return False, None
         if self.method == "polyhedral":
-            return True
+            return True, None
         if self.n + self.q > POLYHEDRAL_MAX_DIM:
-            return False
-        lin, _ = g.enclosure(box.lo, box.hi, uv, self.forms)
-        if lin is None:
-            return True
-        M, _, rad = lin
+            return False, None
+        enc = g.enclosure(box.lo, box.hi, uv, self.forms)
+        if enc[0] is None:
+            return True, enc
+        M, _, rad = enc[0]
         _, r = box_center_radius(box.lo, box.hi)
         with np.errstate(invalid="ignore", divide="ignore"):
             share = rad / (np.abs(M) @ r + rad)
-        return bool(np.nanmax(share, initial=0.0) > POLYHEDRAL_SHARE)
+        return bool(np.nanmax(share, initial=0.0) > POLYHEDRAL_SHARE), enc
 
     def _observed(self, yv, msk, offset, rad) -> ConstrainedZonotope:
         """The set ``y - offset - V - [-rad, rad]`` of the measured outputs' ``M x``."""
@@ -757,10 +762,12 @@ class NonlinearSetObserver:
             Y = Y + (-np.eye(msk.sum()) @ self.V.project(np.flatnonzero(msk)))
         return Y
 
-    def _measure_linear(self, X: ConstrainedZonotope, box: Box, yv, uv, msk
+    def _measure_linear(self, X: ConstrainedZonotope, box: Box, yv, uv, msk, enc=None
                         ) -> tuple[ConstrainedZonotope, str]:
-        """:meth:`_measure` by the linear forms."""
-        lin, failed = self._h.enclosure(box.lo, box.hi, uv, self.forms)
+        """:meth:`_measure` by the linear forms (``enc``: their enclosure over the box,
+        when already computed)."""
+        lin, failed = enc if enc is not None else self._h.enclosure(box.lo, box.hi, uv,
+                                                                    self.forms)
         if lin is None:
             self._h.enclose(box.lo, box.hi, uv)  # (raises where h itself is undefined)
             return X, ("h has no linear enclosure over the box (" + "; ".join(
@@ -773,15 +780,19 @@ class NonlinearSetObserver:
         """``X+ = M X + offset + P + W``, cut by ``f``'s natural enclosure over the box,
         and a certified box of it from the model alone (the interval image of ``box``)."""
         poly, poly_note = None, ""
-        if self._polyhedral(self._f, box, uv):
+        use, enc = self._polyhedral(self._f, box, uv)
+        if use:
             try:
                 poly = self._f.relaxation.lift(X, box.lo, box.hi, uv)
             except (DomainError, UnboundedSetError) as exc:
                 if self.method == "polyhedral":
                     poly_note = (f"f's polyhedral relaxation failed ({exc}); the linear "
                                  "forms carry")
-        lin, failed = (None, {}) if poly is not None else self._f.enclosure(
-            box.lo, box.hi, uv, self.forms)
+        if poly is not None:
+            lin, failed = None, {}
+        else:
+            lin, failed = enc if enc is not None else self._f.enclosure(box.lo, box.hi, uv,
+                                                                        self.forms)
         try:
             f_lo, f_hi = self._f.enclose(box.lo, box.hi, uv)
         except DomainError as exc:  # (a pole in the box: the natural form has no bound)
@@ -801,16 +812,8 @@ class NonlinearSetObserver:
         if poly is not None:
             Xl, P, q, r, L, U = poly
             Xp = (P @ Xl) + ConstrainedZonotope.from_box(round_down(q - r), round_up(q + r))
-            c, rl = 0.5 * L + 0.5 * U, 0.5 * (U - L)
-            mid = P @ c + q
-            k = P.shape[1] + 2
-            rr = round_up((np.abs(P) @ rl + r + gamma(k) * (np.abs(P) @ np.maximum(
-                np.abs(L), np.abs(U)) + np.abs(q))) * (1.0 + gamma(2)))
-            lo, hi = round_down(mid - rr), round_up(mid + rr)
-            Xp = self._cut(Xp, rr, f_lo, f_hi)
-            fin = np.isfinite(f_lo) & np.isfinite(f_hi)
-            lo, hi = np.where(fin, np.maximum(lo, f_lo), lo), np.where(fin, np.minimum(hi, f_hi),
-                                                                     hi)
+            lo, hi, img = _image_box(P, q, r, L, U, f_lo, f_hi)
+            Xp = self._cut(Xp, img, f_lo, f_hi)
         elif lin is None:  # (f's natural enclosure over the box alone)
             if not (np.isfinite(f_lo).all() and np.isfinite(f_hi).all()):
                 raise UnboundedSetError(
@@ -825,17 +828,8 @@ class NonlinearSetObserver:
             M, offset, rad = lin
             Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
                                                         round_up(offset + rad))
-            c, r = box_center_radius(box.lo, box.hi)
-            Xp = self._cut(Xp, np.abs(M) @ r + rad, f_lo, f_hi)
-            mid = M @ c + offset
-            k = self.n + self.q + 2
-            rr = round_up((np.abs(M) @ r + rad + gamma(k) * (np.abs(M) @ (np.abs(c) + r)
-                                                             + np.abs(offset)))
-                          * (1.0 + gamma(2)))
-            lo, hi = round_down(mid - rr), round_up(mid + rr)
-            fin = np.isfinite(f_lo) & np.isfinite(f_hi)
-            lo, hi = np.where(fin, np.maximum(lo, f_lo), lo), np.where(fin, np.minimum(hi, f_hi),
-                                                                     hi)
+            lo, hi, img = _image_box(M, offset, rad, box.lo, box.hi, f_lo, f_hi)
+            Xp = self._cut(Xp, img, f_lo, f_hi)
         if self.W is not None:
             Xp = Xp + self.W
             lo, hi = round_down(lo + self._W_box.lo), round_up(hi + self._W_box.hi)
@@ -979,6 +973,23 @@ class NonlinearSetObserver:
     def __repr__(self) -> str:
         return (f"NonlinearSetObserver(n={self.n}, l={self.l}, p={self.p}, q={self.q}, "
                 f"method={self.method!r}, k={self.k})")
+
+
+def _image_box(P: NDArray[np.float64], q: NDArray[np.float64], r: NDArray[np.float64],
+               L: NDArray[np.float64], U: NDArray[np.float64], f_lo: NDArray[np.float64],
+               f_hi: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                   NDArray[np.float64]]:
+    """The certified box of ``P v + q +- r`` over ``v`` in ``[L, U]``, met with the natural
+    enclosure ``[f_lo, f_hi]`` where that is finite, and the image's radius without
+    rounding terms, ``|P| rad + r`` (what :meth:`NonlinearSetObserver._cut` compares)."""
+    c, rl = box_center_radius(L, U)
+    mid = P @ c + q
+    img = np.abs(P) @ rl + r
+    rr = round_up((img + gamma(P.shape[1] + 2) * (np.abs(P) @ (np.abs(c) + rl) + np.abs(q)))
+                  * (1.0 + gamma(2)))
+    lo, hi = round_down(mid - rr), round_up(mid + rr)
+    fin = np.isfinite(f_lo) & np.isfinite(f_hi)
+    return np.where(fin, np.maximum(lo, f_lo), lo), np.where(fin, np.minimum(hi, f_hi), hi), img
 
 
 def _meet(a: Box, b: Box) -> Box:
