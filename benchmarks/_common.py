@@ -3,8 +3,11 @@ used as the baseline."""
 
 from __future__ import annotations
 
+import datetime
 import statistics
+import subprocess
 import time
+from pathlib import Path
 
 import cvxpy as cp
 import numpy as np
@@ -78,3 +81,11 @@ def linprog_unit(repeats: int = 30) -> float:
         ts.append(time.perf_counter() - t0)
         assert r.status == 0
     return statistics.median(ts)
+
+
+def stamp() -> dict[str, str]:
+    """``{"commit": ..., "date": ...}``: the checkout's commit and today's date, for the
+    head of a results file (what produced its figures, and when)."""
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                            cwd=Path(__file__).parent).stdout.strip()
+    return {"commit": commit, "date": datetime.date.today().isoformat()}

@@ -19,9 +19,7 @@ Run: ``python benchmarks/early_stop.py [PLANTS]``.
 
 from __future__ import annotations
 
-import datetime
 import json
-import subprocess
 import sys
 import warnings
 from pathlib import Path
@@ -33,7 +31,10 @@ from setobs.setmembership import _window
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
 from tests.datasets import random_stable_record  # noqa: E402
+
+from _common import stamp  # noqa: E402
 
 
 def bands(sysm, Y, rw, rv, restart: str, gap: float) -> np.ndarray:
@@ -90,10 +91,8 @@ def main() -> None:
                              "p95_excess_of_the_larger_width": float(np.quantile(prev, 0.95)),
                              "runs_with_collapsed_bands": int(sum(r["collapsed_bands"] > 0
                                                                   for r in sel))}
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                            cwd=HERE).stdout.strip()
-    out = {"commit": commit, "date": datetime.date.today().isoformat(),
-           "plants": count, "window": 10, "steps": 120, "summary": summary, "rows": rows}
+    out = {**stamp(), "plants": count, "window": 10, "steps": 120, "summary": summary,
+           "rows": rows}
     path = HERE / "results" / "early_stop.json"
     path.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps(summary, indent=1))

@@ -15,7 +15,8 @@ tuned on, against inner bounds of the exact set; time per step against n.
 * What each piece buys: the previous defaults (mean-value, 8 N / 2 N generators and
   constraints), fixed sizes at the caps, no re-linearization, no polyhedral relaxation.
 
-Run: ``python benchmarks/nonlinear_set.py``; writes ``benchmarks/results/nonlinear_set.json``.
+Run: ``python benchmarks/nonlinear_set.py``; writes ``benchmarks/results/nonlinear_set.json``
+(stamped with the commit and the date).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from tests.setmembership.test_nonlinear_set import simulate, tank_cascade
 
 import setobs as so
 import setobs.setmembership.nonlinear as nlm
-from _common import linprog_unit
+from _common import linprog_unit, stamp
 
 RW, RV = 0.002, 0.01
 METHODS = ("auto", "mean-value", "taylor")
@@ -110,7 +111,7 @@ def run_variant(case, kw):
 
 
 def main() -> None:
-    out: dict = {"speed": [], "tightness": {}, "rego": {}}
+    out: dict = {**stamp(), "speed": [], "tightness": {}, "rego": {}}
     warm = own_cascade(3, 5)
     estimate(warm)  # (the compiled LP kernels load and compile on first use)
     for n in (6, 15, 30):
