@@ -552,12 +552,12 @@ class NonlinearSetObserver:
         remainder box, ``W``'s and ``V``'s generators) and ``d_c = l`` constraints (one
         per measured output). The constraints are capped so that a posterior (the kept
         ones and a step's ``l``) stays within the compiled simplex's
-        :data:`~setobs.lp.factor.COMPILED_MAX_ROWS` rows, where a hull's ``2 N`` LPs cost
-        microseconds each (above it every LP goes to HiGHS, about 20 times slower per
-        step); they start at :data:`START_STEPS` steps' worth. The generators follow
-        the constraints at the model's ratio ``d_g / d_c`` (at least ``2 N`` more than
-        the constraints): generators beyond that ratio were measured to buy nothing
-        while the constraints are capped.
+        :data:`~setobs.lp.factor.COMPILED_MAX_ROWS` rows, where a hull's ``2 N`` LPs run
+        on the compiled simplex (above it every LP goes to HiGHS; below, the compiled
+        path was measured 2-9 times faster there); they start at :data:`START_STEPS`
+        steps' worth. The generators follow the constraints at the model's ratio
+        ``d_g / d_c`` (at least ``2 N`` more than the constraints): generators beyond that
+        ratio were measured to buy nothing while the constraints are capped.
 
         Parameters
         ----------
