@@ -13,7 +13,11 @@ tuned on, against inner bounds of the exact set; time per step against n.
   value is attained, so band / inner is an *upper* bound on the band's ratio to the exact
   set.
 * What each piece buys: the previous defaults (mean-value, 8 N / 2 N generators and
-  constraints), fixed sizes at the caps, no re-linearization, no polyhedral relaxation.
+  constraints), fixed sizes at the caps, no re-linearization, no polyhedral relaxation,
+  and the two linear forms intersected in the prediction (``intersect_forms=True``).
+* Time per step excludes the observer's construction (sympy's derivatives, once per
+  model) and is the median over 5 runs of the run's time over a linprog unit timed just
+  before it (``per_linprog_range``: the smallest and largest of the 5).
 
 Run: ``python benchmarks/nonlinear_set.py``; writes ``benchmarks/results/nonlinear_set.json``
 (stamped with the commit and the date).
@@ -66,9 +70,27 @@ def own_cascade(n: int, N: int, seed: int = 3) -> dict:
 
 
 def timed(case, **kw):
+    """The run and its time per step (the observer's construction -- sympy's
+    derivatives and their compilation, once per model -- not counted)."""
+    obs = so.NonlinearSetObserver(case["f"], case["h"], case["xs"], case["us"],
+                                  process_noise=case["rw"], measurement_noise=case["rv"],
+                                  initial_state_set=case["X0"], **kw)
     t0 = time.perf_counter()
-    res = estimate(case, **kw)
+    res = obs.run(case["Y"], case["U"] if case["U"].shape[1] else None)
     return res, (time.perf_counter() - t0) / len(case["Y"])
+
+
+def speed(case, reps: int = 5, **kw):
+    """Median over ``reps`` runs of the time per step over a linprog unit timed just
+    before each run (the machine's speed drifts by tens of percent within minutes here:
+    a unit timed apart from its run does not measure the same machine)."""
+    units, ms = [], []
+    for _ in range(reps):
+        unit = linprog_unit()
+        res, dt = timed(case, **kw)
+        units.append(dt / unit)
+        ms.append((1e3 * dt, 1e3 * unit))
+    return res, float(np.median(units)), [min(units), max(units)], ms
 
 
 def old_sizes(case) -> dict:
@@ -93,7 +115,8 @@ def variants(case) -> dict:
             "taylor": {"method": "taylor"}, "previous defaults": old_sizes(case),
             "auto, fixed at the caps": {"reduction_growth": None},
             "auto, no re-linearization": {"_relin": 0},
-            "auto, no polyhedral": {"_poly": 0}}
+            "auto, no polyhedral": {"_poly": 0},
+            "auto, intersected forms": {"intersect_forms": True}}
 
 
 def run_variant(case, kw):
@@ -118,12 +141,12 @@ def main() -> None:
         case = own_cascade(n, 40)
         estimate(own_cascade(n, 12))  # (this size's kernels compiled before the timing)
         for method in METHODS:
-            unit0 = linprog_unit()
-            res, dt = timed(case, method=method)
-            unit = min(unit0, linprog_unit())
+            res, per, spread, ms = speed(case, method=method)
             w = res.state_hi - res.state_lo
-            row = {"n": n, "method": method, "steps": 40, "ms_per_step": 1e3 * dt,
-                   "per_linprog": dt / unit, "linprog_ms": 1e3 * unit,
+            row = {"n": n, "method": method, "steps": 40,
+                   "ms_per_step": float(np.median([a for a, _ in ms])),
+                   "per_linprog": per, "per_linprog_range": spread,
+                   "linprog_ms": float(np.median([b for _, b in ms])),
                    "truth_inside": inside(case, res),
                    "mean_unmeasured_width_from_10": float(w[10:, case["unmeasured"]].mean()),
                    "sizes_reached": [int(res.stats["generators"][-1]),
@@ -154,7 +177,8 @@ def main() -> None:
                       "polyhedral": {"method": "polyhedral"},
                       "previous defaults": old_sizes(rego_example(0)),
                       "auto, no re-linearization": {"_relin": 0},
-                      "auto, no polyhedral": {"_poly": 0}}.items():
+                      "auto, no polyhedral": {"_poly": 0},
+                      "auto, intersected forms": {"intersect_forms": True}}.items():
         errors, radii, ins, ms = [], [], [], []
         poly = kw.get("method") == "polyhedral"  # (seconds a step: 5 seeds, 40 steps)
         for seed in range(5 if poly else 20):

@@ -266,3 +266,24 @@ def test_an_optimal_answer_with_an_open_gap_is_not_taken_as_exact():
         assert box.lo[i] <= ext[0] + tol and box.hi[i] >= ext[1] - tol
         if i == 5:  # the disturbance coordinate of the open gap (width 0.33)
             assert ext[0] - box.lo[i] < 1e-6 and box.hi[i] - ext[1] < 1e-6
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_an_early_stopped_hull_is_outer_and_within_twice_its_gap(seed):
+    """``hull_with_status(Z, gap)``: each bound may stop within its coordinate's gap of
+    the exact one; against the rational LP oracle every bound is outer, and each
+    interval at most twice its gap wider (a gap of a tenth of the width, so the simplex
+    stops early); a wrong gap is refused."""
+    from setobs.exceptions import InvalidValueError
+    from setobs.geometry.zonotope import hull_with_status
+
+    rng = np.random.default_rng(seed)
+    Z = random_cz(rng, n=3, n_g=7, n_c=2)
+    exact = [exact_extremes(Z, np.eye(3)[i]) for i in range(3)]
+    width = np.array([float(hi - lo) for lo, hi in exact])
+    box, _ = hull_with_status(Z, 0.1 * width)
+    for i, (lo, hi) in enumerate(exact):
+        assert Fraction(box.lo[i]) <= lo and Fraction(box.hi[i]) >= hi
+        assert (box.hi[i] - box.lo[i]) - width[i] <= 0.2 * width[i] * (1 + 1e-9) + 1e-12
+    with pytest.raises(InvalidValueError, match="gap must be 3 finite nonnegative"):
+        hull_with_status(Z, [0.1, -1.0, 0.1])

@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import qr
+from scipy.linalg import cho_factor, cho_solve, qr
 
+from .._lazy import lazy_module
 from .._rounding import UNIT_ROUNDOFF, gamma
 from ..exceptions import EmptySetError, InvalidValueError
 from ..lp.factor import COMPILED_MAX_ROWS
@@ -42,6 +43,9 @@ from ..tolerances import (
 )
 from .box import box_center_radius
 from .zonotope import ConstrainedZonotope, factor_polytope, trusted_cz
+
+# The compiled propagation (numba) loads on the first elimination, not on import.
+_prop = lazy_module("setobs.geometry._propagation")
 
 __all__ = [
     "eliminate_constraints",
@@ -538,12 +542,13 @@ FAST_ELIMINATION_SIZE: int = 400
 FAST_ELIMINATION_REFINE: int = 8
 
 #: Sweeps of the interval propagation of :func:`propagated_factor_ranges` (it stops
-#: earlier once no bound moves by more than 1e-3 of its factor's bound).
+#: earlier once no bound moves by more than ``PROPAGATION_MOVE`` of its factor's bound).
 PROPAGATION_SWEEPS: int = 10
+PROPAGATION_MOVE: float = 1e-3
 
 
-def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np.float64],
-                lo: NDArray[np.float64], hi: NDArray[np.float64],
+def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64] | None,
+                b: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64],
                 b_err: NDArray[np.float64] | None = None
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """For every factor ``j``, the intersection over rows ``i`` (``A_ij != 0``) of the
@@ -551,28 +556,23 @@ def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64], b: NDArray[np
     (interval arithmetic in midpoint-radius form; a half-infinite bound counts as
     unbounded), widened by the uncertainty ``b_err`` of ``b`` and by a bound on the
     rounding of the evaluation, ``2 gamma_(n_g + 8) (|b_i| + |A_i| (|m| + r)) / |A_ij|``
-    (every term of the row's sums, the exclusion of ``j`` and the division), so that the
-    ranges are outer in floating point too."""
-    fin = np.isfinite(lo) & np.isfinite(hi)
-    m = np.where(fin, 0.5 * (lo + hi), 0.0)
-    r = np.where(fin, 0.5 * (hi - lo), 0.0)
-    nz = A != 0.0
-    S = A @ m
-    Rr = absA @ r
-    n_inf = nz @ (~fin).astype(np.float64)  # unbounded factors per row
-    err = 2.0 * gamma(A.shape[1] + 8) * (np.abs(b) + absA @ (np.abs(m) + r))
-    if b_err is not None:
-        err = err + b_err
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        centre = (b[:, None] - S[:, None] + A * m[None, :]) / A
-        rad = (np.maximum(Rr[:, None] - absA * r[None, :], 0.0) + err[:, None]) / absA
-        rad *= 1.0 + 4.0 * UNIT_ROUNDOFF
-        # a row bounds xi_j only if every other factor in it is bounded
-        others_inf = n_inf[:, None] - (nz & ~fin[None, :])
-        rad = np.where(others_inf > 0.5, np.inf, rad)
-        low = np.where(nz, centre - rad, -np.inf).max(axis=0, initial=-np.inf)
-        upp = np.where(nz, centre + rad, np.inf).min(axis=0, initial=np.inf)
-    return low, upp
+    (every term of the row's sums in any order, the exclusion of ``j`` and the division),
+    the radius then scaled by ``1 + 4 u``, so that the ranges are outer in floating point
+    too. Compiled (:func:`setobs.geometry._propagation.row_ranges`; ``absA`` is not
+    needed)."""
+    return _prop.row_ranges(*_kernel_args(A, b, lo, hi, b_err))
+
+
+def _kernel_args(A, b, lo, hi, b_err):
+    A = np.ascontiguousarray(A, dtype=np.float64)
+    be = _NO_ERR if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
+    return (A, np.ascontiguousarray(b, dtype=np.float64),
+            np.ascontiguousarray(lo, dtype=np.float64),
+            np.ascontiguousarray(hi, dtype=np.float64), be,
+            2.0 * gamma(A.shape[1] + 8), 1.0 + 4.0 * UNIT_ROUNDOFF)
+
+
+_NO_ERR = np.zeros(0)
 
 
 def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
@@ -617,28 +617,10 @@ def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
     :func:`eliminate_constraints` shrinks the factor bounds to ``E`` (the set is
     unchanged: ``E`` contains every factor's range) and ranks the choices by ``R``.
     """
-    A_a = np.asarray(A, dtype=np.float64)
-    b_a = np.asarray(b, dtype=np.float64)
-    h_a = np.asarray(h, dtype=np.float64)
-    be = None if b_err is None else np.asarray(b_err, dtype=np.float64)
-    absA = np.abs(A_a)
-    lo, hi = -h_a.copy(), h_a.copy()
-    R_lo, R_hi = np.full(h_a.size, -np.inf), np.full(h_a.size, np.inf)
-    scale = np.where(np.isfinite(h_a) & (h_a > 0), h_a, 1.0)
-    for _ in range(max(int(sweeps), 1)):
-        R_lo, R_hi = _row_ranges(A_a, absA, b_a, lo, hi, be)
-        new_lo = np.maximum(lo, R_lo)
-        new_hi = np.minimum(hi, R_hi)
-        ok = new_lo <= new_hi  # (crossing: rounding or an empty set; keep the old bound)
-        new_lo = np.where(ok, new_lo, lo)
-        new_hi = np.where(ok, new_hi, hi)
-        with np.errstate(invalid="ignore"):
-            moved = np.nan_to_num(np.maximum(np.abs(new_lo - lo), np.abs(new_hi - hi)),
-                                  nan=np.inf, posinf=np.inf) / scale
-        lo, hi = new_lo, new_hi
-        if not (moved > 1e-3).any():
-            break
-    return lo, hi, R_lo, R_hi
+    h_a = np.ascontiguousarray(h, dtype=np.float64)
+    A_a, b_a, _, _, be, g2, scale = _kernel_args(A, b, h_a, h_a, b_err)
+    # (a bound crossing its range -- rounding or an empty set -- keeps the old one)
+    return _prop.propagate(A_a, b_a, h_a, int(sweeps), be, g2, scale, PROPAGATION_MOVE)
 
 
 def hausdorff_heuristics(Z: ConstrainedZonotope, r: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -661,18 +643,37 @@ def hausdorff_heuristics(Z: ConstrainedZonotope, r: NDArray[np.float64]) -> NDAr
     AD = Z.A * D
     n = Z.dim
     K = np.eye(n) + GD @ GD.T
-    Qinv = np.eye(Z.n_gen) - GD.T @ np.linalg.solve(K, GD)
-    X = Qinv @ AD.T
+    # (Q^-1 never formed: its diagonal and Q^-1 (AD)^T from the n x n_g solve, O(n n_g n_c)
+    # instead of O(n_g^2 n_c))
+    Y = np.linalg.solve(K, GD)
+    q_diag = 1.0 - np.einsum("ij,ij->j", GD, Y)
+    X = AD.T - GD.T @ (Y @ AD.T)
     M = AD @ X
-    Sdiag = np.diag(Qinv) - np.einsum("jk,jk->j", X, X @ np.linalg.pinv(M, hermitian=True))
+    Sdiag = q_diag - np.einsum("jk,jk->j", X, _psd_solve(M, X.T).T)
     out = np.full(Z.n_gen, np.inf)
     fin = np.isfinite(r)
-    tiny = 1e-12 * float(np.abs(np.diag(Qinv)).max(initial=1.0))
+    tiny = 1e-12 * float(np.abs(q_diag).max(initial=1.0))
     pos = fin & (Sdiag > tiny)
     with np.errstate(over="ignore"):  # (an overshoot past 1e154: inf, never chosen)
         out[pos] = r[pos] ** 2 / Sdiag[pos]
     out[fin & ~pos & (r == 0.0)] = 0.0  # a factor the constraints fix, inside its bound
     return out
+
+
+def _psd_solve(M: NDArray[np.float64], B: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``M^+ B`` for a symmetric positive semidefinite ``M``: by Cholesky where ``M`` is
+    well conditioned (its factor's diagonal within 1e6 of itself), else the
+    pseudo-inverse (dependent rows)."""
+    if M.size:
+        try:
+            L = cho_factor(M, lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            L = None
+        if L is not None:
+            d = np.abs(np.diag(L[0]))
+            if d.min() > 1e-6 * d.max():
+                return cho_solve(L, B, check_finite=False)
+    return np.linalg.pinv(M, hermitian=True) @ B
 
 
 def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int,
@@ -738,7 +739,8 @@ def _drop_bounds(Z: ConstrainedZonotope, score: NDArray[np.float64],
         j = int(where[0])
         if not (np.isfinite(h[j]) and h[j] > 0 and A[:, j].any()):
             continue
-        R0_lo, R0_hi = _row_ranges(A, np.abs(A), b, -h, h)
+        rows = A[:, j] != 0.0  # (xi_j's one-sweep range: only the rows that hold it)
+        R0_lo, R0_hi = _row_ranges(A[rows], np.abs(A[rows]), b[rows], -h, h)
         if not (np.isfinite(R0_lo[j]) and np.isfinite(R0_hi[j])):
             continue
         out = _drop_one(G, c, A, b, h, cerr, berr, j, budgets)

@@ -619,7 +619,7 @@ class FactorPolytope:
         return LPResult(best, np.nan, None, "fallback")
 
     @_quiet_overflow
-    def minimize_many(self, W: NDArray[np.float64]
+    def minimize_many(self, W: NDArray[np.float64], gaps: NDArray[np.float64] | None = None
                       ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i`` by the compiled
         simplex (:meth:`FixedStructureLP.bounded <setobs.lp.fastlp.FixedStructureLP.bounded>`:
@@ -631,6 +631,10 @@ class FactorPolytope:
         ----------
         W : ndarray, shape (n_lp, n_g)
             Objectives (exact: no rounding error to carry).
+        gaps : ndarray, shape (n_lp // 2,), optional
+            For objectives in pairs ``(w, -w)``: each LP may stop within ``gaps[t]`` of
+            its pair's minimum (certified all the same;
+            :meth:`~setobs.lp.fastlp.FixedStructureLP.minimize_all`).
 
         Returns
         -------
@@ -649,10 +653,11 @@ class FactorPolytope:
         with self._lock:
             lp = FixedStructureLP.bounded(self.A, W)
             if self.b_err is None:
-                return lp.minimize_all(self.b, np.concatenate([self.h, np.zeros(self.n_c)]))
+                return lp.minimize_all(self.b, np.concatenate([self.h, np.zeros(self.n_c)]),
+                                       gaps=gaps)
             bounds, ok, ys, objs = lp.minimize_all(
                 self.b, np.concatenate([self.h, np.zeros(self.n_c)]), b_err=self.b_err,
-                return_duals=True)
+                return_duals=True, gaps=gaps)
             # The exact rows' multiplier pays |y|^T b_err for the rows' uncertainty; where
             # that is more than the fast path's gap, the interval-row LP of minimize may
             # be tighter (a thin set of the soundness campaign: 2e-5 of a 0.33 width).

@@ -407,7 +407,7 @@ class FixedStructureLP:
     @with_single_threaded_blas_unless_small(lambda lp: max(lp.m, lp.n))
     def minimize_all(self, b: NDArray[np.float64], h: NDArray[np.float64],
                      state: LPState | None = None, *, b_err: NDArray[np.float64] | None = None,
-                     return_duals: bool = False):
+                     return_duals: bool = False, gaps: NDArray[np.float64] | None = None):
         """Certified lower bounds of ``min W[i]^T xi`` for all ``i``.
 
         Parameters
@@ -424,6 +424,12 @@ class FixedStructureLP:
         return_duals : bool
             Also return the certified multipliers (one row per objective) and
             the simplex objectives.
+        gaps : ndarray, shape (n_lp // 2,), optional
+            For objectives in pairs ``(w, -w)`` (hull objectives; ignored otherwise): each
+            LP of pair ``t`` that the objective chain solves stops once its duality gap is
+            at most ``gaps[t]`` (nonnegative, finite), and is accepted with that gap. The
+            bounds are certified either way, each within its gap of the minimum
+            (:meth:`minimize_all_unchecked`'s ``rel_gap``, with absolute gaps).
 
         Returns
         -------
@@ -442,8 +448,20 @@ class FixedStructureLP:
         if not np.array_equal(np.isinf(h), self.free):
             raise InvalidValueError("the unbounded factors differ from the structure's")
         st = self.new_state() if state is None else state
+        rel_gap = 0.0
+        if gaps is not None and self.paired:
+            g = np.asarray(gaps, dtype=np.float64)
+            if g.shape != (self.n_lp // 2,) or not (np.isfinite(g).all() and (g >= 0).all()):
+                raise InvalidValueError(f"gaps must be {self.n_lp // 2} finite nonnegative "
+                                        "numbers (one per pair of objectives)")
+            # (the kernel's early stop is rel_gap times the pair's last width: a width of
+            # exactly the gap, with rel_gap 1)
+            st.bounds[:] = np.repeat(-0.5 * g, 2)
+            st.codes[:] = _simplex.OPTIMAL
+            rel_gap = 1.0
         bounds, ok = self.minimize_all_unchecked(np.ascontiguousarray(b, dtype=np.float64),
-                                        np.ascontiguousarray(h), st, b_err=b_err)
+                                                 np.ascontiguousarray(h), st, b_err=b_err,
+                                                 rel_gap=rel_gap)
         if return_duals:
             return bounds.copy(), ok, st.ys.copy(), st.objs.copy()
         return bounds.copy(), ok
