@@ -413,7 +413,8 @@ def nonlinear_case(seed: int, methods: tuple[str, ...] = ("auto", "mean-value", 
     return check_states(
         [(method, lambda method=method: so.NonlinearSetObserver(
             f, h, xs, us, process_noise=rw, measurement_noise=rv, initial_state_set=X0,
-            method=method, **extra).run(Y, U)) for method in methods],
+            method=method.split("+")[0], intersect_forms=method.endswith("+intersect"),
+            **extra).run(Y, U)) for method in methods],
         X, f"seed {seed}")
 
 
@@ -431,6 +432,22 @@ def test_nonlinear_bands_hold_the_truth_campaign():
 
 def polyhedral_case(seed: int) -> tuple[int, int, list[str]]:
     return nonlinear_case(seed, ("polyhedral",))
+
+
+def intersected_case(seed: int) -> tuple[int, int, list[str]]:
+    return nonlinear_case(seed, ("auto+intersect",))
+
+
+def test_intersected_forms_hold_the_truth_short():
+    out = [intersected_case(s) for s in range(2)]
+    assert not [p for o in out for p in o[2]]
+
+
+@pytest.mark.slow
+def test_intersected_forms_hold_the_truth_campaign():
+    out = run_campaign(intersected_case, range(20))
+    assert not [p for o in out for p in o[2]]
+    assert sum(o[0] for o in out) >= 20 * 20
 
 
 def test_polyhedral_bands_hold_the_truth_short():

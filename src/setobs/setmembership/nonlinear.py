@@ -65,10 +65,11 @@ instead.
 are of comparable width and differ in slope, the prediction keeps both for the same
 state, ``{M_A x + p_A : x in X, (M_A - M_B)_S x + p_A,S - p_B = 0}`` (both hold at the
 true state, so their intersection does; :meth:`NonlinearSetObserver._intersected`), at
-the cost of a factor and a row per such row. Off by default: measured, it narrowed the
-held-out six tanks' bands by about 1 % and left the oscillator's and the Rego
-example's as they were, for up to twice the time per step (the measurement-side
-intersection of the forms' strips was measured at 0.2 % on the Rego example).
+the cost of a factor and a row per such row; the measurement likewise takes the other
+form's strip ``M_B,i x in y_i - offset_B,i - V_i - [-rad_B,i, rad_B,i]`` in such rows.
+Off by default: measured, it narrowed the held-out six tanks' bands by about 1 % and
+left the oscillator's and the Rego example's as they were, for up to twice the time
+per step.
 
 ``method="polyhedral"``: McCormick's relaxations of the factorable expression tree
 (one auxiliary variable per nonlinear node, its interval bounds over ``B`` and the
@@ -108,7 +109,8 @@ defaults (:meth:`NonlinearSetObserver.default_sizes`) start at ``START_STEPS`` =
 steps' worth of the model's generators and constraints and cap the constraints so a
 posterior stays within the compiled simplex's rows (``COMPILED_MAX_ROWS`` = 64, less a
 step's measurement rows), the generators at the model's ratio. At the caps the growth
-is measured every ``GROWTH_CHECK_EVERY`` steps. The step's hull LPs stop within
+is measured every ``GROWTH_CHECK_EVERY`` steps, below them every other step
+(``GROWTH_CHECK_BELOW_CAPS``). The step's hull LPs stop within
 ``HULL_REL_GAP`` (1e-3) of each coordinate's band at the previous step (certified
 bounds all the same: a band at most twice that wider than the exact hull), and the step
 runs with single-threaded BLAS (:mod:`setobs._blas`: its matrices are small, and two
@@ -231,6 +233,10 @@ HULL_REL_GAP = 1e-3
 #: At the caps the sizes cannot grow: the reduction's growth of the hull (two LPs per
 #: coordinate) is then measured every this many steps only (NaN in between).
 GROWTH_CHECK_EVERY = 10
+
+#: Below the caps, every this many steps (a size's growth is decided a step later at
+#: most; each check costs a hull of the reduced set).
+GROWTH_CHECK_BELOW_CAPS = 2
 
 
 class _Sparse:
@@ -386,6 +392,28 @@ def _rowwise(got: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[n
     offset = np.array([got[pick[i]][1][i] for i in rows])
     rad = np.array([got[pick[i]][2][i] for i in rows])
     return (M, offset, rad), pick, width
+
+
+def _second_form(lin: Any, forms: list[Any], box: Box) -> tuple[
+        NDArray[np.int64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The rows ``S`` where the form not picked row by row (``lin``: the narrower) is at
+    most :data:`INTERSECT_RATIO` times as wide over the box and differs in slope
+    (``|M_A,i - M_B,i| r`` above :data:`INTERSECT_SLOPE` of the smaller remainder), and
+    that form's ``(M_B, offset_B, rad_B)`` in every row."""
+    M, _, rad = lin
+    _, r = box_center_radius(box.lo, box.hi)
+    width = np.array([np.abs(Mf) @ r + rf for Mf, _, rf in forms])
+    pick = np.argmin(width, axis=0)  # (as in lin: the form not picked is the other)
+    other = 1 - pick
+    rows = np.arange(M.shape[0])
+    MB = np.array([forms[other[i]][0][i] for i in rows]).reshape(M.shape)
+    oB = np.array([forms[other[i]][1][i] for i in rows])
+    rB = np.array([forms[other[i]][2][i] for i in rows])
+    slope = np.abs(M - MB) @ r
+    own = np.abs(M) @ r + rad
+    S = np.flatnonzero((width[other, rows] <= INTERSECT_RATIO * own)
+                       & (slope > INTERSECT_SLOPE * np.minimum(rad, rB)))
+    return S, MB, oB, rB
 
 
 def _quadratic_remainder(H_lo: NDArray[np.float64], H_hi: NDArray[np.float64],
@@ -832,7 +860,18 @@ class NonlinearSetObserver:
                 f"{k}: {v}" for k, v in failed.items()) + "): the measurement waits")
         M, offset, rad = lin
         # M x in y - offset - V - [-rad, rad]
-        return X.intersect(self._observed(yv, msk, offset, rad), M[msk]), ""
+        X = X.intersect(self._observed(yv, msk, offset, rad), M[msk])
+        forms = self._h.last_forms
+        if self.intersect_forms and self.method == "auto" and len(forms) == 2:
+            # the other form's strips too, in the rows where it can pay (both hold at the
+            # true state; the noise enters each strip whole, so the pair is sound)
+            S, MB, oB, rB = _second_form(lin, forms, box)
+            two = np.zeros_like(msk)
+            two[S] = True
+            two &= msk
+            if two.any():
+                X = X.intersect(self._observed(yv, two, oB, rB), MB[two])
+        return X, ""
 
     def _predict(self, X: ConstrainedZonotope, box: Box, uv) -> None:
         """``X+ = M X + offset + P + W``, cut by ``f``'s natural enclosure over the box,
@@ -914,22 +953,10 @@ class NonlinearSetObserver:
         if not self.intersect_forms or self.method != "auto" or len(forms) != 2:
             return None
         M, offset, rad = lin
-        _, r = box_center_radius(box.lo, box.hi)
-        width = np.array([np.abs(Mf) @ r + rf for Mf, _, rf in forms])
-        own = np.abs(M) @ r + rad
-        pick = np.argmin(width, axis=0)  # (as in lin: the form not picked is the other)
-        other = 1 - pick
-        rows = np.arange(M.shape[0])
-        MB = np.array([forms[other[i]][0][i] for i in rows]).reshape(M.shape)
-        oB = np.array([forms[other[i]][1][i] for i in rows])
-        rB = np.array([forms[other[i]][2][i] for i in rows])
-        D = M - MB
-        slope = np.abs(D) @ r
-        wB = width[other, rows]
-        S = np.flatnonzero((wB <= INTERSECT_RATIO * own)
-                           & (slope > INTERSECT_SLOPE * np.minimum(rad, rB)))
+        S, MB, oB, rB = _second_form(lin, forms, box)
         if S.size == 0:
             return None
+        D = M - MB
         N = X.dim
         xmax = np.maximum(np.abs(box.lo), np.abs(box.hi))
         delta = round_up((np.abs(D[S]) @ xmax) * (2.0 * gamma(N + 2)))
@@ -1007,7 +1034,8 @@ class NonlinearSetObserver:
         if Xr is X:
             return X, 0.0
         at_caps = g >= self.max_generators and c >= self.max_constraints
-        if self.reduction_growth is None or (at_caps and self.k % GROWTH_CHECK_EVERY):
+        if self.reduction_growth is None or (at_caps and self.k % GROWTH_CHECK_EVERY) or (
+                not at_caps and self.k % GROWTH_CHECK_BELOW_CAPS):
             return Xr, float("nan")
         width = box.hi - box.lo
         floor = 1e-9 * np.maximum(1.0, np.abs(box.lo) + np.abs(box.hi))
