@@ -453,7 +453,7 @@ def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.fl
     if np.isfinite(h).all() and 0 < Z.n_con <= COMPILED_MAX_ROWS:
         from ..lp.fastlp import FixedStructureLP
 
-        R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h, Z.b_err)
+        R0_lo, R0_hi = _row_ranges(Z.A, Z.b, -h, h, Z.b_err)
         reach0 = np.maximum(-R0_lo, R0_hi)
         base = FixedStructureLP.bounded(Z.A, np.zeros((2, Z.n_gen)))
         state = None
@@ -547,8 +547,8 @@ PROPAGATION_SWEEPS: int = 10
 PROPAGATION_MOVE: float = 1e-3
 
 
-def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64] | None,
-                b: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64],
+def _row_ranges(A: NDArray[np.float64], b: NDArray[np.float64],
+                lo: NDArray[np.float64], hi: NDArray[np.float64],
                 b_err: NDArray[np.float64] | None = None
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """For every factor ``j``, the intersection over rows ``i`` (``A_ij != 0``) of the
@@ -558,8 +558,7 @@ def _row_ranges(A: NDArray[np.float64], absA: NDArray[np.float64] | None,
     rounding of the evaluation, ``2 gamma_(n_g + 8) (|b_i| + |A_i| (|m| + r)) / |A_ij|``
     (every term of the row's sums in any order, the exclusion of ``j`` and the division),
     the radius then scaled by ``1 + 4 u``, so that the ranges are outer in floating point
-    too. Compiled (:func:`setobs.geometry._propagation.row_ranges`; ``absA`` is not
-    needed)."""
+    too. Compiled (:func:`setobs.geometry._propagation.row_ranges`)."""
     return _prop.row_ranges(*_kernel_args(A, b, lo, hi, b_err))
 
 
@@ -689,7 +688,7 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int,
         bounded = np.isfinite(h) & (h > 0) & Z.A.any(axis=0)
         # the relaxed set stays bounded in xi_j iff some row bounds it by the other
         # factors' own bounds (one sweep from h), so only such factors are candidates
-        R0_lo, R0_hi = _row_ranges(Z.A, np.abs(Z.A), Z.b, -h, h)
+        R0_lo, R0_hi = _row_ranges(Z.A, Z.b, -h, h)
         cand = bounded & np.isfinite(R0_lo) & np.isfinite(R0_hi)
         E_lo, E_hi, R_lo, R_hi = propagated_factor_ranges(Z.A, Z.b, h, b_err=Z.b_err)
         # Scott et al.'s rescaling, symmetric (no recentring, so no rounding): the bounds
@@ -740,7 +739,7 @@ def _drop_bounds(Z: ConstrainedZonotope, score: NDArray[np.float64],
         if not (np.isfinite(h[j]) and h[j] > 0 and A[:, j].any()):
             continue
         rows = A[:, j] != 0.0  # (xi_j's one-sweep range: only the rows that hold it)
-        R0_lo, R0_hi = _row_ranges(A[rows], np.abs(A[rows]), b[rows], -h, h)
+        R0_lo, R0_hi = _row_ranges(A[rows], b[rows], -h, h)
         if not (np.isfinite(R0_lo[j]) and np.isfinite(R0_hi[j])):
             continue
         out = _drop_one(G, c, A, b, h, cerr, berr, j, budgets)

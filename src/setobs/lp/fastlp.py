@@ -453,7 +453,7 @@ class FixedStructureLP:
             g = np.asarray(gaps, dtype=np.float64)
             if g.shape != (self.n_lp // 2,) or not (np.isfinite(g).all() and (g >= 0).all()):
                 raise InvalidValueError(f"gaps must be {self.n_lp // 2} finite nonnegative "
-                                        "numbers (one per pair of objectives)")
+                                        f"numbers (one per pair of objectives), got {gaps!r}")
             # (the kernel's early stop is rel_gap times the pair's last width: a width of
             # exactly the gap, with rel_gap 1)
             st.bounds[:] = np.repeat(-0.5 * g, 2)

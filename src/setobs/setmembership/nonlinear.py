@@ -67,9 +67,10 @@ state, ``{M_A x + p_A : x in X, (M_A - M_B)_S x + p_A,S - p_B = 0}`` (both hold 
 true state, so their intersection does; :meth:`NonlinearSetObserver._intersected`), at
 the cost of a factor and a row per such row; the measurement likewise takes the other
 form's strip ``M_B,i x in y_i - offset_B,i - V_i - [-rad_B,i, rad_B,i]`` in such rows.
-Off by default: measured, it narrowed the held-out six tanks' bands by about 1 % and
-left the oscillator's and the Rego example's as they were, for up to twice the time
-per step.
+Off by default: measured (``benchmarks/results/nonlinear_set.json``, "intersected
+forms"), it narrows the held-out six tanks' bands by about 1 % and the Rego example's
+mean hull radius by 0.2 %, and leaves the oscillator's as it was, for up to twice the
+time per step.
 
 ``method="polyhedral"``: McCormick's relaxations of the factorable expression tree
 (one auxiliary variable per nonlinear node, its interval bounds over ``B`` and the
@@ -225,9 +226,7 @@ ELIMINATION_BATCH = 64
 #: The hulls of a step (the posterior's bands, and the reduced set's for the growth
 #: check) stop each LP within this fraction of its coordinate's width at the previous
 #: step (the unreduced set's, for the growth check): certified bounds, each band at most
-#: twice that wider than its exact hull. Measured on six tanks (64-row posteriors): the
-#: simplex iterations of a hull 650 -> 390 at 1e-3, the bands at most 0.2 % of their
-#: width wider.
+#: twice that wider than its exact hull.
 HULL_REL_GAP = 1e-3
 
 #: At the caps the sizes cannot grow: the reduction's growth of the hull (two LPs per
@@ -285,7 +284,6 @@ class _Map:
         self.hess = _Sparse(H, (self.m, self.n, self.n), variables)
         self._args = (exprs, zs, us)
         self._relax: Relaxation | None = None
-        self.last_forms: list[Any] = []
 
     @property
     def relaxation(self) -> Relaxation:
@@ -347,11 +345,12 @@ class _Map:
     def enclosure(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
                   u: NDArray[np.float64], forms: Sequence[str]
                   ) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64],
-                                   NDArray[np.float64]] | None, dict[str, str]]:
+                                   NDArray[np.float64]] | None, dict[str, str], list[Any]]:
         """The linear enclosure over the box from the ``forms``, row by row the one whose
         interval image of the box (``|M_i| r + rad_i``) is narrowest (each row holds
-        for every ``z`` in the box whichever form gave it), and the forms that failed
-        with why; ``None`` when none has an enclosure there."""
+        for every ``z`` in the box whichever form gave it; ``None`` when none has an
+        enclosure there), the forms that failed with why, and every form's own
+        enclosure (for their intersection, :func:`_second_form`)."""
         got, failed = [], {}
         lin_forms = [f for f in forms if f != "polyhedral"] or ["mean-value", "taylor"]
         if len(lin_forms) > 1:
@@ -371,47 +370,45 @@ class _Map:
                     share = rad / (np.abs(M) @ r + rad)
                 if np.nanmax(share, initial=0.0) <= AUTO_TAYLOR_SHARE:
                     break
-        self.last_forms = got  # (every form's enclosure: the intersection of the forms)
         if not got:
-            return None, failed
+            return None, failed, got
         if len(got) == 1:
-            return got[0], failed
-        return _rowwise(got, r)[0], failed
+            return got[0], failed, got
+        return _take(got, _narrowest(got, r)[0]), failed, got
 
 
-def _rowwise(got: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
-             r: NDArray[np.float64]) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64],
-                                                    NDArray[np.float64]], NDArray[np.int64],
-                                              NDArray[np.float64]]:
-    """Row by row the enclosure of ``got`` whose interval image of the box (radius
-    ``r``) is narrowest: ``((M, offset, rad), pick, widths)``."""
+def _narrowest(got: list[Any], r: NDArray[np.float64]
+               ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Row by row the index of the enclosure of ``got`` whose interval image of the box
+    (radius ``r``: ``|M_i| r + rad_i``) is narrowest, and every form's widths."""
     width = np.array([np.abs(M) @ r + rad for M, _, rad in got])
-    pick = np.argmin(width, axis=0)
-    rows = np.arange(width.shape[1])
-    M = np.array([got[pick[i]][0][i] for i in rows]).reshape(width.shape[1], -1)
+    return np.argmin(width, axis=0), width
+
+
+def _take(got: list[Any], pick: NDArray[np.int64]) -> tuple[
+        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``(M, offset, rad)`` with row ``i`` from the enclosure ``got[pick[i]]``."""
+    rows = np.arange(pick.size)
+    M = np.array([got[pick[i]][0][i] for i in rows]).reshape(pick.size, -1)
     offset = np.array([got[pick[i]][1][i] for i in rows])
     rad = np.array([got[pick[i]][2][i] for i in rows])
-    return (M, offset, rad), pick, width
+    return M, offset, rad
 
 
 def _second_form(lin: Any, forms: list[Any], box: Box) -> tuple[
         NDArray[np.int64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """The rows ``S`` where the form not picked row by row (``lin``: the narrower) is at
-    most :data:`INTERSECT_RATIO` times as wide over the box and differs in slope
-    (``|M_A,i - M_B,i| r`` above :data:`INTERSECT_SLOPE` of the smaller remainder), and
-    that form's ``(M_B, offset_B, rad_B)`` in every row."""
+    """The rows ``S`` where the form not picked row by row (``lin``: the narrower, from
+    two ``forms``) is at most :data:`INTERSECT_RATIO` times as wide over the box and
+    differs in slope (``|M_A,i - M_B,i| r`` above :data:`INTERSECT_SLOPE` of the smaller
+    remainder), and that form's ``(M_B, offset_B, rad_B)`` in every row."""
     M, _, rad = lin
     _, r = box_center_radius(box.lo, box.hi)
-    width = np.array([np.abs(Mf) @ r + rf for Mf, _, rf in forms])
-    pick = np.argmin(width, axis=0)  # (as in lin: the form not picked is the other)
+    pick, width = _narrowest(forms, r)  # (as in lin: the form not picked is the other)
     other = 1 - pick
-    rows = np.arange(M.shape[0])
-    MB = np.array([forms[other[i]][0][i] for i in rows]).reshape(M.shape)
-    oB = np.array([forms[other[i]][1][i] for i in rows])
-    rB = np.array([forms[other[i]][2][i] for i in rows])
+    MB, oB, rB = _take(forms, other)
+    rows = np.arange(pick.size)
     slope = np.abs(M - MB) @ r
-    own = np.abs(M) @ r + rad
-    S = np.flatnonzero((width[other, rows] <= INTERSECT_RATIO * own)
+    S = np.flatnonzero((width[other, rows] <= INTERSECT_RATIO * width[pick, rows])
                        & (slope > INTERSECT_SLOPE * np.minimum(rad, rB)))
     return S, MB, oB, rB
 
@@ -506,11 +503,10 @@ class NonlinearSetObserver:
     intersect_forms : bool
         With ``method="auto"``: the prediction intersects the mean-value and Taylor
         forms for the same state (:meth:`_intersected`) in the rows where both are of
-        comparable width and slope, instead of keeping the narrower alone. Off by
-        default: measured (``benchmarks/results/nonlinear_set.json``, "intersected
-        forms") it narrows the held-out six tanks' bands by about 1 %, leaves the
-        oscillator's and the Rego example's unchanged, and costs up to twice the time
-        per step.
+        comparable width and slope, instead of keeping the narrower alone, and the
+        measurement takes both forms' strips there. Off by default: what it buys and
+        costs is in the module docstring ("The default, and the polyhedral
+        relaxation").
     dt : float, optional
         Sampling time (the results' time axis).
 
@@ -613,7 +609,7 @@ class NonlinearSetObserver:
         if not fixed and not (0.0 < float(reduction_growth) < np.inf):
             raise InvalidValueError("reduction_growth must be a positive fraction or None, "
                                     f"got {reduction_growth!r}")
-        self.intersect_forms = bool(intersect_forms)
+        self.intersect_forms = bool(intersect_forms) and method == "auto"
         self.max_generators, self.max_constraints = g_cap, c_cap
         self.reduction_growth = None if fixed else float(reduction_growth)
         self._start_sizes = (g_cap, c_cap) if fixed else (min(g0, g_cap), min(c0, c_cap))
@@ -819,7 +815,7 @@ class NonlinearSetObserver:
         :data:`POLYHEDRAL_MAX_DIM` dimensions while the linear forms' remainder is more
         than :data:`POLYHEDRAL_SHARE` of some row's interval image of the box (a large box
         on a curved ``g``: the first steps from a wide initial set). With it, the linear
-        enclosure ``(lin, failed)`` when the decision computed it (else ``None``), for
+        enclosure ``(lin, failed, forms)`` when the decision computed it (else ``None``), for
         the linear path to reuse."""
         if g.affine or self.method not in ("auto", "polyhedral"):
             return False, None
@@ -852,8 +848,8 @@ class NonlinearSetObserver:
                         ) -> tuple[ConstrainedZonotope, str]:
         """:meth:`_measure` by the linear forms (``enc``: their enclosure over the box,
         when already computed)."""
-        lin, failed = enc if enc is not None else self._h.enclosure(box.lo, box.hi, uv,
-                                                                    self.forms)
+        lin, failed, forms = enc if enc is not None else self._h.enclosure(
+            box.lo, box.hi, uv, self.forms)
         if lin is None:
             self._h.enclose(box.lo, box.hi, uv)  # (raises where h itself is undefined)
             return X, ("h has no linear enclosure over the box (" + "; ".join(
@@ -861,8 +857,7 @@ class NonlinearSetObserver:
         M, offset, rad = lin
         # M x in y - offset - V - [-rad, rad]
         X = X.intersect(self._observed(yv, msk, offset, rad), M[msk])
-        forms = self._h.last_forms
-        if self.intersect_forms and self.method == "auto" and len(forms) == 2:
+        if self.intersect_forms and len(forms) == 2:
             # the other form's strips too, in the rows where it can pay (both hold at the
             # true state; the noise enters each strip whole, so the pair is sound)
             S, MB, oB, rB = _second_form(lin, forms, box)
@@ -886,10 +881,10 @@ class NonlinearSetObserver:
                     poly_note = (f"f's polyhedral relaxation failed ({exc}); the linear "
                                  "forms carry")
         if poly is not None:
-            lin, failed = None, {}
+            lin, failed, forms = None, {}, []
         else:
-            lin, failed = enc if enc is not None else self._f.enclosure(box.lo, box.hi, uv,
-                                                                        self.forms)
+            lin, failed, forms = enc if enc is not None else self._f.enclosure(
+                box.lo, box.hi, uv, self.forms)
         try:
             f_lo, f_hi = self._f.enclose(box.lo, box.hi, uv)
         except DomainError as exc:  # (a pole in the box: the natural form has no bound)
@@ -924,12 +919,12 @@ class NonlinearSetObserver:
         else:
             M, offset, rad = lin
             lo, hi, img = _image_box(M, offset, rad, box.lo, box.hi, f_lo, f_hi)
-            Xp = self._intersected(X, box, lin, self._f.last_forms)
+            Xp = self._intersected(X, box, lin, forms)
             if Xp is None:
                 Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
                                                             round_up(offset + rad))
             else:  # (each form's image box holds f(x) for x in the box: their meet too)
-                for M2, off2, rad2 in self._f.last_forms:
+                for M2, off2, rad2 in forms:
                     lo2, hi2, _ = _image_box(M2, off2, rad2, box.lo, box.hi, f_lo, f_hi)
                     lo, hi = np.maximum(lo, lo2), np.minimum(hi, hi2)
             Xp = self._cut(Xp, img, f_lo, f_hi)
@@ -950,7 +945,7 @@ class NonlinearSetObserver:
         Both forms hold at the true state (in the box), so the truth satisfies the
         coupling; the difference ``D = fl(M_A - M_B)`` carries its rounding as a band
         ``|D| |x|_max u`` (``|x| <= max(|lo|, |hi|)`` on the box) on the rows."""
-        if not self.intersect_forms or self.method != "auto" or len(forms) != 2:
+        if not self.intersect_forms or len(forms) != 2:
             return None
         M, offset, rad = lin
         S, MB, oB, rB = _second_form(lin, forms, box)
