@@ -564,14 +564,12 @@ def _row_ranges(A: NDArray[np.float64], b: NDArray[np.float64],
 
 def _kernel_args(A, b, lo, hi, b_err):
     A = np.ascontiguousarray(A, dtype=np.float64)
-    be = _NO_ERR if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
+    be = np.zeros(0) if b_err is None else np.ascontiguousarray(b_err, dtype=np.float64)
     return (A, np.ascontiguousarray(b, dtype=np.float64),
             np.ascontiguousarray(lo, dtype=np.float64),
             np.ascontiguousarray(hi, dtype=np.float64), be,
             2.0 * gamma(A.shape[1] + 8), 1.0 + 4.0 * UNIT_ROUNDOFF)
 
-
-_NO_ERR = np.zeros(0)
 
 
 def propagated_factor_ranges(A: ArrayLike, b: ArrayLike, h: ArrayLike,
