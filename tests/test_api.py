@@ -340,19 +340,44 @@ def test_dimension_error_is_only_for_shapes(tmp_path):
     assert dimension_errors_about_values(tmp_path) == ["x.py:2: x must be positive, got "]
 
 
+def code_lines(text: str, node: ast.ClassDef | ast.FunctionDef) -> int:
+    """The lines of ``node`` that hold code: docstrings, comments and blank lines do not
+    count (a class may grow its documentation, not its logic)."""
+    docs: set[int] = set()
+    for inner in ast.walk(node):
+        body = getattr(inner, "body", None)
+        if (isinstance(inner, ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef) and body
+                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
+                and isinstance(body[0].value.value, str)):
+            docs.update(range(body[0].lineno, body[0].end_lineno + 1))
+    lines = text.splitlines()
+    return sum(1 for i in range(node.lineno, node.end_lineno + 1)
+               if i not in docs and lines[i - 1].strip()
+               and not lines[i - 1].lstrip().startswith("#"))
+
+
+def test_code_lines_skip_docstrings_comments_and_blanks():
+    text = ('class K:\n    """Doc.\n\n    More.\n    """\n\n    # note\n    def f(self):\n'
+            '        """One."""\n        return 1\n')
+    node = ast.parse(text).body[0]
+    assert code_lines(text, node) == 3  # class K:, def f, return 1
+
+
 def test_setmembership_is_composed_not_inherited():
     """No class in ``setmembership/`` has more than one base, and :class:`setobs.SMFDO`
-    (the loop over its engines, the public interface) stays under 400 lines."""
+    (the loop over its engines, the public interface) stays under 250 lines of code
+    (docstrings and comments not counted)."""
     bad, smfdo_lines = [], None
-    for path in sorted((SRC / "setmembership").glob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text())):
+    for path in sorted((SRC / "setmembership").rglob("*.py")):
+        text = path.read_text()
+        for node in ast.walk(ast.parse(text)):
             if isinstance(node, ast.ClassDef):
                 if len(node.bases) > 1:
                     bad.append(f"{path.name}: {node.name}")
                 if node.name == "SMFDO":
-                    smfdo_lines = node.end_lineno - node.lineno + 1
+                    smfdo_lines = code_lines(text, node)
     assert bad == []
-    assert smfdo_lines is not None and smfdo_lines < 400
+    assert smfdo_lines is not None and smfdo_lines < 250
 
 
 def test_the_smfdo_model_is_frozen_and_steps_leave_it_alone():

@@ -9,6 +9,7 @@ Algorithms*, 2nd ed., SIAM 2002, Lemma 3.1 and eq. (3.4)).
 from __future__ import annotations
 
 import math
+from typing import overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -36,6 +37,14 @@ def gamma(k: int) -> float:
     return k * UNIT_ROUNDOFF / (1.0 - k * UNIT_ROUNDOFF)
 
 
+@overload
+def round_up(x: float) -> float: ...
+
+
+@overload
+def round_up(x: NDArray[np.float64]) -> NDArray[np.float64]: ...
+
+
 def round_up(x: ArrayLike) -> NDArray[np.float64] | float:
     """The next floating-point number above ``x`` (elementwise; a float for a scalar).
 
@@ -51,6 +60,14 @@ def round_up(x: ArrayLike) -> NDArray[np.float64] | float:
     """
     out = np.nextafter(x, np.inf)
     return float(out) if np.ndim(out) == 0 else out
+
+
+@overload
+def round_down(x: float) -> float: ...
+
+
+@overload
+def round_down(x: NDArray[np.float64]) -> NDArray[np.float64]: ...
 
 
 def round_down(x: ArrayLike) -> NDArray[np.float64] | float:

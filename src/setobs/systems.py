@@ -130,6 +130,16 @@ class LinearSystem:
         "output_names",
         "state_names",
     )
+    Du: NDArray[np.float64]
+    G: NDArray[np.float64]
+    Gamma: NDArray[np.float64]
+    Phi: NDArray[np.float64]
+    Xi: NDArray[np.float64]
+    disturbance_names: tuple[str, ...]
+    dt: float | None
+    input_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    state_names: tuple[str, ...]
 
     def __init__(
         self,

@@ -260,6 +260,7 @@ class ConstrainedZonotope:
     """
 
     __slots__ = ("_A", "_G", "_b", "_berr", "_c", "_cache", "_cerr", "_h", "unbounded_radius")
+    unbounded_radius: float
     __array_ufunc__ = None  # so that ndarray @ Z calls Z.__rmatmul__
 
     def __init__(
@@ -764,7 +765,7 @@ class ConstrainedZonotope:
             self._cerr, berr, "generalised intersection",
         )
 
-    def project(self, dims: Sequence[int]) -> ConstrainedZonotope:
+    def project(self, dims: Sequence[int] | NDArray[np.integer]) -> ConstrainedZonotope:
         """Projection onto the coordinates ``dims`` (in that order).
 
         Parameters

@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,7 +64,9 @@ from ..tolerances import (
     UNBOUNDED_RADIUS,
 )
 from . import highs
-from .highs import highspy
+
+if TYPE_CHECKING:
+    from highspy import Highs as HighsModel
 
 __all__ = ["EmptinessReport", "FactorPolytope", "LPResult"]
 
@@ -300,7 +303,7 @@ class FactorPolytope:
         self._csc: tuple | None = None  # (A column by column, for the certificate)
         self._neg_h = -h
         self._pivot: tuple | None = None  # (see _free_pivot)
-        self._model: highspy.Highs | None = None
+        self._model: HighsModel | None = None
         self._emptiness: dict[float, EmptinessReport] = {}
         self._lock = threading.RLock()
         self.fallbacks = 0
@@ -342,22 +345,25 @@ class FactorPolytope:
         return w + np.where(self._unb, 0.0, self.PERTURBATION * max(mag, 1e-300) * u)
 
     def _build(self, row_lo, row_hi, cost, options: dict[str, object] | None = None
-               ) -> highspy.Highs | None:
+               ) -> HighsModel | None:
         """A HiGHS model of ``min cost^T xi, row_lo <= A xi <= row_hi, |xi| <= h``."""
         hs = highs.new_model(options)
         lo, up = self._col_bounds()
         return hs if highs.pass_dense(hs, self.A, lo, up, row_lo, row_hi, cost) else None
 
-    def highs_model(self) -> highspy.Highs | None:
+    def highs_model(self) -> HighsModel | None:
         if self._model is None:
             self._model = self._build(self.b, self.b, np.zeros(self.n_g))
         return self._model
 
     def _pinv(self) -> NDArray[np.float64]:
-        if self._unb_pinv is None:
+        pinv = self._unb_pinv
+        if pinv is None:
             Au = self.A[:, self._unb]
-            self._unb_pinv = np.linalg.pinv(Au.T) if self.n_c else np.zeros((0, Au.shape[1]))
-        return self._unb_pinv
+            pinv = np.asarray(np.linalg.pinv(Au.T) if self.n_c else np.zeros((0, Au.shape[1])),
+                              dtype=np.float64)
+            self._unb_pinv = pinv
+        return pinv
 
     # -- queries -----------------------------------------------------------
     def certify(
@@ -438,7 +444,7 @@ class FactorPolytope:
             return 1.0
         return float(np.ldexp(1.0, np.frexp(m)[1]))
 
-    def solve_objective(self, hs: highspy.Highs, w: NDArray[np.float64], scale: float):
+    def solve_objective(self, hs: HighsModel, w: NDArray[np.float64], scale: float):
         """Run HiGHS on objective ``w / scale``; return the outcome
         (:func:`setobs.lp.highs.status`).
 
@@ -527,7 +533,8 @@ class FactorPolytope:
         for i, options in enumerate(attempts):
             perturbed = options == "perturbed"
             hs = self.highs_model() if i == 0 else self._build(
-                self.b, self.b, np.zeros(self.n_g), None if perturbed else options)
+                self.b, self.b, np.zeros(self.n_g),
+                None if perturbed or isinstance(options, str) else options)
             if hs is None:
                 continue
             st = self.solve_objective(hs, self.perturbed_objective(w) if perturbed else w, scale)
@@ -755,6 +762,8 @@ class FactorPolytope:
         """
         unb = self._unb
         be = self.b_err
+        if be is None:  # exact rows: minimize_within_b_err's other paths decide
+            return None
         Au, Ab = self.A[:, unb], self.A[:, ~unb]
         Ur, Sr, Vr, N, xi0, r0, A2, b2, pos = self._free_pivot()
         wu = w[unb]
@@ -931,7 +940,8 @@ class FactorPolytope:
             found = rep.violation_found if np.isfinite(rep.violation_found) else 1.0
             delta = self._row_scale() * max(2.0 * found, 2.0 * rep.tol)
             scale = self.objective_scale(w)
-            y = None
+            y: NDArray[np.float64] | None = None
+            x: NDArray[np.float64] | None = None
             for options in (None, *highs.RETRY_SETTINGS):
                 hs = self._build(self.b - delta, self.b + delta, w / scale, options)
                 if hs is None:

@@ -349,16 +349,22 @@ def step_geometry(V: NDArray[np.float64], A_o: NDArray[np.float64], shift: NDArr
     P = V @ A_o.T + shift
     for W in images:
         P = (P[:, None, :] + W[None, :, :]).reshape(-1, N)
-        if P.shape[0] > 256 and (P := pruned(P)) is None:
-            return None
+        if P.shape[0] > 256:
+            kept = pruned(P)
+            if kept is None:
+                return None
+            P = kept
     for i, (a, b, eq) in enumerate(clips):
         P = clip(P, a, b, eq)
         if P.shape[0] == 0 or P.shape[0] > MAX_CLIP_POINTS:
             # (too many: every inside-outside pair gives a point, and the hull of
             # thousands of points in 7 dimensions took Qhull 15 s and 7e5 facets)
             return None
-        if i < len(clips) - 1 and P.shape[0] > 8 * N and (P := pruned(P)) is None:
-            return None
+        if i < len(clips) - 1 and P.shape[0] > 8 * N:
+            kept = pruned(P)
+            if kept is None:
+                return None
+            P = kept
     out = hull_points(P)
     if out is None:
         return None

@@ -218,9 +218,10 @@ class Relaxation:
                 z = (unit[self.aux_of[j]], 0.0, 0.0)
                 self._univariate(row, z, t, tL, tU, phi, dphi, conv, nd[1])
                 forms.append(z)
-        P = np.array([forms[o][0] for o in self.outputs]).reshape(len(self.outputs), V)
-        q = np.array([forms[o][1] for o in self.outputs])
-        r = np.array([forms[o][2] for o in self.outputs])
+        P = np.array([forms[o][0] for o in self.outputs],
+                     dtype=np.float64).reshape(len(self.outputs), V)
+        q_out = np.array([forms[o][1] for o in self.outputs], dtype=np.float64)
+        r_out = np.array([forms[o][2] for o in self.outputs], dtype=np.float64)
         aux_lo, aux_hi = L[self.N:], U[self.N:]
         Xl = X.cartesian(ConstrainedZonotope.from_box(aux_lo, aux_hi)) if self.n_aux else X
         if rows:
@@ -234,7 +235,7 @@ class Relaxation:
             if keep.any():
                 low = np.minimum(low[keep], beta[keep])
                 Xl = Xl.intersect(ConstrainedZonotope.from_box(low, beta[keep]), R[keep])
-        return Xl, P, q, r, L, U
+        return Xl, P, q_out, r_out, L, U
 
     @staticmethod
     def _univariate(row, z: _Form, t: _Form, tL: float, tU: float, phi: IntervalFunction,

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..exceptions import SkipLimitError
 from ..geometry import Box, ConstrainedZonotope
+from ..lp.fastlp import LPState
 from ._history import HistoryLP
 from ._hrep import HState
 
@@ -91,7 +92,7 @@ class SMFDOState:
         self.from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
         self.windowing = False  # the window has restarted from a hull at least once
         self.u_pending: NDArray[np.float64] | None = None
-        self.states: dict[tuple, object] = {}  # LP warm-start states, one per structure
+        self.states: dict[tuple, LPState] = {}  # LP warm-start states, one per structure
         self.retired_iterations = np.zeros(2, dtype=np.int64)  # (of dropped states)
         self.mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
         self.depth = 0  # recursion steps since the start set of the current posterior

@@ -214,7 +214,7 @@ class WindowModel:
         kappa_sum_abs = np.zeros(N)
         row = self.nS_rows
         v_col = n_x
-        if nV:
+        if noise is not None and nV:
             GV, AV, cV = noise.G, noise.A, noise.c
             cV_e = noise.c_err
         y_sel: list[bool] = []
@@ -225,7 +225,7 @@ class WindowModel:
             m = int(mask.sum())
             if not m:
                 return
-            if nV:
+            if noise is not None and nV:
                 if AV.shape[0]:
                     Arow = np.zeros((AV.shape[0], n_g))
                     Arow[:, v_col:v_col + nV] = AV
@@ -309,8 +309,8 @@ class WindowModel:
         self._c_abs_err = kappa_e
         # Depth of the products (s steps of N-term sums, plus assembly) for gamma.
         self._gK = model_rtol(s, N, p, nD + nV)
-        self.h_D = np.concatenate([np.tile(increment.h, s),
-                                   np.tile(noise.h, n_noisy) if nV else np.zeros(0)])
+        noise_h = np.tile(noise.h, n_noisy) if noise is not None and nV else np.zeros(0)
+        self.h_D = np.concatenate([np.tile(increment.h, s), noise_h])
         self.free = np.concatenate([np.asarray(free_S, dtype=bool), np.isinf(self.h_D)])
         W = self.G if P is None else np.vstack([self.G, P @ self.G])
         self.n_dir = W.shape[0]

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -165,7 +165,8 @@ class NoiseCalibration:
     @property
     def active_times(self) -> NDArray[np.float64] | None:
         """Times ``k dt`` of :attr:`active_samples` (``None`` without a sampling time)."""
-        return None if self.dt is None else self.active_samples * self.dt
+        return (None if self.dt is None
+                else np.asarray(self.active_samples * self.dt, dtype=np.float64))
 
     def describe(self) -> str:
         """What the calibration found, in words (the CLI prints it): the part of the
@@ -317,7 +318,7 @@ class _RecordLP:
         self.nx = nx
         # ---- outputs: residual r_k = y_k - Du u_k - Xi x_k for measured entries
         feed = U is not None and sys.p and np.any(sys.Du != 0)
-        Yc = Y - (U[:N] @ sys.Du.T if feed else 0.0)
+        Yc = Y - (U[:N] @ sys.Du.T if feed and U is not None else 0.0)
         mask = np.isfinite(Yc)
         kk, ii = np.nonzero(mask)
         self.kk, self.ii = kk, ii
@@ -443,6 +444,18 @@ class _RecordLP:
         first = self._chain(A, b, c, m_eq, weights, per_channel, time_limit, self.yout,
                             free=free)
         return self._refine(first, A, b, c, m_eq, weights, per_channel, time_limit, free)
+
+    @overload
+    def _chain(self, A, b: NDArray, c: NDArray, m_eq: int, weights: NDArray,
+               per_channel: bool, time_limit: float, yout: NDArray,
+               raise_on_failure: Literal[True] = ..., free: NDArray | None = None
+               ) -> _LPSolution: ...
+
+    @overload
+    def _chain(self, A, b: NDArray, c: NDArray, m_eq: int, weights: NDArray,
+               per_channel: bool, time_limit: float, yout: NDArray,
+               raise_on_failure: bool = ..., free: NDArray | None = None
+               ) -> _LPSolution | None: ...
 
     def _chain(self, A, b: NDArray, c: NDArray, m_eq: int, weights: NDArray,
                per_channel: bool, time_limit: float, yout: NDArray,
@@ -897,7 +910,8 @@ def calibrate_noise(sys: LinearSystem, Y: ArrayLike, U: ArrayLike | None = None,
         Yw = np.where(ignore[:, None], np.nan, Ya)
         lp = _RecordLP(sys, Yw, Ua, w)
         fixed = np.where(lp.kk < split, minimal[lp.ii] / lp.sigma, np.nan)
-        lower = minimal / lp.sigma if per_channel else np.array([scale * wmax / lp.sigma])
+        lower = (minimal / lp.sigma if per_channel or scale is None
+                 else np.array([scale * wmax / lp.sigma]))
         res = lp.solve(inc, r_v, per_channel, limit, fixed=fixed, lower=lower)
         validated = np.maximum(minimal, radii_of(lp, res))
         # within the LP's accuracy of minimal: no margin (the radii are checked below)
@@ -989,7 +1003,7 @@ def _split(Y: NDArray[np.float64], holdout: float) -> int | None:
         return None
     N = Y.shape[0]
     split = max(1, min(int(np.ceil((1.0 - h) * N)), N - 1))  # (both parts nonempty)
-    meas = np.isfinite(Y).any(axis=1)
+    meas = np.asarray(np.isfinite(Y).any(axis=1))
     if N < 2 or not meas[:split].any() or not meas[split:].any():
         raise InvalidValueError(
             f"holdout={holdout!r} leaves no measured sample in one of the parts of a "

@@ -606,12 +606,13 @@ class NonlinearSetObserver:
         if g_cap < N or c_cap < 0:
             raise InvalidValueError(f"max_generators must be at least {N} and "
                                     f"max_constraints nonnegative, got {g_cap} and {c_cap}")
-        if not fixed and not (0.0 < float(reduction_growth) < np.inf):
+        if reduction_growth is not None and not (0.0 < float(reduction_growth) < np.inf):
             raise InvalidValueError("reduction_growth must be a positive fraction or None, "
                                     f"got {reduction_growth!r}")
         self.intersect_forms = bool(intersect_forms) and method == "auto"
         self.max_generators, self.max_constraints = g_cap, c_cap
-        self.reduction_growth = None if fixed else float(reduction_growth)
+        self.reduction_growth = (None if reduction_growth is None
+                                 else float(reduction_growth))
         self._start_sizes = (g_cap, c_cap) if fixed else (min(g0, g_cap), min(c0, c_cap))
         self.dt = dt
         self.reset()
@@ -693,7 +694,7 @@ class NonlinearSetObserver:
         yv = as_vector("y", y, size=self.l, allow_nan=True)
         if self.p and u is None:
             raise ArgumentError(f"u is required: the model has {self.p} inputs")
-        uv = as_vector("u", u, size=self.p) if self.p else np.zeros(0)
+        uv = as_vector("u", u, size=self.p) if self.p and u is not None else np.zeros(0)
         try:
             return self._advance(yv, uv)
         except (MagnitudeError, InvalidValueError) as exc:
@@ -919,11 +920,12 @@ class NonlinearSetObserver:
         else:
             M, offset, rad = lin
             lo, hi, img = _image_box(M, offset, rad, box.lo, box.hi, f_lo, f_hi)
-            Xp = self._intersected(X, box, lin, forms)
-            if Xp is None:
+            meet = self._intersected(X, box, lin, forms)
+            if meet is None:
                 Xp = (M @ X) + ConstrainedZonotope.from_box(round_down(offset - rad),
                                                             round_up(offset + rad))
             else:  # (each form's image box holds f(x) for x in the box: their meet too)
+                Xp = meet
                 for M2, off2, rad2 in forms:
                     lo2, hi2, _ = _image_box(M2, off2, rad2, box.lo, box.hi, f_lo, f_hi)
                     lo, hi = np.maximum(lo, lo2), np.minimum(hi, hi2)
