@@ -29,6 +29,8 @@ import setobs as so
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.datasets import HSM150  # (the data stay outside the package)
 
+from _common import stamp
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -78,7 +80,7 @@ def main() -> None:
                                   "increment_Nm": float(2 * Mn), "seconds": round(t_curve, 3)},
     }
     path = Path(__file__).parent / "results" / "calibration.json"
-    path.write_text(json.dumps(out, indent=2) + "\n")
+    path.write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"wrote {path}")
 
 

@@ -29,6 +29,8 @@ import sys
 import time
 from pathlib import Path
 
+from _common import stamp
+
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
@@ -118,7 +120,7 @@ def main() -> None:
                       f"it {row['simplex_iterations_per_step']:8.0f}{extra}", flush=True)
     out = {"rows": rows, "machine": platform.platform(), "python": platform.python_version()}
     path = HERE / "results" / "chain_ab.json"
-    path.write_text(json.dumps(out, indent=1))
+    path.write_text(json.dumps({**stamp(), **out}, indent=1))
     print(f"wrote {path}")
 
 

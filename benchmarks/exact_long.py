@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from tests.oracles import history_lp_highs
 
 import setobs as so
-from _common import linprog_unit
+from _common import linprog_unit, stamp
 from setobs.lp import highs
 from state_estimation import noise_model, record, tanks_outputs
 
@@ -123,7 +123,7 @@ def main() -> None:
                   flush=True)
     highs.solve = plain
     out = summary(steps, X, lo, hi, obs, unit, checks, N)
-    Path(args.out).write_text(json.dumps(out, indent=1))
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=1))
     print(json.dumps({k: v for k, v in out.items() if k != "per_step"}, indent=1))
 
 

@@ -42,6 +42,8 @@ import sys
 import time
 from pathlib import Path
 
+from _common import stamp
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -250,7 +252,7 @@ def main() -> None:
                            "k10000": hrec["ms_per_update"].get("10000", 1e9) <= 0.5,
                            "campaign": camp["extrapolated_5000_runs_min"] <= 5},
            "blas_timings_k_le_150": rows, "posterior_set_representation": size_rows}
-    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -47,7 +47,7 @@ _sys.path.insert(0, str(HERE))
 from tests.oracles import solve_state_history_lp, state_history_lp  # noqa: E402
 
 import setobs as so  # noqa: E402
-from _common import state_bands  # noqa: E402
+from _common import stamp, state_bands  # noqa: E402
 from state_estimation import random_system, record, two_mass, vehicle  # noqa: E402
 
 CHECK = (30, 60, 120, 180, 239)
@@ -121,7 +121,7 @@ def main() -> None:
                                       for r in s["checked"]) for s in systems),
            "machine": platform.machine(), "python": platform.python_version(),
            "setobs": so.__version__}
-    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print("targets met:", out["targets_met"])
 
 

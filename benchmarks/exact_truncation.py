@@ -42,6 +42,7 @@ import scipy.sparse as sp
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+from _common import stamp  # noqa: E402
 from state_estimation import record, tanks_outputs  # noqa: E402
 
 TOL = 1e-10
@@ -187,7 +188,7 @@ def main() -> None:
         history_lp(A, B, C, rw, rv, U, Y, 0, k, *box)[0].shape),
         "exact_iterations_cold_chain": its_k, "mean_exact_width": float(width.mean()),
         "rows": rows}
-    Path(args.out).write_text(json.dumps(out, indent=1))
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=1))
     print(json.dumps(out, indent=1))
 
 

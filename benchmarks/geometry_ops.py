@@ -49,7 +49,7 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
-from _common import linprog_unit, make_cz, timeit
+from _common import linprog_unit, make_cz, stamp, timeit
 from setobs import ConstrainedZonotope
 from setobs.geometry import (
     compiled_set_operations,
@@ -178,7 +178,7 @@ def main() -> None:
         result = json.loads(Path(args.out).read_text())
         result["peers"] = peers
         result["setobs"] = setobs.__version__
-        Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
+        Path(args.out).write_text(json.dumps({**stamp(), **result}, indent=2) + "\n")
         print(f"wrote {args.out}")
         return
     rows = []
@@ -240,7 +240,7 @@ def main() -> None:
         "peers": peers,
     }
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **result}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -25,6 +25,8 @@ import tempfile
 from io import BytesIO
 from pathlib import Path
 
+from _common import stamp
+
 ROOT = Path(__file__).resolve().parents[1]
 HEAVY = ["numba", "llvmlite", "highspy", "cdd", "cvxpy", "clarabel", "pandas", "tqdm", "yaml",
          "matplotlib", "scipy.signal", "scipy.optimize", "scipy.spatial", "scipy.stats",
@@ -95,7 +97,7 @@ def main() -> None:
             res["before"] = {"revision": args.before, **measure(Path(tmp) / "src", args.repeat)}
         res["speedup"] = res["before"]["median_s"] / res["after"]["median_s"]
     path = ROOT / "benchmarks" / "results" / "import_time.json"
-    path.write_text(json.dumps(res, indent=2) + "\n")
+    path.write_text(json.dumps({**stamp(), **res}, indent=2) + "\n")
     print(json.dumps(res, indent=2))
 
 

@@ -30,7 +30,7 @@ import cvxpy as cp
 import numpy as np
 
 import setobs
-from _common import hull_cvxpy, make_cz, timeit
+from _common import hull_cvxpy, make_cz, stamp, timeit
 from setobs import ConstrainedZonotope
 
 SIZES = [(5, 45, 40), (5, 100, 90), (10, 200, 150)]
@@ -80,7 +80,7 @@ def main() -> None:
         "results": rows,
     }
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **result}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -27,6 +27,7 @@ from pathlib import Path
 import sympy as sp
 
 import setobs
+from _common import stamp
 from setobs.analysis.modular import design_modular
 from setobs.examples import modular_example
 from setobs.nonlinear import NonlinearSystem
@@ -110,7 +111,7 @@ def main() -> None:
         "steps": steps,
     }
     path = Path(__file__).parent / "results" / "nonlinear_observer.json"
-    path.write_text(json.dumps(out, indent=2) + "\n")
+    path.write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"wrote {path}")
 
 

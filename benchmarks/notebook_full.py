@@ -26,6 +26,8 @@ from pathlib import Path
 import nbclient
 import nbformat
 
+from _common import stamp
+
 ROOT = Path(__file__).resolve().parents[1]
 CELL_BUDGET = 600.0  # seconds: tests/test_notebooks.py's cell timeout
 
@@ -72,7 +74,7 @@ def main() -> None:
         "date": time.strftime("%Y-%m-%d"),
     }
     path = ROOT / "benchmarks" / "results" / f"notebook_{src.stem[:2]}_full.json"
-    path.write_text(json.dumps(out, indent=2) + "\n")
+    path.write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"total {total:.1f} s -> {path.relative_to(ROOT)}")
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import setobs as so
+from _common import stamp
 
 
 def main() -> None:
@@ -27,7 +28,8 @@ def main() -> None:
     md = so.compare.compare(est, ref).to_markdown(start=10)
     print(md)
     out = Path(__file__).parent / "results" / "observer_comparison.md"
-    out.write_text(md + "\n")
+    st = stamp()
+    out.write_text(f"<!-- commit {st['commit']}, {st['date']} -->\n" + md + "\n")
     print(f"wrote {out}")
 
 

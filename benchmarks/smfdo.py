@@ -28,7 +28,7 @@ import numpy as np
 import setobs as so
 
 _sys.path.insert(0, str(Path(__file__).resolve().parent))  # (also when imported by tests)
-from _common import linprog_unit
+from _common import linprog_unit, stamp
 
 
 def data(N: int, seed: int = 0):
@@ -97,7 +97,7 @@ def main() -> None:
            "increment": "|dd_i| <= 1", "setobs": so.__version__, "targets": targets,
            "python": platform.python_version(), "machine": platform.machine(),
            "cpus": os.cpu_count(), "results": rows}
-    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 import setobs as so
-from _common import hull_cvxpy
+from _common import hull_cvxpy, stamp
 from setobs.lp.fastlp import FixedStructureLP, hull_objectives
 from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign
 
@@ -152,7 +152,7 @@ def main() -> None:
         "hull_speedup": res["hull_PZ_delta10"]["speedup_vs_highspy"] >= 20,
         "campaign": camp["delta=10"]["extrapolated_5000_runs_min"] <= 2}
     print(json.dumps(res, indent=2))
-    Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **res}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

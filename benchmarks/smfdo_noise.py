@@ -35,6 +35,8 @@ import setobs as so
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.datasets import HSM150  # (the data stay outside the package)
 
+from _common import stamp
+
 
 def timed_run(obs, Y, U):
     t0 = time.perf_counter()
@@ -97,7 +99,7 @@ def main() -> None:
     out = {"benchmark": "smfdo_noise", "record": "HSM150 idf_pos_0.06_1 (1 kHz, 20 000)",
            "window": 10, "setobs": so.__version__, "python": platform.python_version(),
            "machine": platform.machine(), "cpus": os.cpu_count(), "results": rows}
-    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -55,7 +55,7 @@ _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 _sys.path.insert(0, str(Path(__file__).resolve().parent))
 from tests.oracles import history_lp_highs, noisy_record
 
-from _common import linprog_unit, state_bands
+from _common import linprog_unit, stamp, state_bands
 
 
 def c2d(Ac, Bc, Ts):
@@ -350,7 +350,7 @@ def main() -> None:
                                   10.0)],
                "machine": platform.platform(), "python": platform.python_version()}
         path = Path(args.out).with_name("state_estimation_r30.json")
-        path.write_text(json.dumps(out, indent=1))
+        path.write_text(json.dumps({**stamp(), **out}, indent=1))
         print(f"wrote {path}")
         return
     N = args.steps
@@ -411,7 +411,7 @@ def main() -> None:
            "history_lp_s_per_step_checked": lp_times,
            "tanks_window10_growth_exponent": growth,
            "machine": platform.platform(), "python": platform.python_version()}
-    Path(args.out).write_text(json.dumps(out, indent=1))
+    Path(args.out).write_text(json.dumps({**stamp(), **out}, indent=1))
     print(f"growth exponent (tanks, window 10): {growth}")
     print(f"wrote {args.out}")
 

@@ -36,6 +36,8 @@ from pathlib import Path
 _sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.setmembership.test_verdicts import campaign_failures, campaign_seed
 
+from _common import stamp
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -59,7 +61,7 @@ def main() -> None:
     }
     print(json.dumps(summary, indent=1))
     path = Path(__file__).parent / "results" / "verdict_campaign.json"
-    path.write_text(json.dumps({"summary": summary, "runs": rows}, indent=1) + "\n")
+    path.write_text(json.dumps({**stamp(), "summary": summary, "runs": rows}, indent=1) + "\n")
     print(f"wrote {path}")
 
 

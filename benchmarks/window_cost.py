@@ -36,7 +36,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import setobs as so  # noqa: E402
-from _common import linprog_unit  # noqa: E402
+from _common import linprog_unit, stamp  # noqa: E402
 from setobs.lp import fastlp  # noqa: E402
 from setobs.setmembership import _window  # noqa: E402
 from state_estimation import noise_model, random_system, record, tanks_outputs  # noqa: E402
@@ -155,7 +155,7 @@ def main() -> None:
            "steady": [steady(p, r) for p in PLANTS for r in ("auto", "box")],
            "machine": platform.platform(), "python": platform.python_version()}
     path = HERE / "results" / "window_cost.json"
-    path.write_text(json.dumps(out, indent=1))
+    path.write_text(json.dumps({**stamp(), **out}, indent=1))
     print(f"wrote {path}")
 
 

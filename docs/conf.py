@@ -1,6 +1,7 @@
 """Sphinx configuration of the setobs documentation.
 
 Build (from the repository root): ``python -m sphinx -W -b html docs docs/_build/html``.
+The performance page is generated from ``benchmarks/results/`` (``docs/performance_page.py``).
 The notebooks of ``notebooks/`` are copied into ``docs/notebooks/`` and executed
 during the build (myst-nb), so their figures are rendered. With the environment
 variable ``SETOBS_EXECUTED_NOTEBOOKS`` naming a directory of the same notebooks
@@ -12,12 +13,19 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 import setobs
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+
+# The performance page, generated from the benchmarks' results files (docs/performance_page).
+sys.path.insert(0, str(HERE))
+import performance_page  # noqa: E402
+
+(HERE / "performance.md").write_text(performance_page.render(ROOT / "benchmarks" / "results"))
 
 # The notebooks live in notebooks/ (where the tests run them); the docs render copies.
 _nb_dst = HERE / "notebooks"
@@ -55,6 +63,13 @@ nb_execution_mode = "off" if _executed else "force"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
-html_theme = "alabaster"
-html_static_path: list[str] = []
+html_theme = "pydata_sphinx_theme"
+html_static_path = ["_static"]
+html_css_files = ["wide.css"]
+html_theme_options = {
+    "navigation_with_keys": False,
+    "show_toc_level": 2,
+    "secondary_sidebar_items": ["page-toc"],
+}
+html_sidebars = {"**": ["sidebar-nav-bs"], "performance": [], "index": []}
 suppress_warnings = ["myst.header"]

@@ -2,7 +2,8 @@
 
 The documented command is ``python -m sphinx -W -b html docs docs/_build/html``; the
 build renders the API reference (autosummary + numpydoc: a malformed docstring
-section is an error), the user guide (the README), the references and the
+section is an error), the user guide (one page per capability, ``docs/guide/``), the
+performance page (generated from ``benchmarks/results/``), the references and the
 notebooks (executed, with their figures). The test renders the notebooks as the session
 executed them (``tests/notebooks.py``; each is executed once per session).
 """
@@ -45,3 +46,13 @@ def test_docs_build_without_warnings(tmp_path, executed_notebooks):
     nb = (out / "notebooks" / "03_set_membership_do.html").read_text()
     assert "<img" in nb  # the notebook was executed and its figures rendered
     assert (out / "generated" / "setobs.setmembership.SMFDO.html").exists()
+    # one page per capability, each linked from the guide's index
+    guide = (out / "guide.html").read_text()
+    for page in sorted((ROOT / "docs" / "guide").glob("*.md")):
+        assert (out / "guide" / f"{page.stem}.html").exists(), page.stem
+        assert f'href="guide/{page.stem}.html"' in guide, page.stem
+    assert "NonlinearSetObserver" in (out / "guide" / "nonlinear_set.html").read_text()
+    # the performance page, a section per results file with its commit
+    perf = (out / "performance.html").read_text()
+    for res in sorted((ROOT / "benchmarks" / "results").glob("*.json")):
+        assert f"benchmarks/results/{res.name}" in perf, res.name

@@ -94,3 +94,29 @@ def test_virtual_environments_are_ignored_by_git():
     if out.returncode == 128:   # not a git checkout (an sdist): nothing to check
         pytest.skip("not a git repository")
     assert out.stdout.split() == [".venv/x", "venv/x"]
+
+
+def test_a_missing_record_says_where_it_comes_from(tmp_path, monkeypatch):
+    """``so.io.find_record``: ``$SETOBS_DATA``, then ``shared/data`` beside the checkout
+    that holds the current directory; a missing record names its public source and the
+    variable to set (the notebooks and the guide stop with this, not a StopIteration)."""
+    name = "hsm150/idf_pos_0.06_1.mat"
+    monkeypatch.setenv("SETOBS_DATA", str(tmp_path / "data"))
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(so.RecordNotFoundError, match="malik-robert/HSM150-data") as err:
+        so.io.find_record(name)
+    assert "SETOBS_DATA=" in str(err.value) and isinstance(err.value, FileNotFoundError)
+    assert str(tmp_path / "data") in str(err.value)
+    # beside a checkout: <repo>/../shared/data, found from a folder inside the repository
+    repo = tmp_path / "work" / "repo"
+    (repo / "notebooks").mkdir(parents=True)
+    (repo / "pyproject.toml").write_text("")
+    shared = tmp_path / "work" / "shared" / "data" / "hsm150"
+    shared.mkdir(parents=True)
+    (shared / "idf_pos_0.06_1.mat").write_bytes(b"")
+    monkeypatch.chdir(repo / "notebooks")
+    assert so.io.find_record(name) == shared / "idf_pos_0.06_1.mat"
+    # $SETOBS_DATA first
+    (tmp_path / "data" / "hsm150").mkdir(parents=True)
+    (tmp_path / "data" / "hsm150" / "idf_pos_0.06_1.mat").write_bytes(b"")
+    assert so.io.find_record(name) == tmp_path / "data" / name

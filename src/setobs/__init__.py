@@ -1,4 +1,6 @@
-"""setobs: set-membership geometry and disturbance observers for linear discrete-time systems."""
+"""setobs: set-membership geometry, guaranteed state and disturbance estimation, and the
+point observers of the disturbance-observer literature, for linear and nonlinear
+discrete-time systems."""
 
 from . import (
     analysis,
@@ -6,6 +8,7 @@ from . import (
     examples,
     geometry,
     interval,
+    io,
     observers,
     plotting,
     setmembership,
@@ -31,6 +34,7 @@ from .exceptions import (
     ModelInvalidatedWarning,
     NotFoundError,
     NotSupportedError,
+    RecordNotFoundError,
     SetobsError,
     SkipLimitError,
     SolverError,
@@ -69,6 +73,7 @@ __all__ = [
     "NonlinearSystem",
     "NotFoundError",
     "NotSupportedError",
+    "RecordNotFoundError",
     "SetobsError",
     "SkipLimitError",
     "SolverError",
@@ -81,6 +86,7 @@ __all__ = [
     "examples",
     "geometry",
     "interval",
+    "io",
     "noise_tradeoff",
     "observers",
     "plotting",

@@ -31,6 +31,7 @@ __all__ = [
     "ModelInvalidatedWarning",
     "NotFoundError",
     "NotSupportedError",
+    "RecordNotFoundError",
     "SetobsError",
     "SkipLimitError",
     "SolverError",
@@ -220,3 +221,8 @@ class MissingDataWarning(UserWarning):
 
 class ModelFileError(SetobsError, ValueError):
     """A model or record file cannot be read or is inconsistent (one-line message)."""
+
+
+class RecordNotFoundError(SetobsError, FileNotFoundError):
+    """A measured record the package does not ship is not where it was looked for (the
+    message says where it comes from and how to point setobs at it)."""

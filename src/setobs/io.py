@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,10 +33,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._lazy import optional_import
-from .exceptions import ModelFileError
+from .exceptions import ModelFileError, RecordNotFoundError
 from .systems import LinearSystem
 
-__all__ = ["ModelFileError", "Record", "load_model", "load_record", "model_units"]
+__all__ = ["RECORDS", "ModelFileError", "Record", "find_record", "load_model", "load_record",
+           "model_units"]
+
+#: The measured records the guide and the notebooks use: where each comes from. None is
+#: shipped with the package (the sources carry no licence to redistribute them).
+RECORDS = {
+    "hsm150/idf_pos_0.06_1.mat": (
+        "the HSM150 servo-motor identification record: download "
+        "Data/Identification/idf_pos_0.06_1.mat from the public repository "
+        "https://github.com/malik-robert/HSM150-data"),
+}
 
 _KEYS = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
          "Gamma": ("Gamma", "B", "B0"), "Du": ("Du", "D")}
@@ -417,3 +428,46 @@ def load_record(path: str | Path, *, outputs: Any, inputs: Any = None, time: Any
                              "excitation, not a missing measurement)")
     return Record(arr[:, out_idx], U, t, None if dt is None else dt * decimate,
                   tuple(names[i] for i in out_idx), tuple(names[i] for i in in_idx))
+
+
+def find_record(name: str, *, roots: list[str | Path] | None = None) -> Path:
+    """The path of a measured record that is not shipped with the package.
+
+    Looked up as ``<root>/<name>`` in ``$SETOBS_DATA``, then in the folder
+    ``shared/data`` beside a repository checkout that holds the current directory
+    (found from the current directory upwards), or in ``roots`` when given.
+
+    Parameters
+    ----------
+    name : str
+        The record's path below the data folder, e.g. ``"hsm150/idf_pos_0.06_1.mat"``
+        (:data:`RECORDS` lists the known ones and their sources).
+    roots : list of str or Path, optional
+        Folders to look in instead of the default ones.
+
+    Returns
+    -------
+    Path
+        The first existing ``<root>/<name>``.
+
+    Raises
+    ------
+    RecordNotFoundError
+        When no folder holds it: the message says where the record comes from and how
+        to point setobs at it.
+    """
+    if roots is None:
+        cwd = Path.cwd()
+        repos = [p for p in [cwd, *cwd.parents] if (p / "pyproject.toml").is_file()]
+        roots = [r for r in [os.environ.get("SETOBS_DATA"),
+                             *(p.parent / "shared" / "data" for p in repos[:1])] if r]
+    for root in roots:
+        path = Path(root) / name
+        if path.is_file():
+            return path
+    source = RECORDS.get(name, "a record this package does not ship")
+    folder = Path(name).parent
+    raise RecordNotFoundError(
+        f"{name} not found (looked in: {', '.join(str(r) for r in roots) or 'no folder'}). "
+        f"It is {source}. What to do: put it in <folder>/{folder}/ and set the environment "
+        "variable SETOBS_DATA=<folder>")
