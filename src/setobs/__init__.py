@@ -9,10 +9,13 @@ from . import (
     geometry,
     interval,
     io,
+    models,
+    nonlinear,  # (old path: re-exports setobs.models.exosystem)
     observers,
     plotting,
     setmembership,
     studies,
+    systems,  # (old path: re-exports setobs.models.linear)
     tolerances,
 )
 from .exceptions import (
@@ -42,9 +45,8 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .geometry import Box, ConstrainedZonotope
-from .nonlinear import NonlinearSystem
+from .models import LinearSystem, NonlinearModel, NonlinearSystem
 from .setmembership import SMFDO, NonlinearSetObserver, calibrate_noise, noise_tradeoff
-from .systems import LinearSystem
 
 __version__ = "0.1.0"
 
@@ -69,6 +71,7 @@ __all__ = [
     "ModelFileError",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
+    "NonlinearModel",
     "NonlinearSetObserver",
     "NonlinearSystem",
     "NotFoundError",
@@ -87,10 +90,13 @@ __all__ = [
     "geometry",
     "interval",
     "io",
+    "models",
     "noise_tradeoff",
+    "nonlinear",
     "observers",
     "plotting",
     "setmembership",
     "studies",
+    "systems",
     "tolerances",
 ]

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from .exceptions import InvalidValueError
-from .nonlinear import NonlinearSystem
-from .systems import LinearSystem
+from .models.exosystem import NonlinearSystem
+from .models.linear import LinearSystem
 
 __all__ = [
     "chang2006",

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from ._lazy import optional_import
 from .exceptions import ModelFileError, RecordNotFoundError
-from .systems import LinearSystem
+from .models.linear import LinearSystem
 
 __all__ = ["RECORDS", "ModelFileError", "Record", "find_record", "load_model", "load_record",
            "model_units"]

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._format import format_complex, format_complex_list
 from ..exceptions import NotFoundError
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from .existence import (
     BoundedDOReport,
@@ -124,7 +124,7 @@ def _fmt(v) -> str:
 
 
 def _diagnose_nonlinear(sys: Any, rtol: float) -> Diagnosis:
-    from ..systems import LinearSystem as _LS
+    from ..models.linear import LinearSystem as _LS
     from .modular import nonlinear_modular_conditions
 
     row = nonlinear_modular_conditions(sys)
@@ -184,7 +184,7 @@ def diagnose(sys: LinearSystem, *, disturbance_inputs: DisturbanceInputs = None,
     >>> d.existing
     ['SMFDO', 'PIO', 'higher-order observer', 'modular observer']
     """
-    from ..nonlinear import NonlinearSystem
+    from ..models.exosystem import NonlinearSystem
 
     if isinstance(sys, NonlinearSystem):
         return _diagnose_nonlinear(sys, rtol)

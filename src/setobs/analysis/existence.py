@@ -12,7 +12,7 @@ from scipy.linalg import eigvals, null_space
 from .._format import format_complex_list
 from .._riccati import lqe_gain
 from .._validation import as_matrix
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_FLOOR, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import (
     RankDecision,

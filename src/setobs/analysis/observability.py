@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals
 
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL
 from ._linalg import RankDecision, balance_system, min_margin, not_inside_unit_circle, orth_rows
 

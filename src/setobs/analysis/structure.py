@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import PRODUCT_RTOL, RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, not_inside_unit_circle, rank_decision
 from .zeros import ZerosResult, invariant_zeros

@@ -10,7 +10,7 @@ from scipy.linalg import eigvals, svd
 
 from .._format import format_complex_list
 from ..exceptions import InternalError
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RANK_RTOL, UNIT_CIRCLE_TOL
 from ._linalg import RankDecision, balance_system, min_margin, not_inside_unit_circle, rank_decision
 

@@ -12,8 +12,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._deprecation import renamed
 from .._validation import as_matrix, as_vector
 from ..exceptions import ArgumentError, DesignError, DimensionError, NotSupportedError
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..results import error_summary, time_axis, time_index
-from ..systems import DisturbanceInputs, LinearSystem, require_system
 
 __all__ = ["DesignError", "ObserverResult", "PointObserver", "StateSpaceObserver"]
 

@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import as_matrix
 from ..analysis import observability
-from ..systems import DisturbanceInputs, LinearSystem
+from ..models.linear import DisturbanceInputs, LinearSystem
 from ._gains import lqe_gain, place_gain
 from .base import DesignError, PointObserver
 

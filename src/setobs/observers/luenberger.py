@@ -18,7 +18,7 @@ from ..analysis import (
     pio_conditions,
     pio_error_poles,
 )
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import RESONANCE_RTOL
 from ._gains import default_poles, lqe_gain, place_gain
 from .base import DesignError, StateSpaceObserver

@@ -13,7 +13,7 @@ from scipy.linalg import block_diag, lstsq
 from .._format import format_complex_list
 from ..analysis import invariant_zeros, relative_degrees
 from ..exceptions import InvalidValueError
-from ..systems import DisturbanceInputs, LinearSystem
+from ..models.linear import DisturbanceInputs, LinearSystem
 from ._gains import place_gain
 from .base import DesignError, StateSpaceObserver
 

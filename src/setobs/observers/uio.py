@@ -11,7 +11,7 @@ from scipy.linalg import lstsq, svd
 
 from .._format import format_complex_list
 from ..analysis import markov_toeplitz, uio_conditions, uio_delay
-from ..systems import DisturbanceInputs, LinearSystem
+from ..models.linear import DisturbanceInputs, LinearSystem
 from ._gains import place_gain
 from .base import DesignError, PointObserver
 

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from .._rounding import gamma, round_down, round_up
 from ..exceptions import DomainError, UnboundedSetError
 from ..geometry import ConstrainedZonotope
-from ..interval import IntervalFunction
+from ..models.interval import IntervalFunction
 
 #: Convexity of the univariate functions the relaxation knows on their whole domain
 #: (others, and powers whose convexity changes over the box, get the mean-value lines).

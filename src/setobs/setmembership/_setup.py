@@ -28,7 +28,7 @@ from ..exceptions import (
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import trusted_box
 from ..geometry.zonotope import absorb_center_error, hull_with_status, trusted_cz
-from ..systems import LinearSystem
+from ..models.linear import LinearSystem
 from ..tolerances import CENTER_ERROR_ABSORB_RTOL
 from ._restart import RestartPolytope
 from ._window import WindowModel, model_rtol

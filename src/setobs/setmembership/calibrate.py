@@ -35,7 +35,7 @@ from ..exceptions import (
     SolverWarning,
 )
 from ..geometry import Box
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import (
     CALIBRATION_ACTIVE_RTOL,
     CALIBRATION_ATOL,

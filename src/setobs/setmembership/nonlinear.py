@@ -140,7 +140,6 @@ from .._rounding import gamma, round_down, round_up
 from .._validation import as_matrix, as_vector
 from ..exceptions import (
     ArgumentError,
-    DimensionError,
     DomainError,
     EmptySetError,
     InvalidValueError,
@@ -152,8 +151,10 @@ from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import box_center_radius
 from ..geometry.reduction import eliminate_constraints, reduce_order
 from ..geometry.zonotope import hull_with_status
-from ..interval import IntervalFunction
 from ..lp.factor import COMPILED_MAX_ROWS
+from ..models.exosystem import NonlinearSystem
+from ..models.interval import IntervalFunction
+from ..models.nonlinear import NonlinearModel
 from ._relax import Relaxation
 from ._setup import as_set, noise_set
 from ._steps import SMFDOResult, SMFDOStep
@@ -437,36 +438,20 @@ def _quadratic_remainder(H_lo: NDArray[np.float64], H_hi: NDArray[np.float64],
     return c, round_up(rad)
 
 
-def _symbols(sp: Any, given: Sequence[Any], what: str) -> list[Any]:
-    if isinstance(given, str):
-        given = [given]
-    out = [sp.Symbol(g) if isinstance(g, str) else g for g in given]
-    if not all(isinstance(v, sp.Symbol) for v in out):
-        raise ArgumentError(f"{what} must be sympy symbols or their names")
-    return out
-
-
-def _exprs(sp: Any, given: Any, names: dict[str, Any], what: str) -> list[Any]:
-    if isinstance(given, str) or (not isinstance(given, Sequence | np.ndarray) and \
-            not hasattr(given, "tolist")):
-        given = [given]
-    if hasattr(given, "tolist") and not isinstance(given, list | tuple):
-        given = list(np.ravel(np.asarray(given.tolist(), dtype=object)))
-    try:
-        return [sp.sympify(e, locals=names) for e in given]
-    except (sp.SympifyError, TypeError) as exc:
-        raise ArgumentError(f"{what}: cannot read {given!r} as sympy expressions ({exc})") \
-            from exc
-
-
 class NonlinearSetObserver:
     """Guaranteed state estimator for ``x+ = f(x, u) + w``, ``y = h(x, u) + v``.
 
     Parameters
     ----------
-    f, h : sequence of sympy expressions or strings
-        The state map (``n`` components) and the output map (``l``), in the symbols
-        of ``states``, ``inputs`` and ``disturbances``.
+    f : NonlinearModel, NonlinearSystem, or sequence of sympy expressions or strings
+        The model (:class:`setobs.models.NonlinearModel`; an exosystem
+        :class:`~setobs.models.NonlinearSystem` is converted by
+        :meth:`~setobs.models.NonlinearModel.from_exosystem`), and then ``h``,
+        ``states``, ``inputs`` and ``disturbances`` are not given; or the state map
+        (``n`` components) in the symbols of ``states``, ``inputs`` and
+        ``disturbances``.
+    h : sequence of sympy expressions or strings
+        The output map (``l`` components), when ``f`` is not a model.
     states : sequence of sympy symbols or names
         ``x`` (``n``).
     inputs : sequence of sympy symbols or names
@@ -528,7 +513,8 @@ class NonlinearSetObserver:
     True
     """
 
-    def __init__(self, f: Any, h: Any, states: Sequence[Any], inputs: Sequence[Any] = (), *,
+    def __init__(self, f: Any, h: Any = None, states: Sequence[Any] = (),
+                 inputs: Sequence[Any] = (), *,
                  process_noise: Any, measurement_noise: Any, initial_state_set: Any,
                  method: str = "auto", disturbances: Sequence[Any] = (),
                  increment_set: Any = None, initial_disturbance_set: Any = None,
@@ -539,25 +525,12 @@ class NonlinearSetObserver:
         sp = optional_import("sympy", extra="nonlinear", feature="NonlinearSetObserver")
         if method not in METHODS:
             raise InvalidValueError(f"method must be one of {METHODS}, got {method!r}")
-        xs = _symbols(sp, states, "states")
-        us = _symbols(sp, inputs, "inputs")
-        ds = _symbols(sp, disturbances, "disturbances")
-        if len(set(xs + us + ds)) != len(xs) + len(us) + len(ds):
-            raise ArgumentError("the states, inputs and disturbances must be distinct symbols")
-        if not xs:
-            raise DimensionError("there must be at least one state")
-        names = {str(s): s for s in xs + us + ds}
-        fx = _exprs(sp, f, names, "f")
-        hx = _exprs(sp, h, names, "h")
-        n, q = len(xs), len(ds)
-        if len(fx) != n:
-            raise DimensionError(f"f must have {n} components (one per state), got {len(fx)}")
-        allowed = set(xs + us + ds)
-        for what, ex in (("f", fx), ("h", hx)):
-            extra = set().union(*(e.free_symbols for e in ex)) - allowed
-            if extra:
-                raise ArgumentError(f"{what} uses {sorted(map(str, extra))}, which are not "
-                                    "among the states, inputs or disturbances")
+        model = self._model(f, h, states, inputs, disturbances)
+        self.model = model
+        xs, us, ds = list(model.states), list(model.inputs), list(model.disturbances)
+        fx, hx = list(model.f), list(model.h)
+        n, q = model.n, model.q
+        dt = model.dt if dt is None else dt
         self.method = method
         self.forms = ("mean-value", "taylor") if method == "auto" else (method,)
         self.n, self.q, self.l, self.p = n, q, len(hx), len(us)
@@ -616,6 +589,23 @@ class NonlinearSetObserver:
         self._start_sizes = (g_cap, c_cap) if fixed else (min(g0, g_cap), min(c0, c_cap))
         self.dt = dt
         self.reset()
+
+    @staticmethod
+    def _model(f: Any, h: Any, states: Sequence[Any], inputs: Sequence[Any],
+               disturbances: Sequence[Any]) -> NonlinearModel:
+        """The observer's model: ``f`` itself when it is a :class:`NonlinearModel` (an
+        exosystem :class:`~setobs.models.NonlinearSystem` converted), else the model of
+        ``f, h, states, inputs, disturbances``."""
+        if isinstance(f, NonlinearModel | NonlinearSystem):
+            if h is not None or len(states) or len(inputs) or len(disturbances):
+                raise ArgumentError(
+                    "NonlinearSetObserver(model, ...) takes the model's h, states, inputs "
+                    "and disturbances from the model: give them to NonlinearModel instead")
+            return f if isinstance(f, NonlinearModel) else NonlinearModel.from_exosystem(f)
+        if h is None or not len(states):
+            raise ArgumentError("NonlinearSetObserver needs a NonlinearModel, or f, h and "
+                                "the states")
+        return NonlinearModel(f, h, states, inputs, disturbances)
 
     @staticmethod
     def default_sizes(N: int, l: int, w_gens: int, v_gens: int) -> tuple[int, int, int, int]:

@@ -132,7 +132,7 @@ from ..exceptions import (
     ModelInvalidatedWarning,
 )
 from ..geometry import Box, ConstrainedZonotope
-from ..systems import DisturbanceInputs, LinearSystem, require_system
+from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, MISSING_WARN_FRACTION
 from ._commit import commit
 from ._exact import HistoryEngine, HRepEngine

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from ..exceptions import InvalidValueError
-from ..systems import LinearSystem
+from ..models.linear import LinearSystem
 
 __all__ = ["ErrorOrders", "error_orders"]
 

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from .. import examples
 from ..exceptions import ArgumentError, InvalidValueError
 from ..geometry import ConstrainedZonotope
-from ..systems import LinearSystem
+from ..models.linear import LinearSystem
 
 __all__ = ["EXAMPLE_SYSTEMS", "GENERATORS", "Scenario", "Trajectory", "band_limited_noise",
            "rng_for_run"]
