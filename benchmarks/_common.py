@@ -54,12 +54,12 @@ def timeit(fn, *args, repeats: int) -> tuple[float, list[float], object]:
 
 
 def state_bands(obs, Y, U) -> tuple[list[float], np.ndarray, np.ndarray]:
-    """Run a state-bounding SMFDO over a record (``U[k - 1]`` into step ``k``): the time
+    """Run a state-bounding SMFDO over a record (``U[k]`` with ``Y[k]``): the time
     of each update and the state bands ``(times, lo, hi)``."""
     times, lo, hi = [], [], []
     for k in range(len(Y)):
         t0 = time.perf_counter()
-        st = obs.update(Y[k], U[k - 1] if k else None)
+        st = obs.step(Y[k], None if U is None else U[k])
         times.append(time.perf_counter() - t0)
         lo.append(st.state_lo)
         hi.append(st.state_hi)

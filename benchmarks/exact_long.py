@@ -92,7 +92,7 @@ def main() -> None:
         solves.clear()
         before = dict(obs.stats)
         t0 = time.perf_counter()
-        est = obs.update(Y[k], U[k - 1], u=U[k]) if k else obs.update(Y[0], u=U[0])
+        est = obs.step(Y[k], U[k])
         dt = time.perf_counter() - t0
         lo[k], hi[k] = est.state_lo, est.state_hi
         engine = [key for key, v in obs.stats.items()

@@ -78,7 +78,7 @@ def sizes(kmax: int) -> list[dict]:
     obs = so.SMFDO(sysm, window=None)
     rows = []
     for k, y in enumerate(Y[:kmax + 1]):
-        obs.update(y)
+        obs.step(y)
         if k in (2, 5, 10, 20, 30, 50, 100, 150):
             Z = obs.posterior_set
             t0 = time.perf_counter()
@@ -100,7 +100,7 @@ def h_recursion(long: int) -> dict:
     times, sizes_k = [], []
     for k, y in enumerate(Y):
         t0 = time.perf_counter()
-        obs.update(y)
+        obs.step(y)
         times.append(time.perf_counter() - t0)
         st = obs.exact_representation
         if k in (10, 100, 300, 1000, 3000, 10000) and isinstance(st, HState):
@@ -143,7 +143,7 @@ def growing(kmax: int, kcount: int) -> dict:
                      measurement_noise=noise)
     rows = []
     for k, y in enumerate(Y[:kcount + 1]):
-        whole.update(y)
+        whole.step(y)
         if k < 2:
             continue
         Z = whole.posterior_set

@@ -94,7 +94,7 @@ def study(name, plant, N, reference_k):
         rt = []
         for k in range(reference_k + 1):
             t0 = time.perf_counter()
-            ref.update(Y[k], U[k - 1] if k else None)
+            ref.step(Y[k], None if U is None else U[k])
             rt.append(time.perf_counter() - t0)
         out["set_recursion_ms_per_update"] = {
             str(k): 1e3 * statistics.median(rt[max(0, k - 5):k + 6])

@@ -46,7 +46,7 @@ def time_updates(obs, Y, first: int):
     times, radii = [], []
     for k, y in enumerate(Y):
         t0 = time.perf_counter()
-        st = obs.update(y)
+        st = obs.step(y)
         dt = time.perf_counter() - t0
         if k >= first:
             times.append(dt)

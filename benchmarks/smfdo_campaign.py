@@ -42,13 +42,13 @@ from setobs.studies import ObserverSpec, Scenario, rng_for_run, run_campaign
 def step_times(sys, sc, window, fast, trs, k_from):
     obs = so.SMFDO(sys, window=window, increment_set=sc.increment_set(2),
                    initial_state_set=sc.initial_state_set(3), fast=fast)
-    obs.update(trs[0].Y[0])  # compile / warm caches
+    obs.step(trs[0].Y[0])  # compile / warm caches
     out = []
     for tr in trs:
-        obs.reset_state()
+        obs.reset()
         for k, y in enumerate(tr.Y):
             t0 = time.perf_counter()
-            obs.update(y)
+            obs.step(y)
             if k >= k_from:
                 out.append(time.perf_counter() - t0)
     return statistics.median(out), obs.stats
@@ -60,9 +60,9 @@ def hull_PZ_times(sys, sc, trs):
                    initial_state_set=sc.initial_state_set(3))
     inst = []
     for tr in trs:
-        obs.reset_state()
+        obs.reset()
         for k, y in enumerate(tr.Y):
-            obs.update(y)
+            obs.step(y)
             if k >= 15 and obs.fast_path_instance is not None:
                 inst.append(obs.fast_path_instance)
     model = inst[0][0]

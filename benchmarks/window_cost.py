@@ -133,7 +133,7 @@ def steady(name: str, restart: str) -> dict:
     for k in range(steps):
         it0 = sum(obs.simplex_iterations)
         t0 = time.perf_counter()
-        est = obs.update(Y[k], U[k - 1] if k else None)
+        est = obs.step(Y[k], None if U is None else U[k])
         dt = time.perf_counter() - t0
         if k >= WARM:
             times.append(dt)

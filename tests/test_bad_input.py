@@ -63,16 +63,16 @@ def test_a_box_is_accepted_where_a_set_is_expected():
 
 def test_a_callable_increment_set_returning_an_array_is_named():
     obs = so.SMFDO(CHANG, window=5, increment_set=lambda k: np.ones(2))
-    obs.update([0.0, 0.0])
+    obs.step([0.0, 0.0])
     with pytest.raises(TypeError, match=r"increment_set\(0\) must return a ConstrainedZonotope"):
-        obs.update([0.0, 0.0])
+        obs.step([0.0, 0.0])
 
 
 @pytest.mark.parametrize("bad", [
     lambda: LinearSystem(CHANG.Phi + 0j, CHANG.G, CHANG.Xi),
     lambda: LinearSystem(CHANG.Phi, CHANG.G * (1 + 1j), CHANG.Xi),
     lambda: ConstrainedZonotope(np.eye(2) * 1j, [0, 0]),
-    lambda: so.SMFDO(CHANG).update(np.array([1.0, 2.0]) + 1e-3j),
+    lambda: so.SMFDO(CHANG).step(np.array([1.0, 2.0]) + 1e-3j),
     lambda: so.SMFDO(CHANG).run(np.zeros((3, 2), dtype=complex) + 1j),
 ])
 def test_complex_arrays_are_refused_not_cast(bad):

@@ -225,7 +225,7 @@ def test_a_wide_initial_set_does_not_hang_the_nonlinear_observer():
                                   initial_state_set=so.Box([-1e8, -1e8], [1e8, 1e8]),
                                   method="taylor")
     for y in ([0.52], [0.49], [0.47]):
-        st = obs.update(y)
+        st = obs.step(y)
         assert np.all(st.state_lo <= st.state_hi)
 
 

@@ -58,7 +58,7 @@ def test_a_mostly_missing_record_warns_with_its_fraction():
     obs = so.SMFDO(sys_, window=5)
     obs.run(Y[:10])
     with pytest.warns(MissingDataWarning):
-        res = obs.run(np.full((3, 2), np.nan))
+        res = obs.continue_run(np.full((3, 2), np.nan))
     assert res.lo.shape == (3, 2)
 
 

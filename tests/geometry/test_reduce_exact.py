@@ -135,7 +135,7 @@ def test_exact_mode_posterior_of_the_paper_example(rng):
     sys, Y, _ = data(8)
     obs = so.SMFDO(sys, window=None, fast=False)  # the whole-history set recursion
     for y in Y[:6]:
-        obs.update(y)
+        obs.step(y)
     Z = obs.posterior_set
     R = Z.reduce_exact()
     assert (Z.n_gen, Z.n_con) == (15, 12)

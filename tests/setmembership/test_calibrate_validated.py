@@ -216,7 +216,7 @@ def test_skipping_stops_at_its_limit_and_flags_every_later_step():
         warnings.simplefilter("ignore", so.ModelInvalidatedWarning)
         with pytest.raises(ModelInvalidatedError, match="5 % of 20 samples"):
             for k in range(300):
-                obs.update(Y[k], U[k - 1] if k else None)
+                obs.step(Y[k], U[k])
 
 
 def test_a_glitch_in_the_held_out_part_is_where_validated_is_attained():

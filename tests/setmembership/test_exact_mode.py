@@ -64,7 +64,7 @@ def test_the_representation_stays_small_while_k_grows():
     obs = so.SMFDO(sys, window=None)
     n_vertices, n_normals, n_gen = [], [], []
     for k, y in enumerate(Y):
-        obs.update(y)
+        obs.step(y)
         if k >= 10:
             st = obs.exact_representation
             assert isinstance(st, HState)
@@ -195,7 +195,7 @@ def test_the_h_path_and_the_set_recursion_agree_and_pickle():
     a = so.SMFDO(sys, window=None)
     a.run(Y[:20])
     b = pickle.loads(pickle.dumps(a))
-    ra, rb = a.run(Y[20:]), b.run(Y[20:])
+    ra, rb = a.continue_run(Y[20:]), b.continue_run(Y[20:])
     assert np.array_equal(ra.lo, rb.lo) and np.array_equal(ra.hi, rb.hi)
     ref = so.SMFDO(sys, window=None, fast=False).run(Y)
     np.testing.assert_allclose(ra.lo, ref.lo[20:], rtol=1e-8, atol=1e-8)
@@ -289,7 +289,7 @@ def test_the_carried_vertices_are_the_vertices_of_the_certified_set():
     obs = so.SMFDO(sys, window=None)
     seen = 0
     for k, y in enumerate(Y):
-        obs.update(y)
+        obs.step(y)
         st = obs.exact_representation
         if st is None or k % 10:
             continue

@@ -248,7 +248,7 @@ def test_a_record_split_in_two_runs_equals_the_whole_history_lp():
     Y, D = simulate(sys_, 16, rng, [0.1, 0.2, 0.3], [0.2, 0.1], 1.0, U)
     obs = so.SMFDO(sys_, window=None)
     obs.run(Y[:8], U[:8])          # N rows: the last one is u_7, needed at k = 8
-    second = obs.run(Y[8:], U[8:])
+    second = obs.continue_run(Y[8:], U[8:])
     assert second.violations(D[8:]) == 0
     for k in (8, 12):
         lo, hi = history_lp_bounds(sys_, Y, U, [None] * 3, [None] * 3, 1.0, k)
@@ -263,7 +263,7 @@ def test_continuing_without_the_pending_input_is_refused():
     Y = np.zeros((6, 2))
     obs.run(Y[:3], np.zeros((2, 1)))  # N-1 rows: u_2 unknown
     with pytest.raises(DimensionError, match="input applied before the first step"):
-        obs.run(Y[3:], np.zeros((3, 1)))
+        obs.continue_run(Y[3:], np.zeros((3, 1)))
 
 
 # ------------------------------------------------------------------ 10. solver trouble

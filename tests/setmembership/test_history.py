@@ -138,9 +138,9 @@ def test_a_copy_and_a_pickle_go_on_like_the_original():
                    initial_state_set=so.Box(-2.0 * np.ones(4), 2.0 * np.ones(4)))
     obs.run(Y[:30], U[:30])
     twins = [copy.copy(obs), pickle.loads(pickle.dumps(obs))]
-    a = obs.run(Y[30:], U[30:])
+    a = obs.continue_run(Y[30:], U[30:])
     for t in twins:
-        b = t.run(Y[30:], U[30:])
+        b = t.continue_run(Y[30:], U[30:])
         np.testing.assert_allclose(b.state_lo, a.state_lo, rtol=0, atol=1e-8)
         np.testing.assert_allclose(b.state_hi, a.state_hi, rtol=0, atol=1e-8)
 

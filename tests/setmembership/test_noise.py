@@ -339,7 +339,7 @@ def test_update_warns_once_per_observer_and_reset_status():
                    on_inconsistent="reset")
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
-        steps = [obs.update(y) for y in Y]
+        steps = [obs.step(y) for y in Y]
     msgs = [w for w in rec if issubclass(w.category, ModelInvalidatedWarning)]
     assert len(msgs) == 1 and "k=12" in str(msgs[0].message)
     assert steps[12].status == "reset" and obs.first_inconsistent == 12
@@ -398,11 +398,11 @@ def test_noise_arguments_are_validated():
         assert so.SMFDO(sys, reset="box").on_inconsistent == "reset"
     obs = so.SMFDO(sys, measurement_noise=lambda k: [0.1, 0.1, 0.1])
     with pytest.raises(DimensionError, match=r"measurement_noise\(0\) must have length 2"):
-        obs.update([0.0, 0.0])
+        obs.step([0.0, 0.0])
     # a feedthrough needs u_k
     sysu = LinearSystem(sys.Phi, sys.G, sys.Xi, [[1.0], [0.0], [0.0]], Du=[[1.0], [0.0]])
-    with pytest.raises(ArgumentError, match="feedthrough"):
-        so.SMFDO(sysu).update([0.0, 0.0])
+    with pytest.raises(ArgumentError, match="u is required"):
+        so.SMFDO(sysu).step([0.0, 0.0])
     with pytest.raises(DimensionError, match="U must have N = 3 rows"):
         so.SMFDO(sysu).run(np.zeros((3, 2)), np.zeros((2, 1)))
     with pytest.raises(DimensionError, match="Du must have 2 rows"):

@@ -198,7 +198,7 @@ def test_the_sizes_grow_while_a_reduction_would_widen_the_hull():
     assert g0 < obs.max_generators and c0 < obs.max_constraints
     prev = (g0, c0)
     for k in range(80):
-        st = obs.update(case["Y"][k], case["U"][k])
+        st = obs.step(case["Y"][k], case["U"][k])
         g, c = st.stats["generators"], st.stats["constraints"]
         assert prev[0] <= g <= obs.max_generators and prev[1] <= c <= obs.max_constraints
         prev = (g, c)
@@ -312,8 +312,8 @@ def test_the_intersected_forms_hold_every_sampled_image_and_are_no_wider(monkeyp
               initial_state_set=so.Box([-1.0, -0.5], [1.5, 1.0]), reduction_growth=None)
     plain = so.NonlinearSetObserver(f, ["x1"], ["x1", "x2"], **kw)
     both = so.NonlinearSetObserver(f, ["x1"], ["x1", "x2"], intersect_forms=True, **kw)
-    plain.update([np.nan])
-    both.update([np.nan])
+    plain.step([np.nan])
+    both.step([np.nan])
     assert both.prior.n_con > plain.prior.n_con  # (the coupling rows)
     gain = []
     for a in np.linspace(0.0, 2.0 * np.pi, 13)[:-1]:
@@ -339,7 +339,7 @@ def test_the_intersected_forms_in_the_measurement_keep_the_truth_and_are_no_wide
                                   intersect_forms=True, **kw).run(case["Y"])
     assert inside(case, res)
     one = [so.NonlinearSetObserver(case["f"], case["h"], case["xs"], case["us"],
-                                   intersect_forms=flag, **kw).update(case["Y"][0])
+                                   intersect_forms=flag, **kw).step(case["Y"][0])
            for flag in (False, True)]
     assert np.all(one[1].state_lo >= one[0].state_lo - 1e-9)
     assert np.all(one[1].state_hi <= one[0].state_hi + 1e-9)

@@ -196,10 +196,10 @@ def test_an_inconsistent_record_is_certified():
     f, h, xs, us = tank_cascade(3)
     obs = so.NonlinearSetObserver(f, h, xs, us, process_noise=0.002, measurement_noise=0.01,
                                   initial_state_set=so.Box(np.ones(3), 3.0 * np.ones(3)))
-    obs.update([2.0, 2.0], [1.0])
+    obs.step([2.0, 2.0], [1.0])
     with pytest.raises(so.ModelInvalidatedError,
                        match="measurement at step 1 contradicts") as err:
-        obs.update([9.0, 2.0], [1.0])  # (a level jumps by 7 in one step)
+        obs.step([9.0, 2.0], [1.0])  # (a level jumps by 7 in one step)
     assert err.value.step == 1
 
 
@@ -211,7 +211,7 @@ def test_a_box_outside_the_models_domain_is_reported():
                                   initial_state_set=so.Box(-3.0 * np.ones(3), -np.ones(3)))
     with pytest.raises(so.DomainError, match=r"sqrt of x0 over \[-3\.0\d*, -(1\.0|0\.9)\d*\], "
                                              "which reaches below 0 everywhere.*no true state"):
-        obs.update([np.nan, np.nan], [1.0])
+        obs.step([np.nan, np.nan], [1.0])
 
 
 def test_a_box_reaching_below_the_domain_goes_on():
@@ -276,10 +276,10 @@ def test_an_observer_pickles_mid_run_and_goes_on_the_same():
                                   initial_state_set=so.Box(np.ones(3), 3.0 * np.ones(3)),
                                   method="taylor")
     for k in range(4):
-        obs.update(Y[k], U[k])
+        obs.step(Y[k], U[k])
     copy = pickle.loads(pickle.dumps(obs))
     for k in range(4, 8):
-        a, b = obs.update(Y[k], U[k]), copy.update(Y[k], U[k])
+        a, b = obs.step(Y[k], U[k]), copy.step(Y[k], U[k])
         np.testing.assert_array_equal(a.state_lo, b.state_lo)
         np.testing.assert_array_equal(a.state_hi, b.state_hi)
         assert np.all((X[k] >= a.state_lo) & (X[k] <= a.state_hi))
@@ -312,9 +312,9 @@ def test_bad_input():
         so.NonlinearSetObserver(["x"], ["x"], ["x"], max_generators=0, **kw)
     obs = so.NonlinearSetObserver(["x + u"], ["x"], ["x"], ["u"], **kw)
     with pytest.raises(so.ArgumentError, match="u is required"):
-        obs.update([0.5])
+        obs.step([0.5])
     with pytest.raises(so.DimensionError):
-        obs.update([0.5, 0.1], [0.0])
+        obs.step([0.5, 0.1], [0.0])
 
 
 @pytest.mark.parametrize("f", [["x**3 + 1"], ["10*x"]])
@@ -326,4 +326,4 @@ def test_a_diverging_run_says_so(f):
                                   initial_state_set=so.Box([1.0], [2.0]))
     with pytest.raises(so.UnboundedSetError, match="diverged at step"):
         for _ in range(400):
-            obs.update([np.nan])
+            obs.step([np.nan])

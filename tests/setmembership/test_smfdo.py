@@ -243,18 +243,18 @@ def test_theorem1_failing_carries_report():
 def test_bad_measurements():
     obs = so.SMFDO(so.examples.chang2006())
     with pytest.raises(DimensionError, match="y must have length 2, got 3"):
-        obs.update([0.0, 0.0, 0.0])
+        obs.step([0.0, 0.0, 0.0])
     with pytest.raises(InvalidValueError, match="y contains inf"):
-        obs.update([np.inf, 0.0])  # (NaN means "not measured")
+        obs.step([np.inf, 0.0])  # (NaN means "not measured")
     with pytest.raises(DimensionError, match="Y must have 2 columns"):
         obs.run(np.zeros((5, 3)))
     sysu = LinearSystem(np.eye(2) * 0.5, [[1.0], [0.0]], [[1.0, 0.0], [0.0, 1.0]], [[0.0], [1.0]])
     with pytest.raises(ArgumentError, match="U is required"):
         so.SMFDO(sysu, window=3).run(np.zeros((4, 2)))
-    with pytest.raises(DimensionError, match="u_prev must have length 1, got 2"):
-        o = so.SMFDO(sysu, window=3)
-        o.update([0.0, 0.0])
-        o.update([0.0, 0.0], [1.0, 2.0])
+    with pytest.raises(ArgumentError, match="u is required"):
+        so.SMFDO(sysu, window=3).step([0.0, 0.0])
+    with pytest.raises(DimensionError, match="u must have length 1, got 2"):
+        so.SMFDO(sysu, window=3).step([0.0, 0.0], [1.0, 2.0])
 
 
 def test_inconsistent_data_raises_or_resets():
@@ -385,7 +385,7 @@ def test_windowed_step_equals_an_independent_lp_over_the_window(window, fast):
     checked = 0
     for k in range(60):
         box = obs.restart_box
-        st = obs.update(Y[k])
+        st = obs.step(Y[k])
         if box is None or k < 2 * window:
             continue
         lo, hi = _window_lp_bounds(sys, box, Y[k - window + 1:k + 1], 1.0)

@@ -61,7 +61,7 @@ def _lp_instances(obs, Y, U=None):
     """Run ``obs`` and yield every fast-path step's (model, b, h)."""
     for j, y in enumerate(Y):
         before = obs.stats["fast"]
-        obs.update(y, None if U is None or j == 0 else U[j - 1])
+        obs.step(y, None if U is None else U[j])
         if obs.stats["fast"] > before:
             model, _, b, h = obs.fast_path_instance
             yield model, b, h

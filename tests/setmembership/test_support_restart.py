@@ -134,7 +134,7 @@ def test_the_support_values_are_outer_bounds_of_the_true_rows():
     F = obs.model.restart_poly.F_all
     seen = 0
     for k in range(len(Y)):
-        obs.update(Y[k])
+        obs.step(Y[k])
         sup = obs._state.support[-1]
         if sup is None:
             continue

@@ -147,8 +147,8 @@ def test_copy_shares_no_mutable_state():
     obs = so.SMFDO(s, **kw)
     first = obs.run(Y[:60])
     twin = copy.copy(obs)
-    rest_twin = twin.run(Y[60:])
-    rest = obs.run(Y[60:])
+    rest_twin = twin.continue_run(Y[60:])
+    rest = obs.continue_run(Y[60:])
     for r in (rest, rest_twin):
         np.testing.assert_array_equal(np.vstack([first.hi, r.hi]), ref.hi)
         np.testing.assert_array_equal(np.vstack([first.lo, r.lo]), ref.lo)

@@ -198,7 +198,26 @@ class PointObserver:
         return None
 
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> ObserverResult:
-        """Run over a record from a fresh start (calls :meth:`reset` first).
+        """Run over a record from a fresh start: :meth:`reset`, then :meth:`continue_run`.
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+            Measured outputs.
+        U : array_like, shape (N, p), optional
+            Applied inputs (``U[k]`` with ``Y[k]``; required when the system has inputs).
+
+        Returns
+        -------
+        ObserverResult
+            As :meth:`continue_run`.
+        """
+        self.reset()
+        return self.continue_run(Y, U)
+
+    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None) -> ObserverResult:
+        """Run over a record from the current estimate (what :meth:`run` does after
+        :meth:`reset`).
 
         With a feedthrough (``sys.Du != 0``), ``Du u_k`` is subtracted from
         ``y_k`` first (``U`` is then required); :meth:`step` takes the
@@ -228,7 +247,6 @@ class PointObserver:
                 raise ArgumentError("U is required: the system has a feedthrough Du "
                                      "(y = Xi x + Du u)")
             Ya = Ya - Ua[:N] @ self.sys.Du.T
-        self.reset()
         D = np.empty((N, self.sys.q))
         X = None
         for k in range(N):

@@ -290,7 +290,26 @@ class NonlinearModularObserver(PointObserver):
         return self._xk
 
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> NonlinearObserverResult:
-        """Run over a record from a fresh start.
+        """Run over a record from a fresh start: :meth:`reset`, then :meth:`continue_run`.
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+        U : None
+            No known inputs.
+
+        Returns
+        -------
+        NonlinearObserverResult
+            As :meth:`continue_run`.
+        """
+        self.reset()
+        return self._continue(Y, U)
+
+    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None
+                     ) -> NonlinearObserverResult:
+        """Run over a record from the current step (what :meth:`run` does after
+        :meth:`reset`); the record's first estimate counts as untrusted.
 
         Parameters
         ----------
@@ -304,11 +323,15 @@ class NonlinearModularObserver(PointObserver):
             ``estimate`` (``w^``), ``x_hat``, ``x_tilde`` and the ``untrusted`` steps
             (a ``RuntimeWarning`` says how many).
         """
+        return self._continue(Y, U)
+
+    def _continue(self, Y: ArrayLike, U: ArrayLike | None) -> NonlinearObserverResult:
+        """:meth:`continue_run`'s work (its warning points at the caller of ``run`` or
+        ``continue_run``)."""
         if U is not None and np.size(U):
             raise ArgumentError("the nonlinear modular observer takes no inputs")
         Ya = as_matrix("Y", Y, cols=self.sys.l)
         N = Ya.shape[0]
-        self.reset()
         D = np.empty((N, self.sys.q))
         X = np.empty((N, self.sys.n))
         Xt = np.empty((N, self.sys.n))
@@ -336,7 +359,7 @@ class NonlinearModularObserver(PointObserver):
                           f"{self.trust_tol:g} (result.consistency: an error estimate; "
                           "result.untrusted), or from an unconverged Newton solve; a higher "
                           "order, a design closer to the operating point, or the linearizing "
-                          "coordinates may help", RuntimeWarning, stacklevel=2)
+                          "coordinates may help", RuntimeWarning, stacklevel=3)
         return NonlinearObserverResult(D, X, 0, self.gains, dt=self.sys.dt,
                                        names=tuple(self.sys.disturbance_names),
                                        observer=self.name, x_tilde=Xt, consistency=cons,

@@ -128,6 +128,7 @@ Disturbances
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -508,7 +509,7 @@ class NonlinearSetObserver:
     >>> obs = so.NonlinearSetObserver(["0.9*x + 0.1*sin(x)"], ["x**3 + x"], ["x"],
     ...                               process_noise=0.01, measurement_noise=0.05,
     ...                               initial_state_set=so.Box([-1.0], [1.0]))
-    >>> step = obs.update([0.5])
+    >>> step = obs.step([0.5])
     >>> bool(step.state_lo[0] < 0.45 < step.state_hi[0])
     True
     """
@@ -656,8 +657,23 @@ class NonlinearSetObserver:
         self._last_width: NDArray[np.float64] | None = None  # (the last step's bands)
 
     # ------------------------------------------------------------------ one step
-    @with_single_threaded_blas
     def update(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
+        """Deprecated name of :meth:`step`.
+
+        Parameters
+        ----------
+        y : array_like, shape (l,)
+            The measurement.
+        u : array_like, shape (p,), optional
+            The input at step ``k``.
+        """
+        warnings.warn("NonlinearSetObserver.update() is deprecated: use step() (the "
+                      "estimators' one protocol: reset, step, run)", DeprecationWarning,
+                      stacklevel=2)
+        return self.step(y, u)
+
+    @with_single_threaded_blas
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
         """Take the measurement ``y_k`` (NaN: not measured) with the input ``u_k``, and
         return step ``k``'s certified bounds; then predict step ``k + 1``.
 
@@ -1056,7 +1072,26 @@ class NonlinearSetObserver:
     # ------------------------------------------------------------------ a record
     @with_single_threaded_blas  # (its small dense kernels: :mod:`setobs._blas`)
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
-        """Estimate over a record from ``X_0`` (the observer is reset first).
+        """Estimate over a record from ``X_0``: :meth:`reset`, then :meth:`continue_run`.
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+            Measurements (NaN: not measured).
+        U : array_like, shape (N, p), optional
+            Inputs (``u_k`` with ``y_k``).
+
+        Returns
+        -------
+        SMFDOResult
+            The record's bands (:meth:`continue_run`).
+        """
+        self.reset()
+        return self.continue_run(Y, U)
+
+    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
+        """Estimate over a record continuing from the current step (what :meth:`run` does
+        after :meth:`reset`).
 
         Parameters
         ----------
@@ -1084,8 +1119,7 @@ class NonlinearSetObserver:
             Um = as_matrix("U", U, rows=N, cols=self.p)
         else:
             Um = np.zeros((N, 0))
-        self.reset()
-        steps = [self.update(Ym[k], Um[k]) for k in range(N)]
+        steps = [self.step(Ym[k], Um[k]) for k in range(N)]
         q = self.q
         lo = np.array([s.lo for s in steps]).reshape(N, q)
         hi = np.array([s.hi for s in steps]).reshape(N, q)

@@ -170,7 +170,7 @@ class _Delegated:
 
     def __set__(self, obj: object, value: object) -> None:
         raise ImmutableError(f"SMFDO.{self.name} is fixed (build a new SMFDO, or "
-                             "reset_state() to start again)")
+                             "reset() to start again)")
 
 
 class SMFDO:
@@ -368,7 +368,7 @@ class SMFDO:
             HistoryEngine(reference) if m.history_on else None,
             WindowEngine(), reference) if eng is not None)
         self._state: SMFDOState | None = None
-        self.reset_state()
+        self.reset()
 
     def __copy__(self) -> SMFDO:
         """An independent copy (``copy.copy`` is ``copy.deepcopy`` here): the
@@ -379,10 +379,16 @@ class SMFDO:
 
         return copy.deepcopy(self)
 
-    def reset_state(self) -> None:
+    def reset(self) -> None:
         """Forget all data and start again at ``k = 0``."""
         m = self.model
         self._state = SMFDOState(m.window, m.restart_lags, m.ubar, previous=self._state)
+
+    def reset_state(self) -> None:
+        """Deprecated name of :meth:`reset`."""
+        warnings.warn("SMFDO.reset_state() is deprecated: use reset() (the estimators' one "
+                      "protocol: reset, step, run)", DeprecationWarning, stacklevel=2)
+        self.reset()
 
     @property
     def posterior_set(self) -> ConstrainedZonotope | None:
@@ -458,22 +464,25 @@ class SMFDO:
         for benchmarks and for choosing a window."""
         return self._state.iterations()
 
-    def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
-               u: ArrayLike | None = None) -> SMFDOStep:
-        """Process the measurement ``y_k`` (and the input ``u_(k-1)`` applied before it).
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
+        """Process the measurement ``y_k`` with the input ``u_k`` of the same step.
+
+        The estimators' one record convention: ``u_k`` is applied at the time of
+        ``y_k`` (it moves ``x_k`` to ``x_(k+1)``, and enters ``y_k`` through a
+        feedthrough ``D_u``), so a record's ``U[k]`` goes with ``Y[k]``.
 
         Parameters
         ----------
         y : array_like, shape (l,)
             Measurement at step ``k``; NaN entries are outputs not measured at
             this step (all NaN: a prediction step).
-        u_prev : array_like, shape (p,), optional
-            Known input ``u_(k-1)`` (ignored at ``k = 0``). May be omitted right
-            after :meth:`run` was given ``U`` with ``N`` rows (its last row is
-            ``u_(k-1)``), or after an ``update`` that was given ``u``.
         u : array_like, shape (p,), optional
-            The input ``u_k`` at this step: required when the system has a
-            feedthrough ``D_u`` (``y_k = Xi x_k + D_u u_k + F v_k``).
+            The input ``u_k`` (required when the system has inputs).
+
+        Returns
+        -------
+        SMFDOStep
+            Step ``k``'s certified bounds and status.
 
         Raises
         ------
@@ -481,6 +490,36 @@ class SMFDO:
             If no state and disturbance history explains the data
             (``on_inconsistent="raise"``).
         """
+        if self.sys.p and u is None:
+            raise ArgumentError(f"u is required: the system has {self.sys.p} input(s) (pass "
+                                "zeros explicitly if none was applied)")
+        if not self.sys.p and u is not None and np.size(u) == 0:
+            u = None  # (a record's empty input row of a system without inputs)
+        return self._step(y, None, u)
+
+    def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
+               u: ArrayLike | None = None) -> SMFDOStep:
+        """Deprecated: :meth:`step` takes ``u_k`` with ``y_k``; ``update`` took the input
+        ``u_(k-1)`` applied before ``y_k`` (and ``u_k`` as ``u=`` with a feedthrough).
+
+        Parameters
+        ----------
+        y : array_like, shape (l,)
+            Measurement at step ``k``.
+        u_prev : array_like, shape (p,), optional
+            Known input ``u_(k-1)`` (ignored at ``k = 0``).
+        u : array_like, shape (p,), optional
+            The input ``u_k`` at this step.
+        """
+        warnings.warn("SMFDO.update(y, u_prev) is deprecated: use step(y, u) with the input "
+                      "of the same step (U[k] with Y[k])", DeprecationWarning, stacklevel=2)
+        return self._step(y, u_prev, u)
+
+    def _step(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
+              ) -> SMFDOStep:
+        """One step with the input before it (``u_prev``, else the one carried from the
+        last step) and the current one (``u``): :meth:`_update` under the BLAS policy,
+        and the skip limit."""
         if self._state.blas_small:
             # the last step was a window small enough for BLAS to run single-threaded
             # by itself (setobs._blas.SMALL_BLAS_DIM): the limit's four thread-count
@@ -508,16 +547,42 @@ class SMFDO:
                 return commit(m, s, k, mode, out)
         raise InternalError("no engine answered (the reference recursion always does)")
 
-    @with_single_threaded_blas
     def run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
             progress: bool = False, ignore: ArrayLike | None = None) -> SMFDOResult:
-        """Process a whole record from the current state.
+        """Process a whole record from the start: :meth:`reset`, then
+        :meth:`continue_run` (its parameters, returns and warnings).
 
         Parameters
         ----------
         Y : array_like, shape (N, l)
-            Measurements ``y_0 .. y_(N-1)`` (continuing from the current step
-            when the observer has already seen data). NaN entries: not
+            Measurements ``y_0 .. y_(N-1)``.
+        U : array_like, shape (N, p) or (N-1, p), optional
+            Inputs aligned with ``Y`` (``U[k]`` with ``Y[k]``).
+        progress : bool
+            Show a progress bar.
+        ignore : array_like, optional
+            Samples to ignore (a mask or indices).
+
+        Returns
+        -------
+        SMFDOResult
+            The record's certified bands.
+        """
+        self.reset()
+        return self.continue_run(Y, U, progress=progress, ignore=ignore)
+
+    @with_single_threaded_blas
+    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
+                     progress: bool = False, ignore: ArrayLike | None = None
+                     ) -> SMFDOResult:
+        """Process a record continuing from the current state (what :meth:`run` does
+        after :meth:`reset`).
+
+        Parameters
+        ----------
+        Y : array_like, shape (N, l)
+            Measurements ``y_k .. y_(k+N-1)``, continuing from the current step
+            when the observer has already seen data. NaN entries: not
             measured (a row of NaN is a prediction step).
         U : array_like, shape (N, p) or (N-1, p), optional
             Inputs aligned with ``Y``: ``U[j]`` is applied at the time of
@@ -558,7 +623,7 @@ class SMFDO:
                 if j % 200 == 0 and j:
                     bar.update(200)
                 u = Ua[j - 1] if (Ua is not None and j >= 1) else None
-                steps.append(self.update(Ya[j], u, u=Ua[j] if with_u else None))
+                steps.append(self._step(Ya[j], u, Ua[j] if with_u else None))
             bar.update(N - bar.n)
         finally:
             st.in_run = False
