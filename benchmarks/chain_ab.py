@@ -9,7 +9,7 @@ and keep the order they were built with):
 * ``exact``: exact mode with noise with ``setobs.lp.boxlp``'s chain on (for any number
   of bounds) and off (one HiGHS model per bound): time per step;
 * ``support``: the constant-velocity target at window 10 with the restart's support
-  values on and off (``setobs.setmembership._windowed.SUPPORT_RANGES``), restart depth
+  values on and off (``setobs.setmembership.engines.window.SUPPORT_RANGES``), restart depth
   30 and 60: mean / worst width against the whole-history LP (from k = 25, every fifth
   step).
 
@@ -58,13 +58,13 @@ def one(kind: str, name: str, N: int, on: bool, depth: int) -> dict:
     import setobs as so
     from _common import linprog_unit
     from setobs.lp import boxlp, fastlp
-    from setobs.setmembership import _windowed
+    from setobs.setmembership.engines import window as window_engine
     from state_estimation import noise_model, record
 
     fastlp.PRIMAL_CHAIN = fastlp.CHAIN_ORDER = on if kind == "window" else True
     boxlp.CHAIN = on if kind == "exact" else True
     boxlp.CHAIN_MIN_OBJECTIVES = 1
-    _windowed.SUPPORT_RANGES = on if kind == "support" else True
+    window_engine.SUPPORT_RANGES = on if kind == "support" else True
     A, B, C, rw, rv = plant(name)
     n = A.shape[0]
     X, Y, U = record(A, B, C, rw, rv, N, 0)

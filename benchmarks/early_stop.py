@@ -2,7 +2,7 @@
 
 The window's hull LPs stop once their certified duality gap is at most ``WINDOW_REL_GAP``
 times the coordinate's width at the previous window step
-(:mod:`setobs.setmembership._window`). Each bound is certified; within one step a band is
+(:mod:`setobs.setmembership._closed_form`). Each bound is certified; within one step a band is
 at most ``2 WINDOW_REL_GAP`` of its width wider than the window LP's hull, but the
 restart box carries a step's widening into the next windows, so over a record the bands
 can widen by more. This measures it: random stable plants (3-8 states, 1-3 outputs,
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 import setobs as so
-from setobs.setmembership import _window
+from setobs.setmembership import _closed_form
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
@@ -38,8 +38,8 @@ from _common import stamp  # noqa: E402
 
 
 def bands(sysm, Y, rw, rv, restart: str, gap: float) -> np.ndarray:
-    old = _window.WINDOW_REL_GAP
-    _window.WINDOW_REL_GAP = gap
+    old = _closed_form.WINDOW_REL_GAP
+    _closed_form.WINDOW_REL_GAP = gap
     try:
         n = sysm.n
         obs = so.SMFDO(sysm, window=10, restart=restart, process_noise=rw,
@@ -47,7 +47,7 @@ def bands(sysm, Y, rw, rv, restart: str, gap: float) -> np.ndarray:
                        initial_state_set=so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n)))
         res = obs.run(Y)
     finally:
-        _window.WINDOW_REL_GAP = old
+        _closed_form.WINDOW_REL_GAP = old
     return res.state_hi - res.state_lo
 
 

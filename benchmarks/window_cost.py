@@ -38,7 +38,7 @@ sys.path.insert(0, str(HERE))
 import setobs as so  # noqa: E402
 from _common import linprog_unit, stamp  # noqa: E402
 from setobs.lp import fastlp  # noqa: E402
-from setobs.setmembership import _window  # noqa: E402
+from setobs.setmembership import _closed_form  # noqa: E402
 from state_estimation import noise_model, random_system, record, tanks_outputs  # noqa: E402
 
 SETS = 5
@@ -108,7 +108,7 @@ def chains(name: str) -> dict:
         st2, st3 = copy.deepcopy(st), copy.deepcopy(st)
         orig(lp, b, h, st2, b_scale, b_err)
         ours = int(st2.iters.sum() - st.iters.sum())
-        orig(lp, b, h, st3, b_scale, b_err, _window.WINDOW_REL_GAP)
+        orig(lp, b, h, st3, b_scale, b_err, _closed_form.WINDOW_REL_GAP)
         ours_early = int(st3.iters.sum() - st.iters.sum())
         hB, bred, ok = lp.reduced_data(b, h, b_scale)
         assert ok

@@ -190,11 +190,17 @@ def upward_imports(root: Path) -> list[str]:
     bad = []
     for pkg, allowed in ALLOWED_ABOVE_BASE.items():
         for path in sorted((root / pkg).rglob("*.py")):
+            # the package the file is in (a subpackage's file: deeper), for the level of a
+            # relative import
+            here = list(path.relative_to(root).parts[:-1])
             for node in ast.walk(ast.parse(path.read_text())):
                 targets = []
-                if isinstance(node, ast.ImportFrom) and node.level >= 2:
-                    mod = (node.module or "").split(".")[0]
-                    targets = [mod] if mod else [a.name for a in node.names]
+                if isinstance(node, ast.ImportFrom) and node.level >= 1:
+                    base = here[:len(here) - (node.level - 1)] if node.level - 1 <= len(here) \
+                        else []
+                    mod = [p for p in (node.module or "").split(".") if p]
+                    full = base + mod
+                    targets = [full[0]] if full else [a.name for a in node.names]
                 elif isinstance(node, ast.ImportFrom) and node.level == 0 and (
                         node.module or "").startswith("setobs."):
                     targets = [node.module.split(".")[1]]

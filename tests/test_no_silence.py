@@ -104,7 +104,7 @@ def test_printing_a_long_result_is_a_summary():
     fin = np.isfinite(w)
     k, i = np.unravel_index(int(np.argmax(np.where(fin, w, -np.inf))), w.shape)
     assert f"{res.names[i]} at k = {k}, [{res.lo[k, i]:.6g}, {res.hi[k, i]:.6g}]" in text
-    assert "SMFDOResult: 2000 steps" in text and "1999" in text
+    assert "SetEstimateResult: 2000 steps" in text and "1999" in text
     row = res.summary(start=10).iloc[0]
     half = 0.5 * (res.state_hi[10:] - res.state_lo[10:])
     ok = np.isfinite(half).all(axis=1)

@@ -439,7 +439,7 @@ def study(config: str, dask: str | None = None, out: str | None = None,
             raise CLIError(f"{key} must be an integer, got {val!r}")
     ref_window = cfg.get("reference_window", 20)
     if ref_window is not None:
-        from .setmembership._setup import check_window
+        from .setmembership._sets import check_window
 
         try:
             check_window(ref_window)

@@ -1,6 +1,6 @@
 """The result protocol shared by every time-series result of the package.
 
-:class:`~setobs.setmembership.SMFDOResult`, :class:`~setobs.observers.ObserverResult`,
+:class:`~setobs.setmembership.SetEstimateResult`, :class:`~setobs.observers.ObserverResult`,
 :class:`~setobs.compare.ComparisonTable` and
 :class:`~setobs.studies.CampaignResult` all offer
 

@@ -18,7 +18,7 @@ from scipy.optimize import linprog
 import setobs as so
 from setobs.geometry import ConstrainedZonotope
 from setobs.setmembership._history import HistoryLP
-from setobs.setmembership._setup import Entry
+from setobs.setmembership._model import Entry
 from tests.oracles import history_lp_highs, solve_state_history_lp, state_history_lp
 
 

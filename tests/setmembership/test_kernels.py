@@ -14,7 +14,7 @@ import pytest
 
 from setobs import ConstrainedZonotope
 from setobs.setmembership import _kernels
-from setobs.setmembership._window import WindowModel
+from setobs.setmembership._closed_form import WindowModel
 from tests.oracles import assert_box_covers, assert_outward_sums, outward_sum_cases
 
 

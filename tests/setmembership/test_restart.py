@@ -242,7 +242,7 @@ def test_auto_weighs_the_polytopes_gain_on_average():
     """The rule at a probe: the polytope is kept when it narrows the bands by more than
     1 % of the box restart's widths on average or more than 5 % in one coordinate;
     coordinates with a non-finite or zero width are left out."""
-    from setobs.setmembership._windowed import polytope_pays
+    from setobs.setmembership.engines.window import polytope_pays
 
     wb = np.ones(10)
     one = wb.copy()

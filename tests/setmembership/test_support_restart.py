@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import setobs as so
-from setobs.setmembership import _windowed
+from setobs.setmembership.engines import window as window_engine
 from tests.oracles import history_lp_highs
 
 DT, RV, RADIUS, SIDES = 0.01, 0.1, 0.0017, 10
@@ -101,7 +101,7 @@ def test_without_the_support_values_the_same_window_is_wider(exact_cv, monkeypat
     lags; here, with 59, 1.05 against 1.02 on average)."""
     X, Y, ks, ref = exact_cv
     with_support = ratios(observer().run(Y), ks, ref)
-    monkeypatch.setattr(_windowed, "SUPPORT_RANGES", False)
+    monkeypatch.setattr(window_engine, "SUPPORT_RANGES", False)
     obs = observer()
     res = obs.run(Y)
     assert np.all((X >= res.state_lo) & (X <= res.state_hi))

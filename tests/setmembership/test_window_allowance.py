@@ -18,9 +18,10 @@ import pytest
 import setobs as so
 from setobs.exceptions import SolverWarning
 from setobs.geometry import Box
-from setobs.setmembership import _window, _windowed
+from setobs.setmembership import _closed_form
+from setobs.setmembership._closed_form import ModelCache
 from setobs.setmembership._powers import PowerTable
-from setobs.setmembership._setup import ModelCache
+from setobs.setmembership.engines import window as window_engine
 from setobs.tolerances import ALLOWANCE_RTOL
 from tests.oracles import history_lp_highs
 
@@ -148,9 +149,9 @@ def test_a_step_whose_allowance_dominates_says_so(monkeypatch):
     X, _, Y = corner_record(sysm, rng, 20, 1e-3, 1e-3, 0.0, box)
     # (gK about 1e-3: an allowance of 1e-3 |y| on every measurement row; a cache of
     # its own, so that no other test meets these structures)
-    real_rtol = _window.model_rtol
-    monkeypatch.setattr(_window, "model_rtol", lambda *a: 1e-3)
-    monkeypatch.setattr(_windowed, "MODEL_CACHE", ModelCache())
+    real_rtol = _closed_form.model_rtol
+    monkeypatch.setattr(_closed_form, "model_rtol", lambda *a: 1e-3)
+    monkeypatch.setattr(window_engine, "MODEL_CACHE", ModelCache())
     obs = so.SMFDO(sysm, window=4, process_noise=1e-3 * np.ones(n),
                    measurement_noise=1e-3 * np.ones(2), initial_state_set=Box(*box),
                    state_bounds=True)
@@ -167,8 +168,8 @@ def test_a_step_whose_allowance_dominates_says_so(monkeypatch):
     # the gap is what the allowance costs: before the first restart (k < window, every
     # step from the initial set) the band's excess over the same run with the model's
     # true rounding allowance is within the step's gap of the band
-    monkeypatch.setattr(_window, "model_rtol", real_rtol)
-    monkeypatch.setattr(_windowed, "MODEL_CACHE", ModelCache())
+    monkeypatch.setattr(_closed_form, "model_rtol", real_rtol)
+    monkeypatch.setattr(window_engine, "MODEL_CACHE", ModelCache())
     ref = so.SMFDO(sysm, window=4, process_noise=1e-3 * np.ones(n),
                    measurement_noise=1e-3 * np.ones(2), initial_state_set=Box(*box),
                    state_bounds=True).run(Y)

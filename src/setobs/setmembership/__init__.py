@@ -9,6 +9,8 @@ from .smfdo import (
     ExistenceError,
     ModelInvalidatedError,
     ModelInvalidatedWarning,
+    SetEstimateResult,
+    SetEstimateStep,
     SMFDOResult,
     SMFDOStep,
 )
@@ -24,6 +26,8 @@ __all__ = [
     "PointEstimate",
     "SMFDOResult",
     "SMFDOStep",
+    "SetEstimateResult",
+    "SetEstimateStep",
     "SkipLimitError",
     "calibrate_noise",
     "chebyshev_center",

@@ -1,8 +1,8 @@
 """The one commit of an SMFDO step: an engine's answer recorded in the estimator's state.
 
-Every engine (:mod:`._exact`, :mod:`._windowed`, :mod:`._recursion`) answers a step
-with an :class:`~._state.Outcome` or declines; :meth:`setobs.SMFDO.update` commits
-the first answer here: the window's history and restart hulls, the reported
+Every engine (:mod:`setobs.setmembership.engines`) answers a step with an
+:class:`~._state.Outcome`, hands it off or declines; :meth:`setobs.SMFDO.step` commits
+the answer here: the window's history and restart hulls, the reported
 bounds (with their outward margin), and the states' bounds with the tracked
 unobservable part (:mod:`._unobservable`).
 """
@@ -18,9 +18,11 @@ from ..exceptions import EmptySetError, SolverWarning
 from ..geometry import Box, ConstrainedZonotope
 from ..geometry.box import trusted_box
 from ..geometry.zonotope import hull_with_status
-from ._setup import Entry, SMFDOModel
+from ._model import Entry, SMFDOModel
+from ._recursion import posterior, prior
+from ._set_estimates import SetEstimateStep
 from ._state import Outcome, SMFDOState
-from ._steps import SMFDOStep
+from ._unobservable import STARTUP_STEPS
 
 __all__ = ["add_unobservable", "commit", "hull_pair", "startup_step"]
 
@@ -28,7 +30,7 @@ __all__ = ["add_unobservable", "commit", "hull_pair", "startup_step"]
 _kernels = lazy_module("setobs.setmembership._kernels")
 
 
-def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMFDOStep:
+def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SetEstimateStep:
     """Record step ``k`` (an engine's :class:`~._state.Outcome`, reached in ``mode``) in
     the state: the posterior, the window's history and restart hull (eq. (24)), the
     reported bounds with the outward margin, the state bounds with the unobservable
@@ -43,10 +45,9 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMF
     if mode == "box":
         s.windowing = True
     # the outward margin, the centre and the half-widths in one compiled call
-    has_o = box_o is not None
+    hull = box_o if box_o is not None else box
     ho_lo, ho_hi, lo, hi, est, rad, finite = _kernels.reported(
-        box_o.lo if has_o else box.lo, box_o.hi if has_o else box.hi, box.lo, box.hi,
-        m.margin)
+        hull.lo, hull.hi, box.lo, box.hi, m.margin)
     if m.window is not None:  # (exact mode runs the plain recursion: no history)
         s.hist.append(e)  # e.dd is None at k = 0 (never used)
         # The restart box of eq. (24) gets the same relative margin as the
@@ -73,12 +74,12 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> SMF
     x_lo = x_hi = None
     if box_x is not None:
         x_lo, x_hi = m.outward(box_x.lo, box_x.hi)
-        if m.ubar is None:
+        if m.ubar is None or box_o is None:  # (box_o: computed whenever ubar is)
             x_lo[m.x_free], x_hi[m.x_free] = -np.inf, np.inf
         else:
             x_lo, x_hi = add_unobservable(m, s, k, e, box_o, x_lo, x_hi)
     # (first_inconsistent: the first skipped or reset step since k = 0)
-    return SMFDOStep(k, est, lo, hi, rad, out.Zd, status, x_lo, x_hi,
+    return SetEstimateStep(k, est, lo, hi, rad, out.Zd, status, x_lo, x_hi,
                      s.first_inconsistent is not None, float(out.gap))
 
 
@@ -126,16 +127,14 @@ def startup_step(m, s, e: Entry, Z: ConstrainedZonotope | None):
     previous step, ``None`` at ``k = 0``): ``(Z_k, hull of the state, hull of
     zbar)``, or ``None`` when it ends (``STARTUP_STEPS`` reached, an empty or
     numerically failed set: the tracker is then lost, as before)."""
-    from ._unobservable import STARTUP_STEPS
-
     M = m.startup
     s.startup_Z = None
     if s.startup_steps >= STARTUP_STEPS:
         return None
     s.startup_steps += 1
     try:
-        Zp = M.Z0 if Z is None else m.prior(Z, e, M)
-        Zk = m.posterior(Zp, e, s.startup_steps, M.C)
+        Zp = M.Z0 if Z is None else prior(m, Z, e, M)
+        Zk = posterior(m, Zp, e, s.startup_steps, M.C)
         # (a fallback is still a certified hull, only wider: not flagged here)
         box_x = hull_with_status(M.X @ Zk)[0]
         box_b = hull_with_status(M.bar @ Zk)[0]

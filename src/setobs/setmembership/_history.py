@@ -187,7 +187,7 @@ class HistoryLP:
 
     def push(self, e) -> None:
         """Add the step of entry ``e`` (``y``, ``u``, ``dd``, ``w``, ``v``, ``yerr`` of
-        :class:`~setobs.setmembership._setup.Entry`): the new state, the factors
+        :class:`~setobs.setmembership._model.Entry`): the new state, the factors
         of its uncertainty sets, the dynamics and the measurement rows."""
         if self.box is None:
             raise InternalError("HistoryLP.push: the last step has no hull yet (call hull)")

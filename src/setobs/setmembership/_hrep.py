@@ -29,7 +29,7 @@ and computes one step at a time:
 2. **Offsets** ``g_k`` and the box, *certified*: one prior/posterior step of
    eqs. (20)-(21) from the constrained zonotope of ``P_(k-1)`` (Scott et al.
    2016, Theorem 1, :func:`setobs.geometry.polytope.hpolytope_in_box`) is a
-   :class:`~setobs.setmembership._window.WindowModel` with ``s = 1`` whose
+   :class:`~setobs.setmembership._closed_form.WindowModel` with ``s = 1`` whose
    objectives are the coordinates, ``P`` and the normals ``H_k``; its LPs go
    through the compiled warm-started simplex with the same certificate as
    every interval hull of the library.

@@ -1,5 +1,5 @@
 """Compiled kernels of the windowed SMFDO's step (numba): the assembly of the closed
-form's data (:meth:`setobs.setmembership._window.WindowModel.assemble`) and the
+form's data (:meth:`setobs.setmembership._closed_form.WindowModel.assemble`) and the
 outward margin and centre of the reported bounds (:func:`setobs.setmembership._commit.commit`).
 
 Each replaces a dozen or more small numpy calls (about 1.5 us each) on vectors of a

@@ -1,7 +1,7 @@
 """Computed powers of the observable dynamics with a bound on their rounding that does
 not compound: the error scale of the window's closed form and of its restart rows.
 
-The closed form of ``s`` steps (:mod:`._window`) and the restart rows
+The closed form of ``s`` steps (:mod:`._closed_form`) and the restart rows
 (:mod:`._restart`) read the powers ``A^k`` (``A = A_o``) through products computed in
 floating point. The textbook bound on such a product, ``gamma |A|^k`` (Higham,
 Lemma 3.5 iterated), is valid but grows like the spectral radius of ``|A|``, not of

@@ -1,124 +1,100 @@
-"""The reference engine of the SMFDO: the set recursion (eqs. (20)-(21)) that always answers.
+"""The recursion of the SMFDO (Li-Cong-Dong, Algorithm 1, lines 5-11 and 14): the prior
+(eq. (20)), the posterior (eq. (21)) and the bounds of a posterior (line 14), on
+constrained zonotopes over the model (:class:`._model.SMFDOModel`).
 
-Every step the other engines decline (or cannot decide: an LP that is not
-optimal, data that may contradict the model) is decided here, on constrained
-zonotopes with certified hulls, emptiness tests and retries. This engine owns the
-``on_inconsistent`` policy: a certified empty posterior raises
-:class:`~setobs.ModelInvalidatedError`, drops the measurement (``"skip"``), or
-restarts from an inflated box (``"reset"``); and it flags a step whose LP fell
-back to a wider certified bound.
-"""
+The reference engine runs them step by step and over the window's re-run (eq. (24));
+the start-up of the unobservable part runs them on its joint model."""
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
+from numpy.typing import NDArray
 
-from ..exceptions import EmptySetError, ModelInvalidatedWarning, SolverWarning
+from .._rounding import UNIT_ROUNDOFF
 from ..geometry import Box, ConstrainedZonotope
-from ..geometry.zonotope import hull_with_status
-from ._setup import Entry, SMFDOModel
-from ._state import Outcome, SMFDOState
-from ._windowed import restart_cz, window_hist
+from ..geometry.zonotope import absorb_center_error, hull_with_status, trusted_cz
+from ..tolerances import CENTER_ERROR_ABSORB_RTOL
+from ._closed_form import model_rtol
+from ._model import Entry, SMFDOModel
+from ._unobservable import StartupModel
 
-__all__ = ["ON_INCONSISTENT", "ReferenceEngine"]
-
-#: ``on_inconsistent`` choices.
-ON_INCONSISTENT = ("raise", "skip", "reset")
+__all__ = ["bounds", "posterior", "prior"]
 
 
-class ReferenceEngine:
-    """The set recursion: prior and posterior (eqs. (20)-(21)) from the last posterior,
-    from ``Z_0^-`` at ``k = 0``, or the window's re-run from its restart set
-    (eq. (24)); it always answers."""
+def prior(m: SMFDOModel, Z: ConstrainedZonotope, e: Entry,
+          model: StartupModel | None = None) -> ConstrainedZonotope:
+    """Eq. (20) with process noise: ``A_o Z + B_o Z^Delta + E_o W + Gamma_o u``
+    (``model``: the start-up's joint model instead, :class:`._unobservable.StartupModel`).
 
-    def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, e: Entry) -> Outcome:
-        """One step on the set recursion (eqs. (20)-(21), or the window's re-run from
-        the restart box): the bounds, and the consistency verdict and status."""
-        s.stats["reference"] += 1
-        if k == 0:
-            Zp = m.Z0_prior
-            depth = 0
-        elif mode == "box":
-            # Lines 12-13 / eq. (24): re-run the last delta steps from IH(Z_(k-delta))
-            # (cut by the carried-back rows of the polytope restart).
-            Z = restart_cz(m, s)
-            Zp = None
-            hist = window_hist(m, s, e)
-            for i, ei in enumerate(hist):
-                Zp = m.prior(Z, ei)
-                if i < len(hist) - 1:
-                    Z = m.posterior(Zp, ei, i + 1)
-            depth = len(hist)
-        else:
-            Zp = m.prior(s.posterior(), e)
-            depth = s.depth + 1
-        Z = m.posterior(Zp, e, depth)
-        status = "ok"
-        try:
-            Zd, box, box_o, fell_back, box_x = m.bounds(Z)
-        except EmptySetError:
-            msg = (f"the measurement at step k={k} is inconsistent with the model and the "
-                   "uncertainty sets (empty posterior)")
-            if m.on_inconsistent == "raise":
-                raise m.invalidated(msg, k) from None
-            # One-step prior from the last valid posterior (the windowed re-run may
-            # pass through the same inconsistency again).
-            Zp1 = m.Z0_prior if k == 0 else m.prior(s.posterior(), e)
-            if m.on_inconsistent == "skip":
-                # The measurement is dropped, here and in the window's history.
-                e = e.skipped()
-                Z = Zp1
-                depth = s.depth + 1 if k else 0
-                Zd, box, box_o, fell_back, box_x = m.bounds(Z)
-                status = "skipped"
-            else:
-                Z = self._handle_empty(m, k, Zp1, e, msg)
-                depth = 0
-                Zd, box, box_o, fell_back, box_x = m.bounds(Z)
-                # The window restarts from the reset set: eq. (24) is applied again
-                # only once delta consistent steps have been collected.
-                s.hulls.clear()
-                s.hull_u.clear()
-                s.support.clear()
-                s.hist.clear()
-                s.from_initial = False
-                s.windowing = False
-                status = "reset"
-            s.stats[status] += 1
-            if s.first_inconsistent is None:
-                s.first_inconsistent = k
-            if not s.in_run and not s.warned_inconsistent:
-                s.warned_inconsistent = True
-                warnings.warn(
-                    f"{msg}: {'skipped' if status == 'skipped' else 'reset'} "
-                    "(status recorded per step; warned once per observer)",
-                    ModelInvalidatedWarning, stacklevel=4)
-        if fell_back:
-            status = "fallback" if status == "ok" else status
-            s.stats["fallback"] += 1
-            if not s.warned_fallback:
-                s.warned_fallback = True
-                warnings.warn(
-                    f"SMFDO step k={k}: an LP failed under every solver setting; the bounds "
-                    "of this step are wider (still certified) and flagged status='fallback' "
-                    "(warned once per observer)", SolverWarning, stacklevel=4)
-        return Outcome(Z, box, box_o, Zd if m.keep_sets else None, box_x, status, depth, e)
+    The centre's rounding bound goes through ``A_o`` as factors once it is
+    above rounding level (:func:`~setobs.geometry.zonotope.absorb_center_error`).
+    """
+    A, B, E, Gam = ((m.A_o, m.B_o, m.E_o, m.Gamma_o) if model is None
+                    else (model.A, model.B, model.E, model.Gamma))
+    Z = absorb_center_error(Z, CENTER_ERROR_ABSORB_RTOL)
+    Zp = A @ Z if e.dd is None else A @ Z + B @ e.dd  # (dd: from step 1 on)
+    if e.w is not None:
+        Zp = Zp + E @ e.w
+    u = e.u
+    if u is not None and m.sys.p:
+        v = Gam @ u
+        err = m.data_rtol * (np.abs(Gam) @ np.abs(u)) if m.data_rtol else None
+        Zp = Zp.minkowski_sum(v, err=err)
+    return Zp
 
-    def _handle_empty(self, m: SMFDOModel, k: int, Zp: ConstrainedZonotope, e: Entry, msg: str):
-        """``on_inconsistent="reset"``: the posterior of an inflated box of ``Zp``."""
-        try:
-            hull, _ = hull_with_status(Zp)
-        except EmptySetError:
-            raise m.invalidated(msg + " (the prior itself is empty)", k) from None
-        w = np.where(np.isfinite(hull.width), hull.width, 0.0)
-        scale = 1.0 + float(np.abs(np.where(np.isfinite(hull.lo), hull.lo, 0.0)).max(initial=0.0))
-        factor = m.reset_inflation
-        for _ in range(40):  # inflate geometrically until the measurement is explainable
-            pad = factor * (w + scale)
-            Zr = m.posterior(m.box_cz(Box(hull.lo - pad, hull.hi + pad)), e, 0)
-            if not Zr.is_empty():
-                return Zr
-            factor *= 4.0
-        raise m.invalidated(msg + " (no reset box explains it)", k)
+
+def posterior(m: SMFDOModel, Zp: ConstrainedZonotope, e: Entry, depth: int,
+              C_full: NDArray[np.float64] | None = None) -> ConstrainedZonotope:
+    """Eq. (21): ``Zp ∩ {z : C_o z in y - F_b V}`` on the measured rows of ``y``
+    (balanced units); with no noise set, ``{z : C_o z = y}``; with nothing
+    measured, ``Zp`` (a prediction step).
+
+    ``y`` is known to within ``data_rtol |y|`` plus the model allowance of
+    ``depth`` recursion steps (see :mod:`setobs.setmembership._closed_form`) and
+    the feedthrough's rounding.
+    """
+    y = e.y
+    meas = ~np.isnan(y)
+    if not meas.any():
+        return Zp
+    nD = m.inc_fixed.n_gen if m.inc_fixed is not None else m.sys.q
+    nV = 0 if e.v is None else e.v.n_gen
+    Cf = m.C_o if C_full is None else C_full
+    rtol = m.data_rtol + model_rtol(depth, Cf.shape[1], m.sys.p, nD + nV)
+    ym = y[meas]
+    y_err = rtol * np.abs(ym)
+    if e.yerr is not None:
+        y_err = y_err + e.yerr[meas]
+    C = Cf if meas.all() else Cf[meas]
+    if e.v is None:
+        return Zp.intersect_affine(C, ym, y_err=y_err)
+    V = e.v
+    # the set y - V_m (rows m of F_b V): centre y - c_V (rounded once), the
+    # noise's own constraints, generators -G_V
+    cY = ym - V.c[meas]
+    cY_err = UNIT_ROUNDOFF * np.abs(cY) + V.c_err[meas] + y_err
+    Yset = trusted_cz(-V.G[meas], cY, V.A, V.b, V.h, V.unbounded_radius, cY_err, V.b_err)
+    return Zp.intersect(Yset, R=C)
+
+
+def bounds(m: SMFDOModel, Z: ConstrainedZonotope
+           ) -> tuple[ConstrainedZonotope, Box, Box | None, bool, Box | None]:
+    """Disturbance set ``P Z``, its hull, (windowed mode) the hull of ``Z``, whether
+    an LP fell back, and (``state_bounds``) the hull of the state ``M_x Z``."""
+    fb_o = False
+    box_o = None
+    if m.window is not None or m.history_on or (m.state_bounds and (
+            m.X_coords is not None or m.ubar is not None)):
+        box_o, fb_o = hull_with_status(Z)
+    box_x, fb_x = None, False
+    if m.state_bounds:
+        if m.X_coords is not None and box_o is not None:  # (box_o: computed above)
+            box_x = m.coordinate_states(box_o.lo, box_o.hi)
+        else:  # (the same factor polytope: its HiGHS model is reused)
+            box_x, fb_x = hull_with_status(m.Mx @ Z)
+    Zd = m.P @ Z
+    if box_o is not None and m.P_coords is not None:
+        j = m.P_coords
+        return Zd, Box(box_o.lo[j], box_o.hi[j]), box_o, fb_o or fb_x, box_x
+    box_d, fb_d = hull_with_status(Zd)
+    return Zd, box_d, box_o, fb_o or fb_d or fb_x, box_x

@@ -37,7 +37,7 @@ Support values. The window's step at ``t`` also bounds ``F_j z`` over its own po
 weak-duality bound as its hull, then widened by the reported margin): ``[s_lo, s_hi]
 ⊇ {F_j z : z in Z_t} ⊇ {F_j z : z in X_t}``, since ``Z_t ⊇ X_t`` by the same induction.
 So it is a valid range of ``F_j z_t`` too, and so is the intersection of the two ranges
-(:func:`setobs.setmembership._windowed.restart_rows`); where they would cross (only for
+(:func:`setobs.setmembership._schedule.restart_rows`); where they would cross (only for
 data that contradict the model) the carried range is kept and the LP decides. The
 carried range bounds ``F_j z_t`` through the boxes of ``Z_(t-j)`` and the noise's box
 terms; the support value sees the window's polytope itself, so it is narrower where

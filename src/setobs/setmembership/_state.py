@@ -1,11 +1,13 @@
-"""The SMFDO's mutable state: what one run has seen and carries from step to step.
+"""The SMFDO's mutable state: what one run has seen and carries from step to step, and
+what an engine answers for a step.
 
-:class:`~setobs.SMFDO` holds a frozen :class:`~setobs.setmembership._setup.SMFDOModel`
-and one :class:`SMFDOState`; its engines (:mod:`._exact`, :mod:`._windowed`,
-:mod:`._recursion`) read both and write only the state, and
-:func:`setobs.setmembership._commit.commit` records each step in it.
-:meth:`~setobs.SMFDO.reset_state` replaces it by a fresh one (the counters of
-:attr:`stats` and the one-time warnings go on).
+:class:`~setobs.SMFDO` holds a frozen :class:`~setobs.setmembership._model.SMFDOModel`
+and one :class:`SMFDOState`; its engines (:mod:`setobs.setmembership.engines`) read
+both, keep their own books (each engine's state object), and answer a step with an
+:class:`Outcome`, hand it off (:class:`Handoff`) or decline;
+:func:`setobs.setmembership._commit.commit` records each answer in the state.
+:meth:`~setobs.SMFDO.reset` replaces it by a fresh one (the counters of
+:attr:`stats` and the one-time warnings go on) and the engines' books too.
 """
 
 from __future__ import annotations
@@ -17,13 +19,21 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..exceptions import SkipLimitError
+from ..exceptions import InternalError, SkipLimitError
 from ..geometry import Box, ConstrainedZonotope
 from ..lp.fastlp import LPState
+from ._closed_form import ClosedForm
 from ._history import HistoryLP
 from ._hrep import HState
+from ._model import Entry
+from ._unobservable import UnobservableTracker
 
-__all__ = ["Outcome", "SMFDOState"]
+__all__ = ["Handoff", "Outcome", "Posterior", "SMFDOState"]
+
+#: The carried posterior: a constrained zonotope (the set recursion), exact mode's
+#: H-representation or whole-history LP, the closed form's data (a fast window step),
+#: or ``None`` before the first step.
+Posterior = ConstrainedZonotope | HState | HistoryLP | ClosedForm | None
 
 
 class Outcome(NamedTuple):
@@ -38,21 +48,32 @@ class Outcome(NamedTuple):
     fraction of a band's width that its bounds may exceed the mode's exact bounds by
     (the window's rounding allowances, exact mode's certification gap)."""
 
-    Z_src: object
+    Z_src: Posterior
     box: Box
     box_o: Box | None
     Zd: ConstrainedZonotope | None
     box_x: Box | None
     status: str
     depth: int
-    entry: object
+    entry: Entry
     blas_small: bool = False
     support: tuple | None = None
     gap: float = 0.0
 
-    def with_posterior(self, Z_src: object) -> Outcome:
+    def with_posterior(self, Z_src: Posterior) -> Outcome:
         """The same outcome carrying another representation of its posterior."""
         return self._replace(Z_src=Z_src)
+
+
+class Handoff(NamedTuple):
+    """An engine's hand-off of a step it cannot decide: the loop runs the reference
+    engine from ``start`` (the engine's exact posterior as a set), then gives the
+    answer back to ``owner.resume`` (which carries its own representation on); if the
+    reference engine raises, the state's posterior goes back to ``carried``."""
+
+    owner: object
+    start: ConstrainedZonotope
+    carried: Posterior
 
 
 class SMFDOState:
@@ -71,32 +92,63 @@ class SMFDOState:
         The state being replaced (its :attr:`stats` and one-time warnings go on).
     """
 
-    def __init__(self, window: int | None, restart_lags: int, tracker: object | None,
+    k: int
+    hulls: deque[Box]
+    hull_u: deque[NDArray[np.float64]]
+    support: deque[tuple | None]
+    hist: list[Entry]
+    Z_src: Posterior
+    from_initial: bool
+    windowing: bool
+    poly_restart: bool
+    u_pending: NDArray[np.float64] | None
+    states: dict[tuple, LPState]
+    retired_iterations: NDArray[np.int64]
+    depth: int
+    first_inconsistent: int | None
+    last_y: NDArray[np.float64]
+    ubar: UnobservableTracker | None
+    ubar_prev: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+    startup_Z: ConstrainedZonotope | None
+    startup_steps: int
+    skipped: int
+    run_length: int
+    set_hulls: dict[int, tuple]
+    box_o_last: Box | None
+    warned_inconsistent: bool
+    warned_inexact: bool
+    warned_fallback: bool
+    in_run: bool
+    blas_small: bool
+    stats: dict[str, int]
+
+    def __init__(self, window: int | None, restart_lags: int,
+                 tracker: UnobservableTracker | None,
                  previous: SMFDOState | None = None) -> None:
         self.k = -1
         # hulls of Z_(k-delta) .. Z_(k-1): the restart boxes of eq. (24)
         # (with the polytope restart also the restart_depth - 1 hulls before, and the
         # inputs entering each of them)
         keep = (window or 1) + restart_lags
-        self.hulls: deque[Box] = deque(maxlen=keep)
-        self.hull_u: deque[NDArray[np.float64]] = deque(maxlen=keep)
+        self.hulls = deque(maxlen=keep)
+        self.hull_u = deque(maxlen=keep)
         # beside each hull: the ranges of the restart rows F z over that posterior (its
         # support values, when the window computed them), else None
-        self.support: deque[tuple | None] = deque(maxlen=keep)
+        self.support = deque(maxlen=keep)
         # the data (y_j, u_(j-1), dd_(j-1)) since k = 0 (while the recursion still
         # runs from Z_0^-) or of the last delta steps (once the window restarts)
-        self.hist: list = []
-        # the posterior: a set, an HState, a HistoryLP, or (model, c, b, h, c_err, b_err)
-        # of the fast path
-        self.Z_src: object = None
+        self.hist = []
+        self.Z_src = None  # (the posterior, :data:`Posterior`)
         self.from_initial = True  # no reset since k = 0 (the closed forms from Z_0^- apply)
         self.windowing = False  # the window has restarted from a hull at least once
-        self.u_pending: NDArray[np.float64] | None = None
-        self.states: dict[tuple, LPState] = {}  # LP warm-start states, one per structure
+        # restart="auto": the polytope restart is in use (the window engine's probes
+        # choose; the schedule and the reference engine read it)
+        self.poly_restart = True
+        self.u_pending = None
+        self.states = {}  # LP warm-start states, one per structure
         self.retired_iterations = np.zeros(2, dtype=np.int64)  # (of dropped states)
-        self.mask_keys: set[bytes] = set()  # missing-sample patterns with a structure
         self.depth = 0  # recursion steps since the start set of the current posterior
-        self.first_inconsistent: int | None = None
+        self.first_inconsistent = None
         self.last_y = np.zeros(0)  # the last step's measurement (balanced units)
         self.ubar = copy.deepcopy(tracker)  # the unobservable part's tracker
         self.ubar_prev = None  # (the hull of Z_(k-1): the tracker's input)
@@ -104,20 +156,8 @@ class SMFDOState:
         self.startup_steps = 0
         self.skipped = 0  # skipped steps since k = 0 (max_skip_fraction)
         self.run_length = 0  # the record length run() is processing (0: update() alone)
-        self.auto_poly = True  # restart="auto": the polytope restart is in use
-        self.auto_count = 0  # window steps on the fast path
-        # steps between its probes (doubling while they agree) and the window step of the
-        # next one (0: not yet set, _windowed.AUTO_PROBE)
-        self.auto_period = 0
-        self.auto_next = 0
-        # the polytope restart's support values at every step (probed; None: not decided)
-        self.sup_on: bool | None = None
-        self.sup_miss = 0  # probes in a row at which they did not pay
-        self.set_hulls: dict[int, tuple] = {}  # hulls of the per-step sets it uses
-        self.h_fails = 0  # failed conversions to the H-representation in a row
-        self.h_retry_at = 0  # first step at which the next conversion is tried
-        self.hist_retry_at = 0  # (the same for exact mode's whole-history LP)
-        self.box_o_last: Box | None = None  # certified hull of the last posterior
+        self.set_hulls = {}  # hulls of the per-step sets it uses
+        self.box_o_last = None  # certified hull of the last posterior
         self.warned_inconsistent = False
         self.warned_inexact = False
         self.in_run = False
@@ -136,11 +176,19 @@ class SMFDOState:
         src = self.Z_src
         if isinstance(src, HState | HistoryLP):
             return src.to_cz()
-        if isinstance(src, tuple):
-            model, c, b, h, c_err, b_err = src
-            src = model.to_cz(c, b, h, c_err, b_err)
-            self.Z_src = src
-        return src  # type: ignore[return-value]
+        if isinstance(src, ClosedForm):
+            Z = src.to_cz()
+            self.Z_src = Z
+            return Z
+        return src
+
+    def last_posterior(self) -> ConstrainedZonotope:
+        """:meth:`posterior`, which a step after the first has."""
+        Z = self.posterior()
+        if Z is None:
+            raise InternalError(f"step {self.k + 1} has no posterior of step {self.k} to go on "
+                                "from")
+        return Z
 
     def count_skip(self, k: int, max_skip_fraction: float) -> None:
         """Count a skipped step; stop once more than ``max_skip_fraction`` of the

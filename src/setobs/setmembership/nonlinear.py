@@ -116,8 +116,8 @@ is measured every ``GROWTH_CHECK_EVERY`` steps, below them every other step
 bounds all the same: a band at most twice that wider than the exact hull), and the step
 runs with single-threaded BLAS (:mod:`setobs._blas`: its matrices are small, and two
 threads made it slower). ``stats`` (per step, and
-:attr:`~setobs.SMFDOResult.stats`) holds the sizes, the sizes before the reduction,
-the measured growth (NaN where not measured), the re-linearizations and the notes.
+:attr:`~setobs.setmembership.SetEstimateResult.stats`) holds the sizes, the sizes before
+the reduction, the measured growth (NaN where not measured), the re-linearizations and the notes.
 
 Disturbances
 ------------
@@ -157,8 +157,8 @@ from ..models.exosystem import NonlinearSystem
 from ..models.interval import IntervalFunction
 from ..models.nonlinear import NonlinearModel
 from ._relax import Relaxation
-from ._setup import as_set, noise_set
-from ._steps import SMFDOResult, SMFDOStep
+from ._set_estimates import SetEstimateResult, SetEstimateStep
+from ._sets import as_set, noise_set
 
 __all__ = ["METHODS", "NonlinearSetObserver"]
 
@@ -657,7 +657,7 @@ class NonlinearSetObserver:
         self._last_width: NDArray[np.float64] | None = None  # (the last step's bands)
 
     # ------------------------------------------------------------------ one step
-    def update(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
+    def update(self, y: ArrayLike, u: ArrayLike | None = None) -> SetEstimateStep:
         """Deprecated name of :meth:`step`.
 
         Parameters
@@ -673,7 +673,7 @@ class NonlinearSetObserver:
         return self.step(y, u)
 
     @with_single_threaded_blas
-    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SetEstimateStep:
         """Take the measurement ``y_k`` (NaN: not measured) with the input ``u_k``, and
         return step ``k``'s certified bounds; then predict step ``k + 1``.
 
@@ -686,7 +686,7 @@ class NonlinearSetObserver:
 
         Returns
         -------
-        SMFDOStep
+        SetEstimateStep
             ``state_lo`` / ``state_hi`` (the states), ``lo`` / ``hi`` / ``estimate`` (the
             disturbances' bands and centres; empty without disturbances); ``stats``: the
             sizes kept, the reduction's growth of the hull, the forms that failed.
@@ -734,7 +734,7 @@ class NonlinearSetObserver:
         except EmptySetError:
             raise self._invalidated(what) from None
 
-    def _advance(self, yv, uv) -> SMFDOStep:
+    def _advance(self, yv, uv) -> SetEstimateStep:
         """:meth:`update` for checked data."""
         X = self.prior
         notes = [self.pred_note] if self.pred_note else []
@@ -1061,17 +1061,17 @@ class NonlinearSetObserver:
         self.sizes = (g, c)
         return Xr, max(growth, 0.0)
 
-    def _step(self, box: Box, status: str, stats: dict[str, Any]) -> SMFDOStep:
+    def _step(self, box: Box, status: str, stats: dict[str, Any]) -> SetEstimateStep:
         n = self.n
         lo, hi = box.lo[n:].copy(), box.hi[n:].copy()
         est = 0.5 * lo + 0.5 * hi
         eb = float(np.max(0.5 * (hi - lo), initial=0.0))
-        return SMFDOStep(self.k, est, lo, hi, eb, status=status,
+        return SetEstimateStep(self.k, est, lo, hi, eb, status=status,
                          state_lo=box.lo[:n].copy(), state_hi=box.hi[:n].copy(), stats=stats)
 
     # ------------------------------------------------------------------ a record
     @with_single_threaded_blas  # (its small dense kernels: :mod:`setobs._blas`)
-    def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
+    def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SetEstimateResult:
         """Estimate over a record from ``X_0``: :meth:`reset`, then :meth:`continue_run`.
 
         Parameters
@@ -1083,13 +1083,13 @@ class NonlinearSetObserver:
 
         Returns
         -------
-        SMFDOResult
+        SetEstimateResult
             The record's bands (:meth:`continue_run`).
         """
         self.reset()
         return self.continue_run(Y, U)
 
-    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SMFDOResult:
+    def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SetEstimateResult:
         """Estimate over a record continuing from the current step (what :meth:`run` does
         after :meth:`reset`).
 
@@ -1102,7 +1102,7 @@ class NonlinearSetObserver:
 
         Returns
         -------
-        SMFDOResult
+        SetEstimateResult
             ``state_lo`` / ``state_hi`` of shape ``(N, n)``; ``lo`` / ``hi`` /
             ``estimate`` the disturbances' ``(N, q)``; ``status`` per step.
 
@@ -1123,7 +1123,7 @@ class NonlinearSetObserver:
         q = self.q
         lo = np.array([s.lo for s in steps]).reshape(N, q)
         hi = np.array([s.hi for s in steps]).reshape(N, q)
-        return SMFDOResult(
+        return SetEstimateResult(
             np.array([s.estimate for s in steps]).reshape(N, q), lo, hi,
             np.array([s.error_bound for s in steps]), steps,
             np.array([s.status for s in steps], dtype="<U9"), None, self.dt,

@@ -1,12 +1,16 @@
 """The set-membership filter-based disturbance observer (Li-Cong-Dong, Algorithm 1).
 
-:class:`SMFDO` holds a frozen model (:class:`._setup.SMFDOModel`: what its arguments
-determine), a mutable state (:class:`._state.SMFDOState`) and its engines, each of
-which answers a step or declines: the H-representation recursion and the
-whole-history LP of exact mode (:mod:`._exact`), the window's closed form
-(:mod:`._windowed`), and the reference set recursion, which always answers and owns
-the ``on_inconsistent`` policy (:mod:`._recursion`). :meth:`SMFDO.update` runs them in
-that order and commits the first answer (:func:`._commit.commit`).
+:class:`SMFDO` holds a frozen model (:class:`._model.SMFDOModel`, built by
+:func:`._model.build_model` from the validated :class:`._model.SMFDOOptions`), a mutable
+state (:class:`._state.SMFDOState`) and its engines (:mod:`.engines`, one per file, each
+with its own books), each of which answers a step, hands it off or declines: the
+H-representation recursion (:mod:`.engines.hrep`) and the whole-history LP
+(:mod:`.engines.history`) of exact mode, the window's closed form
+(:mod:`.engines.window`, its schedule in :mod:`._schedule`), and the reference set
+recursion of eqs. (20)-(21) (:mod:`._recursion`), which always answers and owns the
+``on_inconsistent`` policy (:mod:`.engines.reference`). :meth:`SMFDO.step` runs them in
+that order, is the only dispatcher (a hand-off runs the reference engine and gives its
+answer back) and commits the answer (:func:`._commit.commit`).
 
 Notes
 -----
@@ -40,21 +44,18 @@ internal coordinates ``z_o`` above, which for a fully observable,
 well-scaled model are the model's own ``[x; d]``: the disturbance stays a
 coordinate (so its hull is not widened by a rotation), and the model's
 state coordinates are usually the physical ones in which independent
-bounds are natural. Measured on the paper example (notebook 03, pinned by
-``tests/setmembership/test_window_coordinates.py``): in the model's
-coordinates the mean error is 1.47 with ``window=3``, in five random
-rotations of ``x`` 1.55 to 1.62; with ``window=10`` 1.050 to 1.059
-(one rotation slightly better than the model's); exact mode 1.018 in all.
+bounds are natural. On the paper example the model's coordinates are about as
+good as random rotations of ``x`` with a window, and exact mode is the same in all
+(notebook 03; ``tests/setmembership/test_window_coordinates.py``).
 
 *Exact mode.* Once the posterior is bounded it is carried as a certified
 H-representation (facets and box) and advanced one step at a time
 (:mod:`setobs.setmembership._hrep`), so a step costs what the *set's* complexity
-costs, not ``k`` (about 3 ms on the paper example at any ``k``). With process or
+costs, not ``k`` (``benchmarks/results/exact_mode.json``). With process or
 measurement noise the exact set gains facets at every step; exact mode then keeps
 the whole-history LP itself, sparse, in HiGHS, warm-started from step to step and
-certified by the one certificate (:mod:`setobs.setmembership._history`; about one
-whole-history LP solved from scratch per step on 4-state plants,
-``benchmarks/exact_noise.py``). Without noise, sets of growing complexity (more
+certified by the one certificate (:mod:`setobs.setmembership._history`;
+``benchmarks/results/exact_noise.json``). Without noise, sets of growing complexity (more
 than ``H_MAX_VERTICES`` vertices or ``H_MAX_NORMALS`` facets), time-varying
 increment sets, ``keep_sets`` with noise and ``fast=False`` keep the whole history
 in one constrained zonotope instead. Either way the cost grows with ``k``, except
@@ -77,49 +78,46 @@ goes to the reference engine, from the exact posterior.
 
 *The window's restart.* ``restart="polytope"`` cuts the box of eq. (24) by rows
 whose normals are the coordinate axes carried back through the dynamics (rows of
-``A_o^-j``; at most ``MAX_ROWS = 120`` of them, the smallest lags first, rows
+``A_o^-j``; at most ``MAX_ROWS`` of them, the smallest lags first, rows
 nearly parallel to a kept one left out), with ranges from the hulls of the
 ``restart_depth - 1`` earlier steps carried forward, intersected with the window's
 own support values in the rows' directions where the step at ``k - delta``
 computed them (extra objectives of its LPs: computed while a probe every
-``AUTO_PROBE`` steps finds they narrow the bands by more than ``SUPPORT_GAIN = 2 %``
-on average, and only for at most ``SUPPORT_MAX_RATIO = 8`` rows per coordinate; on a
-planar constant-velocity target window 10 goes from 1.15 / 1.66 to 1.03 / 1.18 times
-the exact set, mean / worst). It is an outer bound of the exact set at ``k - delta``
-whatever the data, and keeps its shape: on a lightly damped 4-state plant with noise
-(``benchmarks/state_estimation.py``), window 10 ends 1.04 times as wide as the
-exact set on average (box: 3.3), window 3 1.1 (box: 23); on the HSM150 servo
-record window 10 is the exact set to 0.1 % in the median (box: more than twice as
-wide); where the box restart is already nearly exact (the paper example at window
-10) the two agree. Its LPs are larger (about 3 to 10 times the box restart's time
-per step). It is used with fixed uncertainty sets and an invertible,
+``AUTO_PROBE`` steps finds they narrow the bands by more than ``SUPPORT_GAIN``
+on average, and only for at most ``SUPPORT_MAX_RATIO`` rows per coordinate). It is an
+outer bound of the exact set at ``k - delta`` whatever the data, and keeps its shape:
+its widths against the exact set and the box restart's, and its cost, are in
+``benchmarks/results/state_estimation.json`` and ``chain_ab.json`` (the performance
+page); where the box restart is already nearly exact the two agree. Its LPs are
+larger than the box restart's. It is used with fixed uncertainty sets and an invertible,
 well-conditioned ``A_o``; otherwise (callables, a pure delay) the window restarts
 from the box. With ``restart="auto"`` the other restart is computed too at a probe
-(after ``AUTO_PROBE = 16`` window steps on the fast path, the interval doubling up to
-``AUTO_PROBE_MAX = 64`` while the probes keep the choice), and the polytope stays in
-use while it is narrower than the box restart by more than ``AUTO_GAIN = 1e-2`` of
-the widths on average, or ``AUTO_GAIN_MAX = 5e-2`` in some coordinate (where the
+(after ``AUTO_PROBE`` window steps on the fast path, the interval doubling up to
+``AUTO_PROBE_MAX`` while the probes keep the choice), and the polytope stays in
+use while it is narrower than the box restart by more than ``AUTO_GAIN`` of
+the widths on average, or ``AUTO_GAIN_MAX`` in some coordinate (where the
 shape does not matter the step keeps the box restart's cost); on a probe step the
 narrower one is reported; the reference path
 (``fast=False``) keeps the polytope. With the polytope, the first restart waits for
 its depth (up to ``restart_lags`` steps beyond the window, while the whole history
 is no larger an LP than the window's); until then each step is the whole history
-from the initial set, the exact set (a shallow polytope was up to 27 % wider than
-it on the 4-state plant).
+from the initial set, the exact set (a shallow polytope is wider than it).
 """
 
 
 from __future__ import annotations
 
-import numbers
 import warnings
+from typing import Generic, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._blas import single_threaded_blas, with_single_threaded_blas
 from .._lazy import progress_bar
-from .._validation import as_inputs, as_matrix, check_real_scalar
+from .._validation import as_inputs, as_matrix
+from ..analysis.existence import BoundedDOReport
+from ..analysis.observability import ObservabilityDecomposition
 from ..exceptions import (
     ArgumentError,
     DimensionError,
@@ -134,17 +132,25 @@ from ..exceptions import (
 from ..geometry import Box, ConstrainedZonotope
 from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, MISSING_WARN_FRACTION
+from ._closed_form import MODEL_CACHE as MODEL_CACHE  # (re-exported: one cache per process)
+from ._closed_form import ClosedForm, WindowModel
 from ._commit import commit
-from ._exact import HistoryEngine, HRepEngine
 from ._hrep import HState
-from ._recursion import ON_INCONSISTENT, ReferenceEngine
+from ._model import IncrementSpec, NoiseSpec, SMFDOModel, SMFDOOptions, build_model
 from ._restart import DEFAULT_RESTART_DEPTH
-from ._setup import MODEL_CACHE as MODEL_CACHE  # (re-exported: one cache per process)
-from ._setup import IncrementSpec, NoiseSpec, SMFDOModel, check_window
-from ._state import SMFDOState
-from ._steps import STEP_STATUSES, SMFDOResult, SMFDOStep
-from ._window import WindowModel
-from ._windowed import WindowEngine, start_mode
+from ._schedule import start_mode
+from ._set_estimates import (
+    STEP_STATUSES,
+    SetEstimateResult,
+    SetEstimateStep,
+    SMFDOResult,
+    SMFDOStep,
+)
+from ._state import Handoff, SMFDOState
+from .engines.history import HistoryEngine
+from .engines.hrep import HRepEngine
+from .engines.reference import ReferenceEngine
+from .engines.window import WindowEngine
 
 __all__ = [
     "SMFDO",
@@ -154,18 +160,22 @@ __all__ = [
     "ModelInvalidatedWarning",
     "SMFDOResult",
     "SMFDOStep",
+    "SetEstimateResult",
+    "SetEstimateStep",
 ]
 
+_T = TypeVar("_T")
 
-class _Delegated:
+
+class _Delegated(Generic[_T]):
     """A read-only attribute of the SMFDO that lives on its model or its state."""
 
     def __init__(self, where: str, name: str) -> None:
         self.where, self.name = where, name
 
-    def __get__(self, obj: object, owner: type | None = None) -> object:
+    def __get__(self, obj: object, owner: type | None = None) -> _T:
         if obj is None:
-            return self
+            return self  # type: ignore[return-value]  # (the class attribute itself)
         return getattr(getattr(obj, self.where), self.name)
 
     def __set__(self, obj: object, value: object) -> None:
@@ -221,14 +231,14 @@ class SMFDO:
         measurement; the window restarts from that set and the step's status is
         ``"reset"`` (the guarantee is lost at that step by construction). The
         first inconsistent step is :attr:`first_inconsistent`; :meth:`run`
-        issues one :class:`ModelInvalidatedWarning` per record, :meth:`update`
+        issues one :class:`ModelInvalidatedWarning` per record, :meth:`step`
         one per observer.
     reset : {"raise", "box"}, optional
         Deprecated spelling of ``on_inconsistent`` (``"box"`` is ``"reset"``).
     max_skip_fraction : float
         With ``on_inconsistent="skip"``: once more than this fraction of the samples
         were skipped (of the record given to :meth:`run`, or of the steps so far for
-        :meth:`update`; counted over at least ``1 / max_skip_fraction`` samples, so
+        :meth:`step`; counted over at least ``1 / max_skip_fraction`` samples, so
         that a short record may lose one outlier; 0: no skip at all), the run stops
         with a :class:`SkipLimitError` (a :class:`ModelInvalidatedError`) naming the
         fraction (default 0.01: a
@@ -297,7 +307,7 @@ class SMFDO:
         ``"polytope_restarts"`` (fast window steps restarted from the polytope, see
         ``restart``), ``"support_restarts"`` (its rows cut by support values).
     first_inconsistent : int or None
-        First step (since the last :meth:`reset_state`) whose measurement was
+        First step (since the last :meth:`reset`) whose measurement was
         inconsistent with the model (skipped or reset).
 
     Raises
@@ -321,7 +331,51 @@ class SMFDO:
     One SMFDO is not meant to be used from two threads at once; different
     SMFDOs (of the same system or not) run safely in different threads: each
     keeps its own warm-start state, and only immutable structures are shared.
+
+    Examples
+    --------
+    The paper's example (Li-Cong-Dong, eq. (25)) with a constant disturbance, measured
+    exactly: the certified band holds it, and the window's worst-case error is small.
+
+    >>> import numpy as np
+    >>> import setobs as so
+    >>> sys = so.examples.chang2006()
+    >>> d = np.array([0.5, -0.2])
+    >>> x, Y = np.zeros(3), []
+    >>> for k in range(30):
+    ...     Y.append(sys.Xi @ x)
+    ...     x = sys.Phi @ x + sys.G @ d
+    >>> res = so.SMFDO(sys, window=10, increment_set=[1e-3, 1e-3]).run(np.array(Y))
+    >>> bool(np.all((res.lo[-1] <= d) & (d <= res.hi[-1]))), bool(res.error_bound[-1] < 0.01)
+    (True, True)
     """
+
+    # The model's and the state's public attributes, read-only (Attributes above; the
+    # model's are fixed at construction, the state's change with each step).
+    sys: _Delegated[LinearSystem] = _Delegated("model", "sys")
+    existence: _Delegated[BoundedDOReport] = _Delegated("model", "existence")
+    decomposition: _Delegated[ObservabilityDecomposition] = _Delegated("model", "decomposition")
+    mu_o: _Delegated[int] = _Delegated("model", "mu_o")
+    window: _Delegated[int | None] = _Delegated("model", "window")
+    on_inconsistent: _Delegated[str] = _Delegated("model", "on_inconsistent")
+    keep_sets: _Delegated[bool] = _Delegated("model", "keep_sets")
+    fast: _Delegated[bool] = _Delegated("model", "fast")
+    margin: _Delegated[float] = _Delegated("model", "margin")
+    data_rtol: _Delegated[float] = _Delegated("model", "data_rtol")
+    state_bounds: _Delegated[bool] = _Delegated("model", "state_bounds")
+    restart: _Delegated[str] = _Delegated("model", "restart")
+    restart_depth: _Delegated[int] = _Delegated("model", "restart_depth")
+    reset_inflation: _Delegated[float] = _Delegated("model", "reset_inflation")
+    max_skip_fraction: _Delegated[float] = _Delegated("model", "max_skip_fraction")
+    P: _Delegated[NDArray[np.float64]] = _Delegated("model", "P")
+    T_o: _Delegated[NDArray[np.float64]] = _Delegated("model", "T_o")
+    A_o: _Delegated[NDArray[np.float64]] = _Delegated("model", "A_o")
+    B_o: _Delegated[NDArray[np.float64]] = _Delegated("model", "B_o")
+    Gamma_o: _Delegated[NDArray[np.float64]] = _Delegated("model", "Gamma_o")
+    C_o: _Delegated[NDArray[np.float64]] = _Delegated("model", "C_o")
+    k: _Delegated[int] = _Delegated("_state", "k")
+    stats: _Delegated[dict[str, int]] = _Delegated("_state", "stats")
+    first_inconsistent: _Delegated[int | None] = _Delegated("_state", "first_inconsistent")
 
     def __init__(
         self,
@@ -349,26 +403,24 @@ class SMFDO:
         max_skip_fraction: float = 0.01,
     ) -> None:
         sys = require_system(sys, "sys", disturbance_inputs=disturbance_inputs)
-        window = check_window(window)
-        on_inconsistent = _policy(on_inconsistent, reset)
-        opts = _options(max_skip_fraction, reset_inflation, margin, state_bounds, data_rtol,
-                        restart, restart_depth)
-        self.model = SMFDOModel(
-            sys, window, on_inconsistent, increment_set, initial_state_set,
-            initial_disturbance_set, measurement_noise, process_noise,
-            measurement_noise_matrix, process_noise_matrix, keep_sets, fast,
-            **opts)
+        options = SMFDOOptions(
+            window, increment_set, initial_state_set, initial_disturbance_set,
+            measurement_noise, process_noise, measurement_noise_matrix, process_noise_matrix,
+            on_inconsistent, reset_inflation, margin, data_rtol, keep_sets, fast,
+            state_bounds, restart, restart_depth, max_skip_fraction, reset=reset)
+        self.model: SMFDOModel = build_model(sys, options)
         m = self.model
-        # The engines, tried in this order until one answers (the reference recursion
-        # always does): the H-representation (exact mode without noise), the
+        # The engines, tried in this order until one answers (the reference recursion,
+        # last, always does): the H-representation (exact mode without noise), the
         # whole-history LP (exact mode with noise), the window's closed form.
-        reference = ReferenceEngine()
-        self._engines = tuple(eng for eng in (
-            HRepEngine() if m.hrep_on else None,
-            HistoryEngine(reference) if m.history_on else None,
-            WindowEngine(), reference) if eng is not None)
-        self._state: SMFDOState | None = None
-        self.reset()
+        self._reference = ReferenceEngine()
+        engines: list[HRepEngine | HistoryEngine | WindowEngine | ReferenceEngine] = []
+        if m.hrep_on:
+            engines.append(HRepEngine())
+        if m.history_on:
+            engines.append(HistoryEngine())
+        self._engines = (*engines, WindowEngine(), self._reference)
+        self._state = SMFDOState(m.window, m.restart_lags, m.ubar)
 
     def __copy__(self) -> SMFDO:
         """An independent copy (``copy.copy`` is ``copy.deepcopy`` here): the
@@ -383,6 +435,8 @@ class SMFDO:
         """Forget all data and start again at ``k = 0``."""
         m = self.model
         self._state = SMFDOState(m.window, m.restart_lags, m.ubar, previous=self._state)
+        for engine in self._engines:
+            engine.reset()
 
     def reset_state(self) -> None:
         """Deprecated name of :meth:`reset`."""
@@ -422,10 +476,9 @@ class SMFDO:
         factor bounds of its LPs.
         """
         src = self._state.Z_src
-        if not isinstance(src, tuple):
+        if not isinstance(src, ClosedForm):
             return None
-        model, c, b, h, _, _ = src
-        return model, c, b, h
+        return src.model, src.c, src.b, src.h
 
     @property
     def hull_from_state(self) -> bool:
@@ -464,7 +517,7 @@ class SMFDO:
         for benchmarks and for choosing a window."""
         return self._state.iterations()
 
-    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SMFDOStep:
+    def step(self, y: ArrayLike, u: ArrayLike | None = None) -> SetEstimateStep:
         """Process the measurement ``y_k`` with the input ``u_k`` of the same step.
 
         The estimators' one record convention: ``u_k`` is applied at the time of
@@ -481,7 +534,7 @@ class SMFDO:
 
         Returns
         -------
-        SMFDOStep
+        SetEstimateStep
             Step ``k``'s certified bounds and status.
 
         Raises
@@ -498,7 +551,7 @@ class SMFDO:
         return self._step(y, None, u)
 
     def update(self, y: ArrayLike, u_prev: ArrayLike | None = None, *,
-               u: ArrayLike | None = None) -> SMFDOStep:
+               u: ArrayLike | None = None) -> SetEstimateStep:
         """Deprecated: :meth:`step` takes ``u_k`` with ``y_k``; ``update`` took the input
         ``u_(k-1)`` applied before ``y_k`` (and ``u_k`` as ``u=`` with a feedthrough).
 
@@ -516,7 +569,7 @@ class SMFDO:
         return self._step(y, u_prev, u)
 
     def _step(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
-              ) -> SMFDOStep:
+              ) -> SetEstimateStep:
         """One step with the input before it (``u_prev``, else the one carried from the
         last step) and the current one (``u``): :meth:`_update` under the BLAS policy,
         and the skip limit."""
@@ -533,8 +586,8 @@ class SMFDO:
         return step
 
     def _update(self, y: ArrayLike, u_prev: ArrayLike | None, u: ArrayLike | None
-                ) -> SMFDOStep:
-        """:meth:`update`'s step (the caller sets the BLAS threads): the first engine that
+                ) -> SetEstimateStep:
+        """:meth:`step`'s step (the caller sets the BLAS threads): the first engine that
         answers (the reference recursion always does), and one commit."""
         m, s = self.model, self._state
         s.blas_small = False
@@ -543,12 +596,22 @@ class SMFDO:
         mode = "init" if k == 0 else start_mode(m, s, k)
         for engine in self._engines:
             out = engine.try_step(m, s, k, mode, e)
+            if isinstance(out, Handoff):
+                # the engine cannot decide this step: the reference engine does, from the
+                # engine's exact posterior, and the engine carries its answer on
+                s.Z_src, s.depth = out.start, 0
+                try:
+                    answer = self._reference.try_step(m, s, k, mode, e)
+                except ModelInvalidatedError:
+                    s.Z_src = out.carried  # (the observer is left as before the step)
+                    raise
+                out = out.owner.resume(answer, out)  # type: ignore[attr-defined]
             if out is not None:
                 return commit(m, s, k, mode, out)
         raise InternalError("no engine answered (the reference recursion always does)")
 
     def run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
-            progress: bool = False, ignore: ArrayLike | None = None) -> SMFDOResult:
+            progress: bool = False, ignore: ArrayLike | None = None) -> SetEstimateResult:
         """Process a whole record from the start: :meth:`reset`, then
         :meth:`continue_run` (its parameters, returns and warnings).
 
@@ -565,7 +628,7 @@ class SMFDO:
 
         Returns
         -------
-        SMFDOResult
+        SetEstimateResult
             The record's certified bands.
         """
         self.reset()
@@ -574,7 +637,7 @@ class SMFDO:
     @with_single_threaded_blas
     def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None, *,
                      progress: bool = False, ignore: ArrayLike | None = None
-                     ) -> SMFDOResult:
+                     ) -> SetEstimateResult:
         """Process a record continuing from the current state (what :meth:`run` does
         after :meth:`reset`).
 
@@ -601,7 +664,7 @@ class SMFDO:
 
         Returns
         -------
-        SMFDOResult
+        SetEstimateResult
             ``estimate``, ``lo``, ``hi`` of shape ``(N, q)``, ``error_bound`` and
             ``status`` ``(N,)``, ``first_inconsistent``.
 
@@ -636,60 +699,6 @@ class SMFDO:
     def __repr__(self) -> str:
         mode = "exact" if self.window is None else f"window={self.window}"
         return f"SMFDO({self.sys!r}, {mode}, k={self.k})"
-
-
-# The model's and the state's public attributes, read-only on the SMFDO.
-for _name in ("sys", "existence", "decomposition", "mu_o", "window", "on_inconsistent",
-              "keep_sets", "fast", "margin", "data_rtol", "state_bounds", "restart",
-              "restart_depth", "reset_inflation", "max_skip_fraction", "P", "T_o", "A_o",
-              "B_o", "Gamma_o", "C_o"):
-    setattr(SMFDO, _name, _Delegated("model", _name))
-for _name in ("k", "stats", "first_inconsistent"):
-    setattr(SMFDO, _name, _Delegated("_state", _name))
-del _name
-
-
-def _policy(on_inconsistent: str, reset: str | None) -> str:
-    """``on_inconsistent``, or its deprecated spelling ``reset``, validated."""
-    if reset is not None:
-        if reset not in ("raise", "box"):
-            raise InvalidValueError(f"reset must be 'raise' or 'box', got {reset!r}")
-        if on_inconsistent != "raise":
-            raise InvalidValueError("give on_inconsistent only (reset is its deprecated "
-                                    "spelling)")
-        warnings.warn("SMFDO(reset=...) is deprecated: use on_inconsistent='raise' | "
-                      "'skip' | 'reset'", DeprecationWarning, stacklevel=3)
-        on_inconsistent = "reset" if reset == "box" else "raise"
-    if on_inconsistent not in ON_INCONSISTENT:
-        raise InvalidValueError(f"on_inconsistent must be one of {ON_INCONSISTENT}, got "
-                                f"{on_inconsistent!r}")
-    return on_inconsistent
-
-
-def _options(max_skip_fraction, reset_inflation, margin, state_bounds, data_rtol, restart,
-             restart_depth) -> dict:
-    """The SMFDO's scalar options, validated, as :class:`._setup.SMFDOModel` takes them."""
-    max_skip_fraction = check_real_scalar("max_skip_fraction", max_skip_fraction,
-                                          nonnegative=True)
-    if max_skip_fraction > 1.0:
-        raise InvalidValueError(f"max_skip_fraction is a fraction in [0, 1], got "
-                                f"{max_skip_fraction!r}")
-    reset_inflation = check_real_scalar("reset_inflation", reset_inflation, positive=True)
-    margin = check_real_scalar("margin", margin, nonnegative=True)
-    if not isinstance(state_bounds, bool | np.bool_):
-        raise ArgumentError(f"state_bounds must be True or False, got {state_bounds!r}")
-    data_rtol = check_real_scalar("data_rtol", data_rtol, nonnegative=True)
-    if restart not in ("auto", "polytope", "box"):
-        raise InvalidValueError(f"restart must be 'auto', 'polytope' or 'box', got {restart!r}")
-    if isinstance(restart_depth, bool) or not isinstance(restart_depth, numbers.Integral) \
-            or restart_depth < 1:
-        raise InvalidValueError(f"restart_depth must be an integer >= 1, got {restart_depth!r}")
-    if data_rtol > 1e-6:
-        raise InvalidValueError(f"data_rtol is a rounding-level tolerance (<= 1e-6), got "
-                                f"{data_rtol!r}; bound measurement noise with a set")
-    return dict(margin=margin, data_rtol=data_rtol, state_bounds=bool(state_bounds),
-                restart=restart, restart_depth=int(restart_depth),
-                reset_inflation=reset_inflation, max_skip_fraction=max_skip_fraction)
 
 
 def _check_record(m: SMFDOModel, st: SMFDOState, Y: ArrayLike, U: ArrayLike | None,
@@ -730,7 +739,7 @@ def _check_record(m: SMFDOModel, st: SMFDOState, Y: ArrayLike, U: ArrayLike | No
     return Ya, Ua
 
 
-def _result(m: SMFDOModel, steps: list[SMFDOStep]) -> SMFDOResult:
+def _result(m: SMFDOModel, steps: list[SetEstimateStep]) -> SetEstimateResult:
     """The run's result from its steps (warning once if a step was skipped or reset)."""
     sys, N, q = m.sys, len(steps), m.sys.q
     status = np.array([s.status for s in steps], dtype="<U9")
@@ -744,17 +753,19 @@ def _result(m: SMFDOModel, steps: list[SMFDOStep]) -> SMFDOResult:
             "bands at those steps are not the model's consistent sets (see result.status, "
             "result.first_inconsistent)", ModelInvalidatedWarning,
             stacklevel=4)  # _result -> run -> the BLAS-limit wrapper -> the caller
-    states = (None, None, ())
+    x_lo = x_hi = None
+    x_names: tuple[str, ...] = ()
     if m.state_bounds:
         n = sys.n
-        states = (np.array([s.state_lo for s in steps]).reshape(N, n),
-                  np.array([s.state_hi for s in steps]).reshape(N, n), tuple(sys.state_names))
-    return SMFDOResult(
+        x_lo = np.array([s.state_lo for s in steps]).reshape(N, n)
+        x_hi = np.array([s.state_hi for s in steps]).reshape(N, n)
+        x_names = tuple(sys.state_names)
+    return SetEstimateResult(
         np.array([s.estimate for s in steps]).reshape(N, q),
         np.array([s.lo for s in steps]).reshape(N, q),
         np.array([s.hi for s in steps]).reshape(N, q),
         np.array([s.error_bound for s in steps]), steps, status, first, sys.dt,
-        tuple(sys.disturbance_names), *states,
+        tuple(sys.disturbance_names), x_lo, x_hi, x_names,
         np.array([s.after_skip for s in steps], dtype=bool))
 
 

@@ -108,7 +108,7 @@ class ObserverSpec:
                 f"observer {self.name!r} ({self.kind}): unknown parameter(s) {unknown}; "
                 f"accepted: {list(accepted) or 'none'}")
         if self.kind == "smfdo" and "window" in self.params:
-            from ..setmembership._setup import check_window
+            from ..setmembership._sets import check_window
 
             try:
                 check_window(self.params["window"])

@@ -1,22 +1,20 @@
-"""The exact-mode engines of the SMFDO: the H-representation recursion (:mod:`._hrep`) without
-noise, the whole-history LP (:mod:`._history`) with noise."""
+"""Exact mode's engine without noise: a bounded posterior carried as a certified
+H-representation and advanced one step at a time (:mod:`.._hrep`)."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._rounding import gamma, round_down, round_up
-from ..geometry import ConstrainedZonotope
-from ..geometry.zonotope import hull_with_status
-from ..tolerances import (
-    ALLOWANCE_RTOL,
-    EXACT_RTOL,
-    HREP_CONVERT_RTOL,
-    UNBOUNDED_RADIUS,
-)
-from ._history import HistoryLP
-from ._hrep import (
+from ..._rounding import gamma, round_down, round_up
+from ...geometry import ConstrainedZonotope
+from ...geometry.zonotope import hull_with_status
+from ...tolerances import ALLOWANCE_RTOL, HREP_CONVERT_RTOL, UNBOUNDED_RADIUS
+from .._closed_form import MODEL_CACHE, WindowModel, allowance_fraction
+from .._hrep import (
     HState,
     snap_normals,
     step_geometry,
@@ -24,12 +22,14 @@ from ._hrep import (
     tidy_vertices,
     vertices_match,
 )
-from ._setup import MODEL_CACHE, Entry, SMFDOModel
-from ._state import Outcome, SMFDOState
-from ._window import WindowModel, allowance_fraction
+from .._model import Entry, SMFDOModel
+from .._state import Outcome, SMFDOState
 
-__all__ = ["HISTORY_RETRY", "H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS",
-           "H_MAX_VERTICES", "HRepEngine", "HistoryEngine"]
+if TYPE_CHECKING:
+    from ...geometry.polytope import HRep
+
+__all__ = ["H_CONVERSION_LPS", "H_LAX_SIZE_FACTOR", "H_MAX_NORMALS", "H_MAX_VERTICES",
+           "HRepBooks", "HRepEngine"]
 
 #: LP budget of converting a bounded posterior to the H-representation of exact
 #: mode (a beneath-beyond vertex enumeration); beyond it the set recursion goes on.
@@ -43,12 +43,6 @@ H_CONVERSION_LPS = 150
 H_MAX_VERTICES = 128
 H_MAX_NORMALS = 64
 
-
-#: Steps after a failed start of exact mode's whole-history LP (an unbounded
-#: posterior, or free factors that could not be eliminated) before the next try.
-HISTORY_RETRY = 4
-
-
 #: Exact mode converts a posterior whose facets are confirmed only to
 #: ``VERTEX_RTOL`` (not ``HREP_CONVERT_RTOL``) when its box is at most this many
 #: times wider than one step's uncertainty: converted earlier, in the transient
@@ -56,6 +50,17 @@ HISTORY_RETRY = 4
 #: tolerance became 1e-6 of the later width (the verdict campaign on random systems,
 #: seed 36).
 H_LAX_SIZE_FACTOR = 1e3
+
+
+@dataclass
+class HRepBooks:
+    """The H-representation engine's own state (replaced at :meth:`~setobs.SMFDO.reset`):
+    its back-off after failed conversions."""
+
+    #: failed conversions to the H-representation in a row
+    fails: int = 0
+    #: first step at which the next conversion is tried
+    retry_at: int = 0
 
 
 class HRepEngine:
@@ -72,7 +77,12 @@ class HRepEngine:
     def __init__(self) -> None:
         self._h_images: list[NDArray[np.float64]] | None = None
         self._h_floor_value: float | None = None
-        self._h_noise: dict[bytes, list] = {}
+        self._h_noise: dict[bytes, HRep] = {}
+        self.books = HRepBooks()
+
+    def reset(self) -> None:
+        """Forget the back-off (a new run; the model's derived data stay)."""
+        self.books = HRepBooks()
 
     def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
                  e: Entry) -> Outcome | None:
@@ -94,9 +104,9 @@ class HRepEngine:
     def _to_hstate(self, m: SMFDOModel, s: SMFDOState, Z: ConstrainedZonotope) -> HState | None:
         """The H-representation of a bounded posterior (certified facets and box,
         :func:`setobs.geometry.polytope.to_hrep`'s construction), or ``None``."""
-        from ..exceptions import SetobsError
-        from ..geometry.polytope import BUDGET_STATUS, verified_facets
-        from ..geometry.zonotope import support_unwarned
+        from ...exceptions import SetobsError
+        from ...geometry.polytope import BUDGET_STATUS, verified_facets
+        from ...geometry.zonotope import support_unwarned
 
         try:
             box, _ = hull_with_status(Z)
@@ -138,17 +148,18 @@ class HRepEngine:
         """Largest width of one step's uncertainty in ``z_o`` (``B_o`` times the
         increment set, with ``E_o`` times the process noise)."""
         if self._h_floor_value is None:
-            w = hull_with_status(m.B_step @ m.step_set)[0]
+            w = hull_with_status(m.B_step @ m.fixed_step_set())[0]
             self._h_floor_value = float(np.max(w.hi - w.lo, initial=0.0))
         return self._h_floor_value
 
     def _h_setup(self, m: SMFDOModel) -> list[NDArray[np.float64]]:
         """Vertices of the increment (and process-noise) sets mapped into the state."""
         if self._h_images is None:
-            from ..geometry.polytope import vertices
+            from ...geometry.polytope import vertices
 
             # (no disturbance, q = 0: the point {0}, neutral in the Minkowski sum)
-            images = [vertices(m.inc_fixed) @ m.B_o.T if m.sys.q
+            inc = m.inc_fixed  # (fixed: the engine runs only then)
+            images = [vertices(inc) @ m.B_o.T if m.sys.q and inc is not None
                       else np.zeros((1, m.A_o.shape[0]))]
             if m.W_fixed is not None:
                 images.append(vertices(m.W_fixed) @ m.E_o.T)
@@ -167,7 +178,7 @@ class HRepEngine:
         key = mask.tobytes()
         hr = self._h_noise.get(key)
         if hr is None:
-            from ..geometry.polytope import to_hrep
+            from ...geometry.polytope import to_hrep
 
             hr = self._h_noise[key] = to_hrep(V.project(np.flatnonzero(mask).tolist()))
         # v = y - C z in V_m:  H_v (y - C z) <= k_v,  E_v (y - C z) = f_v
@@ -177,11 +188,12 @@ class HRepEngine:
                                                                         strict=True)]
         return out
 
-    def _h_back_off(self, s: SMFDOState, step: int) -> None:
+    def _h_back_off(self, step: int) -> None:
         """After a failed conversion or step: the next conversion is tried at
         ``step + 2^fails`` (at most 64 steps later)."""
-        s.h_fails += 1
-        s.h_retry_at = step + min(2 ** s.h_fails, 64)
+        b = self.books
+        b.fails += 1
+        b.retry_at = step + min(2 ** b.fails, 64)
 
     def _hrep_step(self, m: SMFDOModel, s: SMFDOState, e: Entry):
         """One exact step by the H-representation recursion (:mod:`._hrep`): the
@@ -190,13 +202,13 @@ class HRepEngine:
         it)."""
         st = s.Z_src
         if not isinstance(st, HState):
-            if not isinstance(st, ConstrainedZonotope) or s.k + 1 < s.h_retry_at:
+            if not isinstance(st, ConstrainedZonotope) or s.k + 1 < self.books.retry_at:
                 return None
             st = self._to_hstate(m, s, st)
             if st is None:  # not bounded yet, or the conversion failed
-                self._h_back_off(s, s.k + 1)
+                self._h_back_off(s.k + 1)
                 return None
-            s.h_fails = 0
+            self.books.fails = 0
             s.Z_src = st
         N = m.A_o.shape[0]
         y = e.y
@@ -213,11 +225,11 @@ class HRepEngine:
         if geo is None or geo[0].shape[0] > H_MAX_VERTICES or geo[1].shape[0] > H_MAX_NORMALS:
             # too complex, or the approximate geometry sees no consistent point: the
             # set recursion decides this step; back off before converting again
-            self._h_back_off(s, s.k + 2)
+            self._h_back_off(s.k + 2)
             return None
         V_new, H_new = geo
         H_new = snap_normals(H_new, st.H)
-        inc, B_step, Vn = m.step_set, m.B_step, m.V_fixed
+        inc, B_step, Vn = m.fixed_step_set(), m.B_step, m.V_fixed
         # rows beyond z: P (unless it selects coordinates), the state map (state
         # bounds, unless it selects coordinates), then the new facet normals
         P_ext = np.vstack([m.hull_rows, H_new])
@@ -275,94 +287,6 @@ class HRepEngine:
             # The normals from the approximate geometry miss a facet: carrying
             # {H z <= g} would be an outer set from the next step on. This step's
             # bounds are exact (its LPs ran over the exact set); carry that set.
-            self._h_back_off(s, s.k + 1)
+            self._h_back_off(s.k + 1)
             return model.to_cz(c, b, h, c_err, b_err), box, box_o, Zd, box_x, gap
         return HState(H_new, g, lo_c, hi_c, V_t), box, box_o, Zd, box_x, gap
-
-
-class HistoryEngine:
-    """Exact mode with noise: the whole-history LP (:mod:`._history`), grown by one
-    block per step and certified by the one certificate; it declines (``None``) until
-    the posterior is bounded, and hands a step it cannot decide (an infeasible LP:
-    the data may contradict the model; a numerical failure) to the reference engine,
-    from the exact posterior, then goes on with the step as that decided it.
-
-    Parameters
-    ----------
-    reference : ReferenceEngine
-        The engine that decides the steps the LP does not.
-    """
-
-    def __init__(self, reference) -> None:
-        self.reference = reference
-
-    def try_step(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str,
-                 e: Entry) -> Outcome | None:
-        """The step's :class:`~._state.Outcome` on the whole-history LP, or ``None``."""
-        if k == 0:
-            return None
-        H = s.Z_src
-        if not isinstance(H, HistoryLP):
-            H = self._start(m, s, k)
-            if H is None:
-                return None
-        H.push(e)
-        out = H.hull()
-        if out is None:
-            H.pop()
-            return self._fallback(m, s, k, mode, e, H)
-        box_o, box, box_x, _ = m.split_hull(*out)
-        s.stats["fast"] += 1
-        # "ok" only when every band is certified within EXACT_RTOL of its width of the
-        # whole-history set (the multipliers refined from the basis where the solver's
-        # left a gap: lp.boxlp.BoxLP.refined_multiplier); else "inexact", with the gap
-        gap = allowance_fraction(*out, H.gaps, m.margin, m.reported_rows)
-        return Outcome(H, box, box_o, None, box_x, "inexact" if gap > EXACT_RTOL else "ok",
-                       0, e, gap=gap)
-
-    @staticmethod
-    def _start(m: SMFDOModel, s: SMFDOState, k: int) -> HistoryLP | None:
-        """Exact mode's whole-history LP from the current posterior, once it is
-        bounded; ``None`` before (the set recursion goes on)."""
-        from ..exceptions import SetobsError
-        from ..geometry.reduction import reduce_exact
-
-        box = s.box_o_last
-        if k < s.hist_retry_at or box is None or not (
-                np.isfinite(box.lo).all() and np.isfinite(box.hi).all()):
-            return None
-        Z = s.posterior()
-        if Z is None:
-            return None
-        try:
-            if np.isinf(Z.h).any():  # (X0 = R^n: its factors pivoted out, exactly)
-                Z = reduce_exact(Z)
-            H = HistoryLP.start(Z, box.lo, box.hi, A_o=m.A_o, Gamma_o=m.Gamma_o, C_o=m.C_o,
-                                B_o=m.B_o, E_o=m.E_o, rows=m.hull_rows, data_rtol=m.data_rtol)
-        except SetobsError:
-            H = None
-        if H is None:
-            s.hist_retry_at = k + HISTORY_RETRY
-        return H
-
-    def _fallback(self, m: SMFDOModel, s: SMFDOState, k: int, mode: str, e: Entry,
-                  H: HistoryLP) -> Outcome:
-        """The reference engine's step from the exact posterior
-        (:meth:`HistoryLP.to_cz`), with its certified emptiness test and retries; the
-        history goes on with the step as that decided it."""
-        from ..exceptions import ModelInvalidatedError
-
-        s.Z_src = H.to_cz()
-        s.depth = 0
-        try:
-            out = self.reference.try_step(m, s, k, mode, e)
-        except ModelInvalidatedError:
-            s.Z_src = H  # (the observer is left as before the step)
-            raise
-        box = out.box_o
-        if out.status in ("ok", "inexact", "fallback", "skipped") and box is not None and \
-                np.isfinite(box.lo).all() and np.isfinite(box.hi).all():
-            H.push(out.entry)  # (a skipped step's measurement dropped)
-            H.box = (box.lo.copy(), box.hi.copy())
-            out = out.with_posterior(H)
-        return out

@@ -1,4 +1,6 @@
-"""Results of the SMFDO: one step (:class:`SMFDOStep`) and a run (:class:`SMFDOResult`)."""
+"""Results of the set estimators (the SMFDO and the nonlinear set observer): one step
+(:class:`SetEstimateStep`) and a run (:class:`SetEstimateResult`); ``SMFDOStep`` and
+``SMFDOResult`` are their former names."""
 
 from __future__ import annotations
 
@@ -15,15 +17,16 @@ from ..exceptions import DimensionError, InvalidValueError
 from ..geometry import ConstrainedZonotope
 from ..results import error_summary, time_axis, time_index
 
-__all__ = ["STEP_STATUSES", "SMFDOResult", "SMFDOStep"]
+__all__ = ["STEP_STATUSES", "SMFDOResult", "SMFDOStep", "SetEstimateResult", "SetEstimateStep"]
 
-#: Values of :attr:`SMFDOStep.status`.
+#: Values of :attr:`SetEstimateStep.status`.
 STEP_STATUSES = ("ok", "unbounded", "fallback", "inexact", "reset", "skipped")
 
 
 @dataclass(frozen=True)
-class SMFDOStep:
-    """One step of the SMFDO.
+class SetEstimateStep:
+    """One step of a set estimator (:class:`~setobs.SMFDO`,
+    :class:`~setobs.NonlinearSetObserver`).
 
     Attributes
     ----------
@@ -101,8 +104,10 @@ class SMFDOStep:
 
 
 @dataclass(frozen=True)
-class SMFDOResult:
-    """Batch result of :meth:`SMFDO.run` (the protocol of :mod:`setobs.results`).
+class SetEstimateResult:
+    """A set estimator's run over a record (:meth:`SMFDO.run <setobs.SMFDO.run>`,
+    :meth:`NonlinearSetObserver.run <setobs.NonlinearSetObserver.run>`; the protocol of
+    :mod:`setobs.results`).
 
     Arrays of shape ``(N, q)`` (``error_bound``, ``status``: ``(N,)``). Unpacks as
     ``t, estimate, lo, hi = smfdo.run(Y)``.
@@ -118,7 +123,7 @@ class SMFDOResult:
     error_bound : ndarray, shape (N,)
         Certified bound on the infinity-norm error of :attr:`estimate`:
         ``max_i (hi_i - lo_i) / 2`` (in exact mode the ``optimal`` metric).
-    steps : list of SMFDOStep
+    steps : list of SetEstimateStep
         The per-step records.
     status : ndarray of str, shape (N,)
         Per-step status (:data:`STEP_STATUSES`).
@@ -136,7 +141,7 @@ class SMFDOResult:
     state_names : tuple of str
         The state names (for tables).
     after_skip : ndarray of bool, shape (N,)
-        True from the first skipped or reset step on (:attr:`SMFDOStep.after_skip`):
+        True from the first skipped or reset step on (:attr:`SetEstimateStep.after_skip`):
         those bands hold for the model with the skipped samples discarded, not for
         the record.
     """
@@ -145,7 +150,7 @@ class SMFDOResult:
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
     error_bound: NDArray[np.float64]
-    steps: list[SMFDOStep]
+    steps: list[SetEstimateStep]
     status: NDArray[np.str_] = field(default_factory=lambda: np.zeros(0, dtype="<U9"))
     first_inconsistent: int | None = None
     dt: float | None = None
@@ -159,14 +164,14 @@ class SMFDOResult:
 
     @property
     def gap(self) -> NDArray[np.float64]:
-        """Per-step :attr:`SMFDOStep.gap`, shape ``(N,)``: the largest fraction of a band
+        """Per-step :attr:`SetEstimateStep.gap`, shape ``(N,)``: the largest fraction of a band
         by which the step's bounds may exceed its mode's exact bounds (status
         ``"inexact"`` above the tolerance)."""
         return np.array([st.gap for st in self.steps], dtype=np.float64)
 
     @property
     def stats(self) -> dict[str, NDArray[Any]]:
-        """The steps' :attr:`SMFDOStep.stats` as arrays of shape ``(N,)``, one per key
+        """The steps' :attr:`SetEstimateStep.stats` as arrays of shape ``(N,)``, one per key
         (NaN, or ``""`` for text, where a step has none); empty when no step keeps any."""
         keys: dict[str, None] = {}
         for st in self.steps:
@@ -194,7 +199,7 @@ class SMFDOResult:
         what = [f"q = {q} disturbance{'s' if q != 1 else ''}"] if q else []
         if n:
             what.append(f"n = {n} state bounds")
-        lines = [f"SMFDOResult: {N} steps" + (f", {', '.join(what)}" if what else "")]
+        lines = [f"SetEstimateResult: {N} steps" + (f", {', '.join(what)}" if what else "")]
         st = self.status if self.status.size == N else np.full(N, "ok")
         kinds, counts = np.unique(st, return_counts=True)
         first = self.first_inconsistent
@@ -264,7 +269,7 @@ class SMFDOResult:
         with np.errstate(invalid="ignore"):
             mid = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), np.nan)
         n = lo.shape[1]
-        view = SMFDOResult(mid, lo, hi, self.error_bound, self.steps, self.status,
+        view = SetEstimateResult(mid, lo, hi, self.error_bound, self.steps, self.status,
                            self.first_inconsistent, self.dt,
                            self.state_names or tuple(f"x{i}" for i in range(n)))
         return plot_estimate_band(view, truth=truth, component=component, ax=ax)
@@ -384,3 +389,9 @@ class SMFDOResult:
         Da = as_matrix("D", D, cols=q)
         out = (Da < self.lo) | (Da > self.hi)
         return int(out.any(axis=1).sum())
+
+
+#: Former name of :class:`SetEstimateStep`.
+SMFDOStep = SetEstimateStep
+#: Former name of :class:`SetEstimateResult`.
+SMFDOResult = SetEstimateResult

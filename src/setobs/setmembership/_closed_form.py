@@ -52,6 +52,11 @@ a narrow band) the step says ``"inexact"`` (:func:`allowance_fraction`).
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -73,18 +78,11 @@ _EMPTY = np.zeros(0)
 #: :meth:`setobs.lp.fastlp.FixedStructureLP.minimize_all_unchecked`): each bound is
 #: certified, and within that gap of the window LP's optimum: within one step a band is
 #: at most ``2 WINDOW_REL_GAP`` of its width *at the previous step* wider than the
-#: window's exact hull, and the restarts carry that into later windows. Measured
-#: (``benchmarks/results/early_stop.json``: 30 random stable plants, 120 steps, window 10,
-#: restarts auto and box, against the stop off): each run's widest excess has median
-#: 0.18 %, 95th percentile 0.52 %, largest 1.1 % of the band's width; against the larger
-#: of the band's width and its width a step before at most 0.37 %. An absolute amount,
-#: not a fraction of the band: where the set collapses to a point at a step (every state
-#: measured, noise on the corners: 2 of the 60 runs) that band is thousands of times its
-#: own (rounding-level) width wider. At 1e-4 the figures are 0.047 % (95th percentile)
-#: and 0.09 %. Simplex iterations per step
-#: on the 30-tank cascade with 21 outputs 1 327 -> 635 (1e-4: 731; 1e-2: 537), bands
-#: 0.035 % wider on average and 0.21 % at most (1e-2: 0.35 % and 1.7 %); on the random
-#: 6-state plant 799 -> 536, 0.07 % and 0.26 %.
+#: window's exact hull, and the restarts carry that into later windows. An absolute
+#: amount, not a fraction of the band: where the set collapses to a point at a step that
+#: band is many times its own (rounding-level) width wider. The excess over the stop off
+#: and the iterations it saves, measured on random stable plants and the cascades:
+#: ``benchmarks/results/early_stop.json`` (the performance page).
 WINDOW_REL_GAP = 1e-3
 
 
@@ -92,7 +90,7 @@ def allowance_fraction(lo, hi, alw, margin: float, rows=None) -> float:
     """The largest fraction of a finite band's reported width (``hi - lo`` plus the
     reported outward margin ``2 margin max(1, |lo|, |hi|)``) taken by its rounding
     allowances ``alw`` (:meth:`WindowModel.hull`), over the bands ``rows`` (default
-    all: the reported ones, :attr:`~._setup.SMFDOModel.reported_rows`); allowances
+    all: the reported ones, :attr:`~._model.SMFDOModel.reported_rows`); allowances
     within the margin ``margin max(1, |lo|, |hi|)`` count as 0."""
     if rows is not None:
         lo, hi, alw = lo[rows], hi[rows], alw[rows]
@@ -404,3 +402,75 @@ class WindowModel:
     def to_cz(self, c, b, h, c_err=None, b_err=None) -> ConstrainedZonotope:
         """The set itself (for ``keep_sets`` and the reference path)."""
         return trusted_cz(self.G, c, self.A, b, h, self.unbounded_radius, c_err, b_err)
+
+
+class ClosedForm(NamedTuple):
+    """A posterior as the closed form's data (the fast path's step): the structure and
+    the step's ``c``, ``b``, ``h`` with their rounding bounds; the set is built on first
+    use (:meth:`to_cz`)."""
+
+    model: WindowModel
+    c: NDArray[np.float64]
+    b: NDArray[np.float64]
+    h: NDArray[np.float64]
+    c_err: NDArray[np.float64] | None
+    b_err: NDArray[np.float64] | None
+
+    def to_cz(self) -> ConstrainedZonotope:
+        """The posterior as a constrained zonotope."""
+        return self.model.to_cz(self.c, self.b, self.h, self.c_err, self.b_err)
+
+
+class ModelCache:
+    """Window structures shared by all SMFDOs of a process (keyed by a digest of the
+    matrices they depend on), so that a Monte Carlo campaign sets each up once.
+
+    The structures are immutable (each SMFDO keeps its own LP warm-start state);
+    the cache is locked, and bounded by the memory of its entries.
+    """
+
+    def __init__(self, max_bytes: int = 256 * 2**20) -> None:
+        self._items: OrderedDict[tuple, tuple[WindowModel, int]] = OrderedDict()
+        self._lock = threading.Lock()
+        self._bytes = 0
+        self.max_bytes = max_bytes
+
+    @staticmethod
+    def _size(model: WindowModel) -> int:
+        lp = model.lp
+        arrays = (model.A, model.G, model.b_c, lp.Ared, lp.Q2, lp.Q0, lp.binv0, lp.W, lp.Wred,
+                  lp.yU, lp.pinvU)
+        return int(sum(a.nbytes for a in arrays if a is not None))
+
+    def get(self, key: tuple, build: Callable[[], WindowModel]) -> WindowModel:
+        """The structure under ``key``, built by ``build`` (outside the lock) if absent.
+
+        Parameters
+        ----------
+        key : tuple
+            The structure's key (the model's digest and the structure's own key).
+        build : callable
+            Builds the structure when it is not cached.
+        """
+        with self._lock:
+            hit = self._items.get(key)
+            if hit is not None:
+                self._items.move_to_end(key)
+                return hit[0]
+        model = build()  # outside the lock: building takes a while
+        size = self._size(model)
+        with self._lock:
+            if key not in self._items:
+                self._items[key] = (model, size)
+                self._bytes += size
+                while self._bytes > self.max_bytes and len(self._items) > 1:
+                    _, (_, sz) = self._items.popitem(last=False)
+                    self._bytes -= sz
+        return model
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+
+#: The process's one cache of window structures.
+MODEL_CACHE = ModelCache()
