@@ -25,8 +25,10 @@ from __future__ import annotations
 import csv
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -41,12 +43,12 @@ __all__ = ["RECORDS", "ModelFileError", "Record", "find_record", "load_model", "
 
 #: The measured records the guide and the notebooks use: where each comes from. None is
 #: shipped with the package (the sources carry no licence to redistribute them).
-RECORDS = {
+RECORDS: Mapping[str, str] = MappingProxyType({
     "hsm150/idf_pos_0.06_1.mat": (
         "the HSM150 servo-motor identification record: download "
         "Data/Identification/idf_pos_0.06_1.mat from the public repository "
         "https://github.com/malik-robert/HSM150-data"),
-}
+})
 
 _KEYS = {"Phi": ("Phi", "A", "A0"), "G": ("G", "E", "E0", "F"), "Xi": ("Xi", "C", "C0"),
          "Gamma": ("Gamma", "B", "B0"), "Du": ("Du", "D")}

@@ -21,7 +21,7 @@ import pytest
 
 import setobs as so
 from setobs.exceptions import SolverError
-from setobs.setmembership import calibrate as calmod
+from setobs.lp import conic
 
 DATA = Path(__file__).parents[1] / "data" / "regressions" / "exchanger_calib_1000.mps.gz"
 # The ARX(2,2) model in observer canonical form, as it stands in the regression LP:
@@ -158,8 +158,8 @@ def test_chain_moves_on_and_checks_answers(monkeypatch):
     over (and named); the next solver answers."""
     sys_ = so.LinearSystem([[1.0]], [[1.0]], [[1.0]])
     Y = np.array([[0.0], [1.0], [0.0], [1.0], [0.0]])
-    chain = (("broken", _failing), ("liar", _wrong_point), *calmod.SOLVER_CHAIN)
-    monkeypatch.setattr(calmod, "SOLVER_CHAIN", chain)
+    chain = (("broken", _failing), ("liar", _wrong_point), *conic.SOLVER_CHAIN)
+    monkeypatch.setattr(conic, "SOLVER_CHAIN", chain)
     cal = so.calibrate_noise(sys_, Y, increment=0.0)
     assert abs(cal.minimal[0] - 0.5) < 1e-8
     failed = " | ".join(cal.info["failed_attempts"])
@@ -168,7 +168,7 @@ def test_chain_moves_on_and_checks_answers(monkeypatch):
 
 
 def test_chain_ends_in_a_solver_error_not_a_crash(monkeypatch):
-    monkeypatch.setattr(calmod, "SOLVER_CHAIN", (("broken", _failing), ("liar", _wrong_point)))
+    monkeypatch.setattr(conic, "SOLVER_CHAIN", (("broken", _failing), ("liar", _wrong_point)))
     with pytest.raises(SolverError, match=r"failed under every solver.*broken.*liar"):
         so.calibrate_noise(so.LinearSystem([[1.0]], [[1.0]], [[1.0]]),
                            np.array([[0.0], [1.0], [0.0]]), increment=0.0)

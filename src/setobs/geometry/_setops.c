@@ -4,8 +4,8 @@
  * intersection (eq. (13)): the same sets as the NumPy code in zonotope.py up to rounding
  * (bit for bit for the sum and the plain intersection; the products of the maps and of R
  * may be summed in another order than by the BLAS), with the same error bounds on the
- * centre and on the constraints' right-hand side (_sum_err, _map_err, _diff_err), which
- * cover either rounding. The NumPy code stays the reference and the fallback.
+ * centre and on the constraints' right-hand side (sum_err, map_err, diff_err of
+ * _bounds.py), which cover either rounding. The NumPy code stays the reference and the fallback.
  *
  * Each function returns a new ConstrainedZonotope, or None when its fast path does not
  * apply (another type, dtype, byte order, shape, a matrix entry that is not finite or
@@ -333,7 +333,7 @@ static PyObject *minkowski_sum(PyObject *mod, PyObject *const *args, Py_ssize_t 
         cd[i] = VAT(s.vc, i) + VAT(t.vc, i);
         nonzero |= cd[i] != 0.0;
     }
-    /* _sum_err(c, _add(cerr_Z, cerr_W)) */
+    /* sum_err(c, add_err(cerr_Z, cerr_W)) */
     const double widen = 1.0 + 2.0 * U, g2 = gamma_k(2.0);
     if (nonzero || (s.vcerr.p && t.vcerr.p)) {
         PyArrayObject *e = new_vec(n);
@@ -403,7 +403,7 @@ static PyObject *linear_map(PyObject *mod, PyObject *const *args, Py_ssize_t nar
         }
         cd[i] = ci;
     }
-    /* _map_err(M, c_Z, cerr_Z) */
+    /* map_err(M, c_Z, cerr_Z) */
     int nonzero = 0;
     for (npy_intp k = 0; k < n; k++) nonzero |= VAT(s.vc, k) != 0.0;
     if (s.vcerr.p == NULL && !nonzero) {
@@ -484,7 +484,7 @@ static PyObject *intersect(PyObject *mod, PyObject *const *args, Py_ssize_t narg
     put_vec(bd + m1, &t.vb);
     put_vec(DATA(h), &s.vh);
     put_vec(DATA(h) + g1, &t.vh);
-    /* b's new rows c_W - R c_Z, and _diff_err(c_W, R, c_Z, cerr_Z, cerr_W) */
+    /* b's new rows c_W - R c_Z, and diff_err(c_W, R, c_Z, cerr_Z, cerr_W) */
     const double gk1 = gamma_k((double)n1 + 1.0), widen = 1.0 + gamma_k((double)n1 + 3.0);
     int nonzero = 0;
     for (npy_intp i = 0; i < n2; i++) {

@@ -19,13 +19,14 @@ from ..exceptions import (
     EmptySetError,
     ImmutableError,
     InvalidValueError,
-    MagnitudeError,
     SolverError,
     SolverWarning,
     UnboundedSetError,
 )
 from ..lp.factor import EmptinessReport, FactorPolytope, LPResult
 from ..tolerances import FEASIBILITY_TOL, MAX_MAGNITUDE, UNBOUNDED_RADIUS
+from ._bounds import add_err, cat_err, diff_err, map_err, sum_err
+from ._guard import check_set_data
 from .box import Box, box_center_radius, trusted_box
 from .results import ContainmentResult, DistanceResult, HRep, VolumeResult
 
@@ -50,145 +51,6 @@ def _blockdiag2(X: NDArray[np.float64], Y: NDArray[np.float64]) -> NDArray[np.fl
     out[: X.shape[0], : X.shape[1]] = X
     out[X.shape[0] :, X.shape[1] :] = Y
     return out
-
-
-# ---------------------------------------------------------------------- rounding bounds
-# Elementwise bounds on the rounding errors of centres and right-hand sides
-# (None means exact, so that exact sets cost nothing). Each helper returns the
-# bound of the new vector: carried errors plus the rounding of the operation
-# (Higham's gamma bounds), inflated once more for the rounding of the bound.
-
-def _add(e1: NDArray[np.float64] | None, e2: NDArray[np.float64] | None
-         ) -> NDArray[np.float64] | None:
-    if e1 is None:
-        return e2
-    if e2 is None:
-        return e1
-    return (e1 + e2) * (1.0 + 2.0 * UNIT_ROUNDOFF)
-
-
-def _cat(e1, n1: int, e2, n2: int) -> NDArray[np.float64] | None:
-    """Concatenated bounds of two stacked vectors (``None``: exact)."""
-    if e1 is None and e2 is None:
-        return None
-    return np.concatenate([np.zeros(n1) if e1 is None else e1,
-                           np.zeros(n2) if e2 is None else e2])
-
-
-_GAMMA2 = gamma(2)
-
-
-def _sum_err(s, err) -> NDArray[np.float64] | None:
-    """Bound for the rounding of ``s = fl(a + v)`` plus the bound ``err`` carried by
-    ``a`` and ``v``: ``|fl(a + v) - (a + v)| <= u |a + v| <= gamma_1 |s|``, and
-    ``gamma_2 |s|`` also covers the rounding of that product (zero where ``s = 0``:
-    a floating-point sum is zero only if exact)."""
-    new = np.abs(s)
-    if not np.count_nonzero(new):  # (count_nonzero: ~0.3 us against ~1.4 for .any())
-        return err
-    new *= _GAMMA2
-    return new if err is None else _add(err, new)
-
-
-def _map_err(M, c, err) -> NDArray[np.float64] | None:
-    """Bound for ``fl(M c)`` given the bound ``err`` carried by ``c``."""
-    if err is None and not np.count_nonzero(c):
-        return None
-    k = M.shape[1]
-    base = gamma(k + 1) * np.abs(c)
-    if err is not None:
-        base += err
-    out = np.abs(M) @ base
-    out *= 1.0 + gamma(k + 2)
-    return out
-
-
-def _diff_err(y, C, c, cerr, yerr) -> NDArray[np.float64] | None:
-    """Bound for ``fl(y - C c)`` given the bounds carried by ``c`` and ``y``."""
-    k = C.shape[1]
-    absC = np.abs(C)
-    base = absC @ np.abs(c)
-    base += np.abs(y)
-    base *= gamma(k + 1)
-    if cerr is not None:
-        base += absC @ cerr
-    if yerr is not None:
-        base += yerr
-    if not np.count_nonzero(base):
-        return None
-    base *= 1.0 + gamma(k + 3)
-    return base
-
-
-# ---------------------------------------------------------------------- the data guard
-_DATA_NAMES = ("G", "c", "A", "b", "h", "c_err", "b_err")
-
-
-def _first_bad_numpy(arrays) -> tuple[int, int, float] | None:
-    """:func:`_setops.check_data` in NumPy (any array-likes; the fallback)."""
-    for k, a in enumerate(arrays):
-        if a is None:
-            continue
-        a = np.asarray(a, dtype=np.float64)
-        if not a.size:
-            continue
-        mag = np.abs(a)
-        if mag.max() <= MAX_MAGNITUDE:  # (a NaN makes the maximum NaN: not <=)
-            continue
-        with np.errstate(invalid="ignore"):
-            bad = ~(mag <= MAX_MAGNITUDE)
-        if k == 4:
-            bad &= ~np.isposinf(a)  # h: +inf is an unbounded factor
-        if bad.any():
-            i = int(np.flatnonzero(bad.reshape(-1))[0])
-            return k, i, float(a.reshape(-1)[i])
-    return None
-
-
-def check_set_data(op: str, G, c, A, b, h, cerr=None, berr=None) -> None:
-    """Refuse set data that are not finite or exceed :data:`MAX_MAGNITUDE` in magnitude.
-
-    The guard of every set-building path (the constructor's validation, :meth:`_owned`,
-    :meth:`_trusted` and the compiled operations, which fall back to the NumPy code on
-    such results so that this raises): a set's ``G``, ``c``, ``A``, ``b``, ``c_err`` and
-    ``b_err`` hold finite entries of at most ``MAX_MAGNITUDE`` in magnitude, and ``h``
-    such entries or ``+inf``. Within that bound no single operation or LP on the set
-    overflows double precision (products of two entries are at most ``1e300``), so no
-    set with inf or NaN data, whose queries would answer wrongly or not at all, is ever
-    built.
-
-    Parameters
-    ----------
-    op : str
-        The operation, named in the message.
-    G, c, A, b, h : ndarray
-        The set's data.
-    cerr, berr : ndarray or None
-        The rounding bounds of ``c`` and ``b`` (``None``: exact).
-
-    Raises
-    ------
-    MagnitudeError
-        Naming the operation, the array, the first bad entry and its value.
-    """
-    bad = None
-    if compiled_ops is not None:
-        bad = compiled_ops.check_data(G, c, A, b, h, cerr, berr)
-        if bad is NotImplemented:
-            bad = _first_bad_numpy((G, c, A, b, h, cerr, berr))
-    else:
-        bad = _first_bad_numpy((G, c, A, b, h, cerr, berr))
-    if bad is None:
-        return
-    k, i, v = bad
-    arr = np.asarray((G, c, A, b, h, cerr, berr)[k])
-    idx = tuple(int(j) for j in np.unravel_index(i, arr.shape)) if arr.ndim > 1 else (i,)
-    what = "NaN" if np.isnan(v) else f"an entry of {v:.3g}"
-    raise MagnitudeError(
-        f"{op}: the result's {_DATA_NAMES[k]} would hold {what} (first at index {idx}); a "
-        f"set's data must be finite and at most {MAX_MAGNITUDE:.0e} in magnitude "
-        "(setobs.tolerances.MAX_MAGNITUDE: products of larger numbers overflow double "
-        "precision): rescale the units, or the matrix of the operation")
 
 
 def _rebuild(G, c, A, b, h, unbounded_radius, cerr, berr) -> ConstrainedZonotope:
@@ -319,7 +181,7 @@ class ConstrainedZonotope:
         reference) or already read-only arrays of a set: no copies (internal fast path of
         the exact operations). ``cerr``, ``berr``: as in :meth:`_trusted`; ``op``: the
         operation named by the data guard (:func:`check_set_data`)."""
-        check_set_data(op, G, c, A, b, h, cerr, berr)
+        check_set_data(op, G, c, A, b, h, cerr, berr, compiled_ops)
         self = object.__new__(cls)
         setattr_ = object.__setattr__
         if cerr is not None and not np.count_nonzero(cerr):
@@ -355,7 +217,7 @@ class ConstrainedZonotope:
             object.__setattr__(self, name, arr)
         if op is not None:
             check_set_data(op, self._G, self._c, self._A, self._b, self._h, self._cerr,
-                           self._berr)
+                           self._berr, compiled_ops)
         object.__setattr__(self, "unbounded_radius", unbounded_radius)
         object.__setattr__(self, "_cache", {})
         return self
@@ -580,12 +442,12 @@ class ConstrainedZonotope:
         if not isinstance(other, ConstrainedZonotope):
             v = as_vector("vector", other, size=self.dim)
             c = self._c + v
-            cerr = _sum_err(c, self._cerr)
+            cerr = sum_err(c, self._cerr)
             if err is not None:
                 e = as_vector("err", err, size=self.dim)
                 if (e < 0).any():
                     raise InvalidValueError("err must be nonnegative")
-                cerr = _add(cerr, e)
+                cerr = add_err(cerr, e)
             return self._same_factors(self._G, c, cerr, "Minkowski sum with a vector")
         if err is not None:
             raise ArgumentError("err applies to a vector summand only")
@@ -602,9 +464,9 @@ class ConstrainedZonotope:
             np.concatenate((self._b, other._b)),
             np.concatenate((self._h, other._h)),
             min(self.unbounded_radius, other.unbounded_radius),
-            _sum_err(c, _add(self._cerr, other._cerr)),
+            sum_err(c, add_err(self._cerr, other._cerr)),
             None if self._berr is None and other._berr is None else
-            _cat(self._berr, self.n_con, other._berr, other.n_con),
+            cat_err(self._berr, self.n_con, other._berr, other.n_con),
             "Minkowski sum",
         )
 
@@ -647,7 +509,7 @@ class ConstrainedZonotope:
                 return out
         M_a = as_matrix("M (linear map)", M, cols=self.dim)
         return self._same_factors(M_a @ self._G, M_a @ self._c,
-                                  _map_err(M_a, self._c, self._cerr), "linear map")
+                                  map_err(M_a, self._c, self._cerr), "linear map")
 
     def _same_factors(self, G: NDArray[np.float64], c: NDArray[np.float64],
                       cerr: NDArray[np.float64] | None, op: str) -> ConstrainedZonotope:
@@ -681,8 +543,8 @@ class ConstrainedZonotope:
             np.concatenate([self._b, other._b]),
             np.concatenate([self._h, other._h]),
             min(self.unbounded_radius, other.unbounded_radius),
-            _cat(self._cerr, self.dim, other._cerr, other.dim),
-            _cat(self._berr, self.n_con, other._berr, other.n_con),
+            cat_err(self._cerr, self.dim, other._cerr, other.dim),
+            cat_err(self._berr, self.n_con, other._berr, other.n_con),
             "Cartesian product",
         )
 
@@ -717,7 +579,7 @@ class ConstrainedZonotope:
             np.vstack([self._A, C_a @ self._G]),
             np.concatenate([self._b, y_a - C_a @ self._c]),
             self._h, self.unbounded_radius, self._cerr,
-            _cat(self._berr, self.n_con, _diff_err(y_a, C_a, self._c, self._cerr, ye),
+            cat_err(self._berr, self.n_con, diff_err(y_a, C_a, self._c, self._cerr, ye),
                  C_a.shape[0]),
             "intersection with an affine set",
         )
@@ -755,8 +617,9 @@ class ConstrainedZonotope:
         A[n_c1 + n_c2 :, : self.n_gen] = R_a @ self._G
         A[n_c1 + n_c2 :, self.n_gen :] = -other._G
         b = np.concatenate([self._b, other._b, other._c - R_a @ self._c])
-        new_err = _diff_err(other._c, R_a, self._c, self._cerr, other._cerr)
-        berr = _cat(_cat(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err, other.dim)
+        new_err = diff_err(other._c, R_a, self._c, self._cerr, other._cerr)
+        berr = cat_err(cat_err(self._berr, n_c1, other._berr, n_c2), n_c1 + n_c2, new_err,
+                       other.dim)
         G = np.zeros((self.dim, self.n_gen + other.n_gen))
         G[:, : self.n_gen] = self._G
         return ConstrainedZonotope._owned(
@@ -1005,10 +868,10 @@ class ConstrainedZonotope:
         # rounding of fl(x - c) is at most u |fl(x - c)| (one subtraction), and c's own
         # uncertainty c_err adds to it
         d = xv - self._c
-        err = _sum_err(d, self._cerr)
+        err = sum_err(d, self._cerr)
         fp = FactorPolytope(np.vstack([self._A, self._G]), np.concatenate([self._b, d]),
                             self._h, unbounded_radius=self.unbounded_radius,
-                            b_err=_cat(self._berr, self.n_con, err, self.dim))
+                            b_err=cat_err(self._berr, self.n_con, err, self.dim))
         return not fp.emptiness(tol).empty
 
     # ------------------------------------------------------------------ more operations

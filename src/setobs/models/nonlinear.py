@@ -286,9 +286,6 @@ class NonlinearModel:
 
         return call(fl), call(hl)
 
-    def __getstate__(self) -> dict[str, Any]:
-        return dict(self.__dict__)
-
     def __repr__(self) -> str:
         return (f"NonlinearModel(n={self.n}, p={self.p}, q={self.q}, l={self.l}; "
                 f"states {', '.join(self.state_names)})")

@@ -171,12 +171,16 @@ class PointObserver:
         raise NotSupportedError("a subclass implements this")
 
     def _check(self, y: ArrayLike, u: ArrayLike | None):
+        """``y_k`` with the feedthrough's ``Du u_k`` taken off (the designs see
+        ``Xi x_k``), and ``u_k``, validated."""
         yv = as_vector("y", y, size=self.sys.l)
         if self.sys.p:
             if u is None:
                 raise ArgumentError(f"u is required: the system has {self.sys.p} input(s) "
                                      "(pass zeros explicitly if none was applied)")
             uv = as_vector("u", u, size=self.sys.p)
+            if np.any(self.sys.Du != 0):
+                yv = yv - self.sys.Du @ uv
         else:
             uv = np.zeros(0)
         return yv, uv
@@ -187,7 +191,8 @@ class PointObserver:
         Parameters
         ----------
         y : array_like, shape (l,)
-            Measurement ``y_k`` (feedthrough-free: ``y_k - Du u_k``).
+            Measurement ``y_k`` (with a feedthrough, ``Du u_k`` is taken off here, as
+            the set estimators do).
         u : array_like, shape (p,), optional
             Input ``u_k`` applied at step ``k`` (required when the system has inputs).
         """
@@ -219,9 +224,8 @@ class PointObserver:
         """Run over a record from the current estimate (what :meth:`run` does after
         :meth:`reset`).
 
-        With a feedthrough (``sys.Du != 0``), ``Du u_k`` is subtracted from
-        ``y_k`` first (``U`` is then required); :meth:`step` takes the
-        feedthrough-free measurement ``y_k - Du u_k``.
+        With a feedthrough (``sys.Du != 0``), :meth:`step` takes ``Du u_k`` off ``y_k``
+        (``U`` is then required).
 
         Parameters
         ----------
@@ -242,11 +246,6 @@ class PointObserver:
             Ua = as_matrix("U", U, cols=self.sys.p)
             if Ua.shape[0] < N:
                 raise DimensionError(f"U must have at least {N} rows, got {Ua.shape[0]}")
-        if self.sys.p and np.any(self.sys.Du != 0):
-            if Ua is None:
-                raise ArgumentError("U is required: the system has a feedthrough Du "
-                                     "(y = Xi x + Du u)")
-            Ya = Ya - Ua[:N] @ self.sys.Du.T
         D = np.empty((N, self.sys.q))
         X = None
         for k in range(N):

@@ -534,8 +534,6 @@ class NonlinearSetObserver:
         dt = model.dt if dt is None else dt
         self.method = method
         self.forms = ("mean-value", "taylor") if method == "auto" else (method,)
-        self.n, self.q, self.l, self.p = n, q, len(hx), len(us)
-        self.states, self.inputs, self.disturbances = tuple(xs), tuple(us), tuple(ds)
         zs = xs + ds
         self._f = _Map(sp, fx + list(ds), zs, us)  # (d+ = d: the increment is noise)
         self._h = _Map(sp, hx, zs, us)
@@ -644,6 +642,42 @@ class NonlinearSetObserver:
         def gens(c: int) -> int:
             return max(c + 2 * N, int(np.ceil(c * dg / dc)))
         return gens(c0), c0, gens(c_cap), c_cap
+
+    # the model's sizes and variables, read from it (one source)
+    @property
+    def n(self) -> int:
+        """Number of states."""
+        return self.model.n
+
+    @property
+    def q(self) -> int:
+        """Number of disturbances."""
+        return self.model.q
+
+    @property
+    def l(self) -> int:
+        """Number of outputs."""
+        return self.model.l
+
+    @property
+    def p(self) -> int:
+        """Number of known inputs."""
+        return self.model.p
+
+    @property
+    def states(self) -> tuple:
+        """The state variables."""
+        return tuple(self.model.states)
+
+    @property
+    def inputs(self) -> tuple:
+        """The input variables."""
+        return tuple(self.model.inputs)
+
+    @property
+    def disturbances(self) -> tuple:
+        """The disturbance variables."""
+        return tuple(self.model.disturbances)
 
     def reset(self) -> None:
         """Back to ``X_0`` at step 0."""
@@ -1067,10 +1101,9 @@ class NonlinearSetObserver:
         est = 0.5 * lo + 0.5 * hi
         eb = float(np.max(0.5 * (hi - lo), initial=0.0))
         return SetEstimateStep(self.k, est, lo, hi, eb, status=status,
-                         state_lo=box.lo[:n].copy(), state_hi=box.hi[:n].copy(), stats=stats)
+                               state_lo=box.lo[:n].copy(), state_hi=box.hi[:n].copy(), stats=stats)
 
     # ------------------------------------------------------------------ a record
-    @with_single_threaded_blas  # (its small dense kernels: :mod:`setobs._blas`)
     def run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SetEstimateResult:
         """Estimate over a record from ``X_0``: :meth:`reset`, then :meth:`continue_run`.
 
@@ -1089,6 +1122,7 @@ class NonlinearSetObserver:
         self.reset()
         return self.continue_run(Y, U)
 
+    @with_single_threaded_blas  # (its small dense kernels: :mod:`setobs._blas`)
     def continue_run(self, Y: ArrayLike, U: ArrayLike | None = None) -> SetEstimateResult:
         """Estimate over a record continuing from the current step (what :meth:`run` does
         after :meth:`reset`).

@@ -279,15 +279,15 @@ class SMFDO:
         disturbance (``q = 0``) the SMFDO is a set-membership state observer: the
         worst-case-optimal state set in exact mode, an outer bound of it with a
         window. A state on the unobservable part of the augmented pair is bounded
-        from ``initial_state_set`` when that set bounds it
-        (:mod:`setobs.setmembership._unobservable`), else reported unbounded.
+        from ``initial_state_set`` when that set bounds it (tracked outside the LPs,
+        an outer bound by induction), else reported unbounded.
     restart : {"auto", "polytope", "box"}
         The set each window restarts from (windowed mode). ``"box"``: the
         interval hull of ``Z_(k-delta)``, eq. (24) of Li-Cong-Dong literally.
         ``"polytope"``: that box cut by up to ``(restart_depth - 1) N_o`` rows
         carried back through the dynamics (at most 120), with ranges from the earlier
-        hulls and the window's own support values
-        (:mod:`setobs.setmembership._restart`, soundness proof there). ``"auto"``
+        hulls and the window's own support values (an outer bound of the exact set
+        whatever the data; the proof is in the developer notes). ``"auto"``
         (default): the polytope while it is narrower than the box by ``AUTO_GAIN`` on
         average or ``AUTO_GAIN_MAX`` somewhere, checked at probes. Both are certified;
         the module notes (*The window's restart*) give the rule, widths and costs.
