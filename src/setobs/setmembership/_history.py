@@ -82,11 +82,10 @@ _PRIOR_SLACK = 1e-9
 
 #: The implied bounds' radius is this many times the prior's (the LP's feasible set is
 #: the same). Tight implied bounds are active at many optimal vertices of the
-#: whole-history LP, and that degeneracy stalled HiGHS: on a 30-tank cascade with 21
-#: outputs exact mode needed 59 000-79 000 simplex iterations and 16-29 s per step at
-#: k = 85-89 (``benchmarks/results/exact_long_tight_bounds.json``); with 16 times the
-#: radius about 2 500 iterations per step to k = 183 (``exact_long.json``). Wider bounds
-#: only widen the certificate's basic-column term, which the accepted gap explains.
+#: whole-history LP, and that degeneracy stalled HiGHS on a 30-tank cascade with 21
+#: outputs (``benchmarks/results/exact_long_tight_bounds.json``, against 16 times the
+#: radius in ``exact_long.json``). Wider bounds only widen the certificate's
+#: basic-column term, which the accepted gap explains.
 IMPLIED_WIDEN = 16.0
 
 _TINY = np.finfo(np.float64).tiny

@@ -2,8 +2,9 @@
 
 Eq. (24) of Li-Cong-Dong restarts the window from the interval hull of
 ``Z_t`` (``t = k - delta``), a box that forgets every correlation of the
-state: on a 4-state benchmark with noise, window 10 ended 1.9 times as wide as
-the exact set. This module restarts it instead from
+state (how much wider than the exact set that leaves the window on the benchmark
+plants: ``benchmarks/results/state_estimation.json``). This module restarts it
+instead from
 
 .. math::  S_t = \\mathrm{IH}(Z_t) \\cap \\bigcap_{j=1}^{m-1}
            \\{z : \\ell_j \\le F_j z \\le u_j\\},

@@ -36,24 +36,7 @@ def compiled_batch(fp: FactorPolytope, W: NDArray[np.float64],
     one dual simplex warm from the previous objective's basis, each multiplier
     certified like the HiGHS path's). For polytopes with every bound finite and
     1 to :data:`COMPILED_MAX_ROWS` rows; elsewhere nothing is solved.
-
-    Parameters
-    ----------
-    W : ndarray, shape (n_lp, n_g)
-        Objectives (exact: no rounding error to carry).
-    gaps : ndarray, shape (n_lp // 2,), optional
-        For objectives in pairs ``(w, -w)``: each LP may stop within ``gaps[t]`` of
-        its pair's minimum (certified all the same;
-        :meth:`~setobs.lp.fastlp.FixedStructureLP.minimize_all`).
-
-    Returns
-    -------
-    bounds : ndarray, shape (n_lp,)
-        Certified lower bounds where ``ok``.
-    ok : ndarray of bool, shape (n_lp,)
-        Solved with the certified bound within the fast path's gap of the simplex
-        objective; the others go to :meth:`minimize` (which also decides
-        emptiness).
+    (Parameters as for the method of :class:`FactorPolytope` it serves.)
     """
     n_lp = W.shape[0]
     if fp.n_c == 0 or fp.n_c > COMPILED_MAX_ROWS or fp.any_unbounded or not n_lp:
@@ -81,15 +64,7 @@ def compiled_retry(fp: FactorPolytope, w: NDArray[np.float64], w_err: NDArray[np
                    w_pair: tuple[NDArray[np.float64], NDArray[np.float64]] | None
                   ) -> LPResult | None:
     """Last retry: the compiled simplex of :mod:`setobs.lp.fastlp`, certified here.
-
-    Parameters
-    ----------
-    w : ndarray, shape (n_g,)
-        Objective over the factors.
-    w_err : ndarray, optional
-        Elementwise bound on the rounding error in ``w``.
-    w_pair : (M, v), optional
-        ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
+    (Parameters as for the method of :class:`FactorPolytope` it serves.)
     """
     from ..fastlp import FixedStructureLP
 

@@ -25,17 +25,7 @@ def within_b_err(fp: FactorPolytope, w: NDArray[np.float64], w_err: NDArray[np.f
                  scale: float) -> LPResult | None:
     """``min w^T xi`` over ``|A xi - b| <= b_err``, ``|xi| <= h`` (the set the
     certificate covers), or ``None`` unless it is decided with the gap closed.
-
-    Parameters
-    ----------
-    w : ndarray, shape (n_g,)
-        Objective over the factors.
-    w_err : ndarray, optional
-        Elementwise bound on the rounding error in ``w``.
-    w_pair : (M, v), optional
-        ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
-    scale : float
-        Power of two the objective is divided by (:meth:`objective_scale`).
+    (Parameters as for the method of :class:`FactorPolytope` it serves.)
     """
     be = fp.b_err
     if be is None or not np.any(be):

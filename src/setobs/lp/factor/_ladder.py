@@ -25,15 +25,7 @@ def highs_ladder(fp: FactorPolytope, w: NDArray[np.float64], w_err: NDArray[np.f
                  ) -> LPResult:
     """:meth:`FactorPolytope.minimize` for a caller that holds the polytope's lock: the
     retry ladder of the module notes (:mod:`setobs.lp.factor`).
-
-    Parameters
-    ----------
-    w : ndarray, shape (n_g,)
-        Objective over the factors.
-    w_err : ndarray, optional
-        Elementwise bound on the rounding error in ``w``.
-    w_pair : (M, v), optional
-        ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
+    (Parameters as for the method of :class:`FactorPolytope` it serves.)
     """
     if fp.n_c == 0:
         # No constraints: the minimum over the box is analytic and exact.

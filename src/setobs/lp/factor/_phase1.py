@@ -108,15 +108,7 @@ def relaxed_rows(fp: FactorPolytope, w: NDArray[np.float64],
     :meth:`FactorPolytope.emptiness` (and a valid bound for the exact set). If the
     relaxed LP does not solve either, the ``"fallback"`` answer of
     :meth:`FactorPolytope.minimize` is returned.
-
-    Parameters
-    ----------
-    w : ndarray, shape (n_g,)
-        Objective over the factors.
-    w_err : ndarray, optional
-        Elementwise bound on the rounding error in ``w``.
-    w_pair : (M, v), optional
-        ``w`` was computed as ``M^T v`` (see :mod:`setobs.lp.certificate`).
+    (Parameters as for the method of :class:`FactorPolytope` it serves.)
     """
     with fp.lock:
         rep = fp.emptiness()
