@@ -57,6 +57,9 @@ ABOUT: dict[str, tuple[str, str]] = {
     "smfdo": ("smfdo", "The SMFDO's time per update by window and restart, in linprog units."),
     "smfdo_campaign": ("smfdo_campaign", "The SMFDO's fast path against the reference path, "
                        "the hull against HiGHS and cvxpy, and the Fig. 1(b) campaign."),
+    "window_worst": ("window_worst", "A study: what holds window 10's worst state band "
+                     "against exact mode on two 30-tank cascades (a fast and a slow one), "
+                     "by restart variant."),
     "smfdo_noise": ("smfdo_noise", "The SMFDO on the measured motor record with noise bounds."),
     "state_estimation": ("state_estimation", "Guaranteed state estimation: band widths against "
                          "the whole-history LP and cost per step, by plant, window and "
