@@ -296,3 +296,62 @@ def test_restart_arguments_are_checked(bad):
     sys = so.LinearSystem(two_mass(), np.zeros((4, 0)), [[1.0, 0.0, 0.0, 0.0]])
     with pytest.raises(ValueError, match="restart"):
         so.SMFDO(sys, window=3, measurement_noise=0.1, **bad)
+
+
+def _slow_cascade(n=12, l=8, dt=0.1, seed=7):
+    """Tanks of unequal outflow coefficients sampled fast (``A`` close to ``I``), ``l`` of
+    the ``n`` levels measured (as ``benchmarks/window_worst.py``'s ``slow`` plant)."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(0.05, 0.3, n)
+    Ac = np.diag(-c) + np.diag(c[:-1], -1)
+    M = expm(np.block([[Ac, np.eye(n)[:, :1] * 0.5], [np.zeros((1, n + 1))]]) * dt)
+    A, B = M[:n, :n], M[:n, n:]
+    skip = set(np.round(np.linspace(0, n - 1, n - l + 2)[1:-1]).astype(int))
+    C = np.eye(n)[[i for i in range(n) if i not in skip]]
+    return A, B, C
+
+
+def test_the_first_polytope_restart_waits_out_the_initial_transient(monkeypatch):
+    """A slow cascade from a wide initial box (``|x_0| <= 5`` against noise of 1e-3 and
+    1e-2): restarted at ``k - delta`` while that hull was still the initial set's
+    transient, window 5 carried it into its bands (its widest state band 1.78 times the
+    exact one over steps 8-16). Waiting while the restart hull is more than
+    ``TRANSIENT_RATIO`` times as wide as the newest keeps them within 1.35 times the
+    whole-history LP's (an independent HiGHS LP) over those steps, and outside them
+    (sound); with the wait off (``TRANSIENT_RATIO = inf``) the bound fails."""
+    from setobs.setmembership import _schedule
+    from tests.oracles import history_lp_highs, noisy_record
+
+    A, B, C = _slow_cascade()
+    n, l = A.shape[0], C.shape[0]
+    rw, rv, N = 1e-3, 1e-2, 30
+    rng = np.random.default_rng(1)
+    U = np.sin(0.05 * np.arange(N))[:, None] + 0.2 * rng.normal(size=(N, 1))
+    X, Y = noisy_record(A, B, C, U, rw, rv, rng)
+    sys_ = so.LinearSystem(A, np.zeros((n, 0)), C, B)
+    kw = dict(window=5, measurement_noise=rv, process_noise=rw, state_bounds=True,
+              initial_state_set=so.Box(-5 * np.ones(n), 5 * np.ones(n)))
+    ks = range(8, 17)
+    ref = {k: history_lp_highs(A, np.zeros((n, 0)), C, Y, k, np.zeros(0), U=U, Gamma=B,
+                               x_box=(-5 * np.ones(n), 5 * np.ones(n)),
+                               noise_w=(np.eye(n), np.full(n, rw)),
+                               noise_v=(np.eye(l), np.full(l, rv)), states=True)
+           for k in ks}
+
+    def worst(res):
+        out = 0.0
+        for k in ks:
+            lo, hi = ref[k]
+            w = hi - lo
+            assert np.all(res.state_lo[k] <= lo + 1e-7 * w) and \
+                np.all(res.state_hi[k] >= hi - 1e-7 * w), k
+            out = max(out, float(np.max((res.state_hi[k] - res.state_lo[k]) / w)))
+        return out
+
+    res = so.SMFDO(sys_, **kw).run(Y, U)
+    assert np.all((X >= res.state_lo) & (X <= res.state_hi))
+    assert worst(res) <= 1.35
+    monkeypatch.setattr(_schedule, "TRANSIENT_RATIO", np.inf)
+    assert worst(so.SMFDO(sys_, **kw).run(Y, U)) > 1.5

@@ -18,8 +18,20 @@ from ._state import SMFDOState
 _kernels = lazy_module("setobs.setmembership._kernels")
 _EMPTY = np.zeros(0)
 
-__all__ = ["init_lags", "polytope_now", "restart_cz", "restart_rows", "restart_start",
-           "start_mode", "support_at", "window_hist"]
+__all__ = ["TRANSIENT_RATIO", "TRANSIENT_WAIT", "in_transient", "init_lags", "polytope_now",
+           "restart_cz", "restart_rows", "restart_start", "start_mode", "support_at",
+           "window_hist"]
+
+#: The polytope restart's first restart also waits while the hull it would restart from
+#: (at ``k - delta``) is more than this many times as wide as the newest hull in some
+#: coordinate: the transient from a wide initial set, which a restart would carry into
+#: the window (with and without the wait on a slow 30-tank cascade:
+#: ``benchmarks/results/window_worst.json``; in development runs a ratio of 1.5 waited
+#: out the whole :data:`TRANSIENT_WAIT` there, at 7 times the cost, for little).
+TRANSIENT_RATIO = 2.0
+#: ... but at most this many windows beyond the window (the whole history's LP grows
+#: with every step it waits).
+TRANSIENT_WAIT = 2
 
 
 def start_mode(m: SMFDOModel, s: SMFDOState, k: int) -> str:
@@ -41,12 +53,25 @@ def init_lags(m: SMFDOModel, s: SMFDOState) -> int:
     (``restart_lags``) each step is the whole history from ``Z_0^-``, the exact set, as long
     as that LP is no larger than the polytope window's: ``N + k f`` against ``N + R + delta
     f`` factors (``f`` per step, ``R`` the polytope's rows), so at most ``R // f`` steps
-    (its LPs are cold: a longer wait costs more than it gains). None with the box restart
-    (eq. (24) as the paper runs it)."""
+    (its LPs are cold: a longer wait costs more than it gains), and while the restart hull
+    is still in its transient (:data:`TRANSIENT_RATIO`; at most :data:`TRANSIENT_WAIT`
+    windows). None with the box restart (eq. (24) as the paper runs it)."""
     if not polytope_now(m, s) or m.restart_poly is None:
         return 0
     f = m.fixed_step_set().n_gen + (0 if m.V_fixed is None else m.V_fixed.n_gen)
-    return min(m.restart_lags, m.restart_poly.F_all.shape[0] // max(f, 1))
+    lags = min(m.restart_lags, m.restart_poly.F_all.shape[0] // max(f, 1))
+    win = m.window_length()
+    if len(s.hulls) >= win and in_transient(s.hulls[-win], s.hulls[-1]):
+        return max(lags, TRANSIENT_WAIT * win)
+    return lags
+
+
+def in_transient(old: Box, new: Box) -> bool:
+    """Whether ``old`` is more than :data:`TRANSIENT_RATIO` times as wide as ``new`` in a
+    coordinate where both are finite (and ``new`` not flat)."""
+    wo, wn = old.hi - old.lo, new.hi - new.lo
+    ok = np.isfinite(wo) & np.isfinite(wn) & (wn > 0.0)
+    return bool(ok.any() and np.any(wo[ok] > TRANSIENT_RATIO * wn[ok]))
 
 
 def window_hist(m: SMFDOModel, s: SMFDOState, entry: Entry) -> list[Entry]:

@@ -100,8 +100,11 @@ shape does not matter the step keeps the box restart's cost); on a probe step th
 narrower one is reported; the reference path
 (``fast=False``) keeps the polytope. With the polytope, the first restart waits for
 its depth (up to ``restart_lags`` steps beyond the window, while the whole history
-is no larger an LP than the window's); until then each step is the whole history
-from the initial set, the exact set (a shallow polytope is wider than it).
+is no larger an LP than the window's) and, from a wide initial set, for the transient
+to pass (while the hull it would restart from is more than ``TRANSIENT_RATIO`` times as
+wide as the newest one, at most ``TRANSIENT_WAIT`` windows); until then each step is
+the whole history from the initial set, the exact set (a restart from a shallow
+polytope, or from the transient, is wider than it).
 """
 
 
