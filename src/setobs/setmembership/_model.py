@@ -296,7 +296,7 @@ class SMFDOModel:
 
     def split_hull(self, lo: NDArray[np.float64], hi: NDArray[np.float64]):
         """The fast paths' hull bounds (the coordinates of ``z``, then the rows of
-        ``_hull_rows``, then any rows of the caller's) as ``(box_o, box, box_x,
+        :attr:`hull_rows`, then any rows of the caller's) as ``(box_o, box, box_x,
         rest)``: the hulls of ``z``, of ``P z`` and (``state_bounds``, else ``None``)
         of the state, and the index of the caller's rows."""
         N = self.A_o.shape[0]

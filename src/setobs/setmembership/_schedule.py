@@ -26,8 +26,9 @@ __all__ = ["TRANSIENT_RATIO", "TRANSIENT_WAIT", "in_transient", "init_lags", "po
 #: (at ``k - delta``) is more than this many times as wide as the newest hull in some
 #: coordinate: the transient from a wide initial set, which a restart would carry into
 #: the window (with and without the wait on a slow 30-tank cascade:
-#: ``benchmarks/results/window_worst.json``; in development runs a ratio of 1.5 waited
-#: out the whole :data:`TRANSIENT_WAIT` there, at 7 times the cost, for little).
+#: ``benchmarks/results/window_worst.json``; in development runs, without the
+#: :data:`TRANSIENT_WAIT` cap, a ratio of 1.5 kept the whole history there until the
+#: restart's growth limit, at 7 times the cost, for little).
 TRANSIENT_RATIO = 2.0
 #: ... but at most this many windows beyond the window (the whole history's LP grows
 #: with every step it waits).

@@ -51,11 +51,8 @@ def noise_set(name: str, value: object, dim: int) -> ConstrainedZonotope | None:
     if value is None:
         return None
     if isinstance(value, Box | ConstrainedZonotope):
-        Z = ConstrainedZonotope.from_box(value.lo, value.hi) if isinstance(value, Box) \
-            else value
-        if Z.dim != dim:
-            raise DimensionError(f"{name} must have dimension {dim}, got {Z.dim}")
-        if not Z.is_bounded:
+        Z = as_set(name, value, dim)
+        if Z is None or not Z.is_bounded:
             raise InvalidValueError(
                 f"{name} must be bounded (an output that is not measured at a step is "
                 "NaN in Y, not unbounded noise)")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import copy
 from collections import deque
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,7 +28,7 @@ from ._hrep import HState
 from ._model import Entry
 from ._unobservable import UnobservableTracker
 
-__all__ = ["Handoff", "Outcome", "Posterior", "SMFDOState"]
+__all__ = ["Handoff", "Outcome", "Posterior", "Resumes", "SMFDOState"]
 
 #: The carried posterior: a constrained zonotope (the set recursion), exact mode's
 #: H-representation or whole-history LP, the closed form's data (a fast window step),
@@ -65,13 +65,21 @@ class Outcome(NamedTuple):
         return self._replace(Z_src=Z_src)
 
 
+class Resumes(Protocol):
+    """An engine that hands steps off: it carries the reference engine's answer on."""
+
+    def resume(self, out: Outcome, handoff: Handoff) -> Outcome:
+        """The answer ``out`` to the handed-off step, carried on by the engine."""
+        ...
+
+
 class Handoff(NamedTuple):
     """An engine's hand-off of a step it cannot decide: the loop runs the reference
     engine from ``start`` (the engine's exact posterior as a set), then gives the
     answer back to ``owner.resume`` (which carries its own representation on); if the
     reference engine raises, the state's posterior goes back to ``carried``."""
 
-    owner: object
+    owner: Resumes
     start: ConstrainedZonotope
     carried: Posterior
 

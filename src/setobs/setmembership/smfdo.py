@@ -608,7 +608,7 @@ class SMFDO:
                 except ModelInvalidatedError:
                     s.Z_src = out.carried  # (the observer is left as before the step)
                     raise
-                out = out.owner.resume(answer, out)  # type: ignore[attr-defined]
+                out = out.owner.resume(answer, out)
             if out is not None:
                 return commit(m, s, k, mode, out)
         raise InternalError("no engine answered (the reference recursion always does)")
