@@ -66,6 +66,24 @@ def state_bands(obs, Y, U) -> tuple[list[float], np.ndarray, np.ndarray]:
     return times, np.array(lo), np.array(hi)
 
 
+def count_solves(solves: list[tuple[int, float]]):
+    """Route every HiGHS solve of setobs through a counter that appends ``(simplex
+    iterations, seconds)`` to ``solves``; returns the plain solve (to put back:
+    ``setobs.lp.highs.solve = plain``)."""
+    from setobs.lp import highs
+
+    plain = highs.solve
+
+    def counted(hs, **kw):
+        t0 = time.perf_counter()
+        st = plain(hs, **kw)
+        solves.append((int(hs.getInfo().simplex_iteration_count), time.perf_counter() - t0))
+        return st
+
+    highs.solve = counted
+    return plain
+
+
 def linprog_unit(repeats: int = 30) -> float:
     """Median time (s) of one 45 x 40 ``scipy.optimize.linprog`` (HiGHS): the unit of the
     speed targets, timed in the same run as what it measures."""

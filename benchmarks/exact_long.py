@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from tests.oracles import history_lp_highs
 
 import setobs as so
-from _common import linprog_unit, stamp
+from _common import count_solves, linprog_unit, stamp
 from setobs.lp import highs
 from state_estimation import noise_model, record, tanks_outputs
 
@@ -74,15 +74,7 @@ def main() -> None:
     obs = so.SMFDO(so.LinearSystem(A, np.zeros((n, 0)), C, B), window=None,
                    measurement_noise=rv, state_bounds=True, initial_state_set=X0, **nkw)
     solves: list[tuple[int, float]] = []
-    plain = highs.solve
-
-    def counted(hs, **kw):
-        t0 = time.perf_counter()
-        st = plain(hs, **kw)
-        solves.append((int(hs.getInfo().simplex_iteration_count), time.perf_counter() - t0))
-        return st
-
-    highs.solve = counted
+    plain = count_solves(solves)
     steps, checks = [], []
     checks_at = {int(c) for c in args.check.split(",") if c}
     unit = linprog_unit()

@@ -38,6 +38,9 @@ ABOUT: dict[str, tuple[str, str]] = {
                    "step against k, and the exact-mode Fig. 1(b) campaign."),
     "exact_noise": ("exact_noise", "Exact mode with noise (the whole-history LP) on three "
                     "plants, against one LP of the same step solved from scratch."),
+    "exact_bounded": ("exact_bounded", "Exact mode with noise over a bounded history (the "
+                      "outer and inner cut LPs) on three 30-state plants: cost per step, the "
+                      "history kept, and the bounds against an independent whole-history LP."),
     "exact_truncation": ("exact_truncation", "A study: the whole-history LP cut at s = k - L "
                          "with outer and inner restart sets."),
     "geometry_ops": ("geometry_ops", "The set operations and queries against cvxpy and "

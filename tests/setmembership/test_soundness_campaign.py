@@ -532,3 +532,32 @@ def test_ill_conditioned_windows_hold_the_truth_short():
 def test_ill_conditioned_windows_hold_the_truth_campaign():
     out = run_campaign(ill_conditioned_case, range(30))
     assert sum(o[0] for o in out) >= 30 * 7 * 40
+
+
+def _bounded_history_on(monkeypatch) -> None:
+    """Exact mode over a bounded history, its first cut tried from step 8 (6 deep)."""
+    from setobs.setmembership import _bounded
+
+    monkeypatch.setattr(_bounded, "BOUNDED", True)
+    monkeypatch.setattr(_bounded, "CUT_ROWS", 0)
+    monkeypatch.setattr(_bounded, "CUT_START", 6)
+    monkeypatch.setattr(_bounded, "CUT_RETRY", 2)
+    monkeypatch.setattr(_bounded, "INNER_HISTORY", 8)
+
+
+@pytest.mark.filterwarnings("ignore::setobs.SolverWarning")
+def test_bounded_history_holds_the_truth_short(monkeypatch):
+    """The state campaign's seeds 2 and 49 with exact mode's history cut early (an
+    "inexact" step from an open bracket is allowed; a band without the truth is not)."""
+    _bounded_history_on(monkeypatch)
+    out = [state_case(s) for s in (2, 49)]
+    assert not [p for o in out for p in o[2]]
+    assert sum(o[0] for o in out) >= 80
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore::setobs.SolverWarning")
+def test_bounded_history_holds_the_truth_campaign(monkeypatch):
+    _bounded_history_on(monkeypatch)
+    out = run_campaign(state_case, range(60))
+    assert sum(o[0] for o in out) >= 5000

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from .._lazy import lazy_module
 from .._rounding import round_down, round_up
+from ..exceptions import InternalError
 from ..tolerances import HISTORY_GAP_RTOL
 from . import highs
 
@@ -95,6 +96,21 @@ class BoxLP:
         #: bound may lie below the LP's minimum (``obj - bound`` plus what the solver's
         #: point misses of its rows, :meth:`_gap`)
         self.last_gaps = np.zeros(0)
+        #: columns whose values at each objective's optimum :meth:`minimize_all` keeps
+        #: in :attr:`last_points` (``None``: none)
+        self.record: NDArray[np.int64] | None = None
+        #: the solver's optimal point on :attr:`record`, one row per objective of the
+        #: last :meth:`minimize_all` (unscaled)
+        self.last_points = np.zeros((0, 0))
+        # (a basis a clone's first model starts from: clone)
+        self._seed: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]] | None = None
+        #: whether :meth:`minimize_all` keeps each objective's certified multiplier in
+        #: :attr:`last_duals`
+        self.keep_duals = False
+        #: the row multipliers of the last :meth:`minimize_all`'s certified bounds, one
+        #: row per objective (each a valid multiplier: any gives a valid cut)
+        self.last_duals = np.zeros((0, 0))
+        self._y = np.zeros(0)
 
     # ------------------------------------------------------------------ building
     def begin(self) -> None:
@@ -189,6 +205,182 @@ class BoxLP:
         self._undo = []
         self._models = []
         self._cache = None
+
+    # ------------------------------------------------------------------ cutting
+    def _merge(self) -> None:
+        """The blocks as one block each (columns, rows), for an edit by index."""
+        if len(self._lo) > 1:
+            self._lo, self._hi, self._s = ([np.concatenate(x)] for x in
+                                           (self._lo, self._hi, self._s))
+        if len(self._b) > 1:
+            self._b, self._berr = [np.concatenate(self._b)], [np.concatenate(self._berr)]
+            ent = self._ent
+            self._ent = [(np.concatenate([e[0] for e in ent]), np.concatenate([e[1] for e in ent]),
+                          np.concatenate([e[2] for e in ent]))]
+
+    def delete(self, cols: NDArray[np.int64], rows: NDArray[np.int64],
+               demote: NDArray[np.int64] | None = None) -> None:
+        """Remove columns and rows; the rest are re-indexed in order (an index ``i``
+        becomes ``i`` minus the removed indices below it). No kept row may have an entry
+        in a removed column. Each HiGHS model is cut the same way (``deleteRows``,
+        ``deleteCols``) and keeps its basis: the statuses of what is kept, with as many
+        basic columns of ``demote`` made nonbasic (or slacks of kept rows made basic) as
+        the count of basic variables must change to match the rows.
+
+        Parameters
+        ----------
+        cols, rows : ndarray of int64
+            The columns and rows to remove.
+        demote : ndarray of int64, optional
+            Kept columns (indices before the cut) preferred for leaving the basis.
+        """
+        cols = np.unique(np.asarray(cols, dtype=np.int64))
+        rows = np.unique(np.asarray(rows, dtype=np.int64))
+        if not (cols.size or rows.size):
+            return
+        self._merge()
+        lo_all, s_all = self._lo[0], self._s[0]  # (before the cut: a clone's seed is padded)
+        r, c, v = self._ent[0] if self._ent else (np.zeros(0, np.int64),) * 2 + (np.zeros(0),)
+        gone_r = np.isin(r, rows)
+        gone_c = np.isin(c, cols)
+        if (gone_c & ~gone_r).any():
+            raise InternalError("BoxLP.delete: a kept row has an entry in a removed column")
+        keep_e = ~gone_r
+        if self._ent:
+            r, c = r[keep_e], c[keep_e]
+            self._ent = [(r - np.searchsorted(rows, r), c - np.searchsorted(cols, c),
+                          v[keep_e])]
+        kc = np.ones(self.n_col, dtype=bool)
+        kc[cols] = False
+        kr = np.ones(self.n_row, dtype=bool)
+        kr[rows] = False
+        self._lo, self._hi, self._s = ([x[0][kc]] for x in (self._lo, self._hi, self._s))
+        if self._b:
+            self._b, self._berr = [self._b[0][kr]], [self._berr[0][kr]]
+        pref = np.zeros(self.n_col, dtype=bool)
+        if demote is not None:
+            pref[np.asarray(demote, dtype=np.int64)] = True
+        self.n_col, self.n_row = int(kc.sum()), int(kr.sum())
+        for hs in self._models:
+            self._cut_model(hs, cols, rows, kc, kr, pref[kc])
+        if self._seed is not None:
+            got = self._padded_seed(kc.size, kr.size, lo_all, s_all)
+            self._seed = None if got is None else (got[0][kc], got[1][kr], got[2][kc])
+        oc = self._cols[kc[self._cols]] if self._cols.size else self._cols
+        self._cols = oc - np.searchsorted(cols, oc)
+        self._undo = []
+        self._cache = None
+
+    def _cut_model(self, hs, cols, rows, kc, kr, pref) -> None:
+        """Cut one HiGHS model and give it its basis back, repaired to a square count."""
+        basis = hs.getBasis()
+        ok = bool(basis.valid)
+        if ok:
+            cs = np.array([int(st) for st in basis.col_status], dtype=np.int64)
+            rs = np.array([int(st) for st in basis.row_status], dtype=np.int64)
+            x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
+            ok = cs.size == kc.size and rs.size == kr.size and x.size == kc.size
+        if rows.size:
+            hs.deleteRows(rows.size, rows.astype(np.int32))
+        if cols.size:
+            hs.deleteCols(cols.size, cols.astype(np.int32))
+        if ok:
+            self._set_statuses(hs, cs[kc], rs[kr], x[kc], pref)
+
+    def _set_statuses(self, hs, cs, rs, x, pref) -> bool:
+        """Set a basis from status codes (HiGHS's ``HighsBasisStatus`` values), made
+        square: surplus basic columns (those of ``pref`` first) put at their nearer
+        bound, missing ones made up by basic slacks; ``False`` if HiGHS refuses it."""
+        BASIC = int(highs.highspy.HighsBasisStatus.kBasic)
+        LOWER = int(highs.highspy.HighsBasisStatus.kLower)
+        UPPER = int(highs.highspy.HighsBasisStatus.kUpper)
+        cs, rs = cs.copy(), rs.copy()
+        extra = int((cs == BASIC).sum() + (rs == BASIC).sum()) - rs.size
+        if extra > 0:
+            cand = np.flatnonzero(cs == BASIC)
+            cand = np.concatenate([cand[pref[cand]], cand[~pref[cand]]])[:extra]
+            lo = np.concatenate(self._lo)
+            hi = np.concatenate(self._hi)
+            s = np.concatenate(self._s)
+            xs = x[cand]
+            near_lo = np.abs(xs - lo[cand] / s[cand]) <= np.abs(hi[cand] / s[cand] - xs)
+            cs[cand] = np.where(near_lo, LOWER, UPPER)
+        elif extra < 0:
+            cand = np.flatnonzero(rs != BASIC)[: -extra]
+            rs[cand] = BASIC
+        b = highs.highspy.HighsBasis()
+        b.col_status = [highs.highspy.HighsBasisStatus(int(v)) for v in cs]
+        b.row_status = [highs.highspy.HighsBasisStatus(int(v)) for v in rs]
+        b.valid = True
+        return hs.setBasis(b) == highs.highspy.HighsStatus.kOk
+
+    def set_bounds(self, cols: NDArray[np.int64], lo: NDArray[np.float64],
+                   hi: NDArray[np.float64]) -> None:
+        """Change the bounds of some columns (finite), in the data and in every model.
+
+        Parameters
+        ----------
+        cols : ndarray of int64
+            The columns.
+        lo, hi : ndarray
+            Their new bounds.
+        """
+        cols = np.asarray(cols, dtype=np.int64)
+        self._merge()
+        self._lo[0][cols] = lo
+        self._hi[0][cols] = hi
+        s = self._s[0][cols]
+        for hs in self._models:
+            hs.changeColsBounds(cols.size, cols.astype(np.int32), lo / s, hi / s)
+        self._cache = None
+
+    def clone(self) -> BoxLP:
+        """A copy of the LP's data, without HiGHS models: its first model starts from the
+        basis of this one's (its first model's last basis, cut as this LP is cut later)."""
+        other = BoxLP()
+        self._merge()
+        other._lo, other._hi, other._s = [self._lo[0].copy()], [self._hi[0].copy()], \
+            [self._s[0].copy()]
+        if self._b:
+            other._b, other._berr = [self._b[0].copy()], [self._berr[0].copy()]
+            r, c, v = self._ent[0]
+            other._ent = [(r.copy(), c.copy(), v.copy())]
+        other.n_col, other.n_row = self.n_col, self.n_row
+        if self._models:
+            basis = self._models[0].getBasis()
+            x = np.asarray(self._models[0].getSolution().col_value, dtype=np.float64)
+            if basis.valid and x.size == self.n_col:
+                other._seed = (np.array([int(v) for v in basis.col_status], dtype=np.int64),
+                               np.array([int(v) for v in basis.row_status], dtype=np.int64),
+                               x)
+        return other
+
+    def _padded_seed(self, n_col, n_row, lo, scale):
+        """The clone's seed basis padded to ``n_col`` columns and ``n_row`` rows (what
+        was added since it was taken: columns at their lower bound ``lo`` / ``scale``,
+        rows' slacks basic); ``None`` when it has more than that."""
+        if self._seed is None:
+            return None
+        cs, rs, x = self._seed
+        nc, nr = n_col - cs.size, n_row - rs.size
+        if nc < 0 or nr < 0:
+            return None
+        LOWER = int(highs.highspy.HighsBasisStatus.kLower)
+        BASIC = int(highs.highspy.HighsBasisStatus.kBasic)
+        return (np.concatenate([cs, np.full(nc, LOWER, dtype=np.int64)]),
+                np.concatenate([rs, np.full(nr, BASIC, dtype=np.int64)]),
+                np.concatenate([x, lo[cs.size:] / scale[cs.size:]]))
+
+    def _seeded(self, hs) -> bool:
+        """Give a fresh model the clone's seed basis, padded for what was added since
+        (:meth:`_padded_seed`); whether it took."""
+        got = self._padded_seed(self.n_col, self.n_row, np.concatenate(self._lo),
+                                np.concatenate(self._s))
+        self._seed = None
+        if got is None:
+            return False
+        cs, rs, x = got
+        return self._set_statuses(hs, cs, rs, x, np.zeros(cs.size, dtype=bool))
 
     # ------------------------------------------------------------------ the data
     def arrays(self):
@@ -315,6 +507,8 @@ class BoxLP:
         limit = highs.simplex_limit(self.n_row, self.n_col)
         out = np.empty(n_obj)
         gaps = np.empty(n_obj)
+        pts = self._points_buffer(n_obj)
+        duals = np.empty((n_obj, self.n_row)) if self.keep_duals else None
         for j, hs in enumerate(self._models):
             if moved:  # (the objective moves to the new columns)
                 hs.changeColsCost(prev.size, prev, np.zeros(prev.size))
@@ -324,8 +518,14 @@ class BoxLP:
                 self._models = []  # (fresh models next time)
                 return None
             out[j], gaps[j] = got
+            self._keep_point(pts, j, self._models[j])
+            if duals is not None:
+                duals[j] = self._y
         self._cols = cols
         self.last_gaps = gaps
+        self.last_points = pts
+        if duals is not None:
+            self.last_duals = duals
         return out
 
     def _minimize_chain(self, cols: NDArray[np.int64], W: NDArray[np.float64]
@@ -343,7 +543,7 @@ class BoxLP:
             hs = self.build_model(cols, W[order[0]])
             if hs is None:
                 return None
-            self._models, self._warm, self._ranged = [hs], [False], [False]
+            self._models, self._warm, self._ranged = [hs], [self._seeded(hs)], [False]
             self._cols = cols
         moved = not np.array_equal(cols, self._cols)
         idx = cols.astype(np.int32)
@@ -354,6 +554,8 @@ class BoxLP:
         limit = highs.simplex_limit(self.n_row, self.n_col)
         out = np.empty(n_obj)
         gaps = np.empty(n_obj)
+        pts = self._points_buffer(n_obj)
+        duals = np.empty((n_obj, self.n_row)) if self.keep_duals else None
         for j in order:
             self._models[0].changeColsCost(idx.size, idx, W[j] * scale)
             got = self._solve(0, cols, W[j], limit)
@@ -361,9 +563,25 @@ class BoxLP:
                 self._models = []  # (a fresh model next time)
                 return None
             out[j], gaps[j] = got
+            self._keep_point(pts, j, self._models[0])
+            if duals is not None:
+                duals[j] = self._y
         self._cols = cols
         self.last_gaps = gaps
+        self.last_points = pts
+        if duals is not None:
+            self.last_duals = duals
         return out
+
+    def _points_buffer(self, n_obj: int) -> NDArray[np.float64]:
+        return np.full((n_obj, 0 if self.record is None else self.record.size), np.nan)
+
+    def _keep_point(self, pts, j: int, hs) -> None:
+        """Row ``j`` of :attr:`last_points`: the solver's point on :attr:`record`."""
+        if self.record is not None:
+            x = self._point(hs)
+            if x is not None:
+                pts[j] = x[self.record]
 
     def _solve(self, j: int, cols, w: NDArray[np.float64], limit: int
                ) -> tuple[float, float] | None:
@@ -418,6 +636,7 @@ class BoxLP:
             if np.isfinite(bound) and (obj - bound <= tol
                                        or obj - bound <= tol + self._explained(hs, cols, w, y)):
                 self._warm[j] = True
+                self._y = y
                 return bound, self._gap(hs, obj, bound, y)
             self.retries += 1
         return None

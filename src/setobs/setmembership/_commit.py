@@ -65,7 +65,8 @@ def commit(m: SMFDOModel, s: SMFDOState, k: int, mode: str, out: Outcome) -> Set
     if status == "inexact" and not s.warned_inexact:
         s.warned_inexact = True
         what = ("the window's rounding allowances (the closed form's c_err / b_err)"
-                if m.window is not None else "the certificate's gap (an inexact multiplier)")
+                if m.window is not None else
+                "the certificate's gap (an inexact multiplier, or a cut history's open bracket)")
         warnings.warn(
             f"SMFDO step k={k}: {what} take {100 * out.gap:.3g} % of a band's width; the "
             "bounds are certified but wider than the mode's exact bounds, flagged "

@@ -65,6 +65,8 @@ multiple of *one* whole-history LP solved from scratch
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -89,6 +91,19 @@ _PRIOR_SLACK = 1e-9
 IMPLIED_WIDEN = 16.0
 
 _TINY = np.finfo(np.float64).tiny
+_EMPTY = np.zeros(0, dtype=np.int64)
+
+
+class _Block(NamedTuple):
+    """One state's place in the LP: its columns ``z``; its own columns (``z`` and the
+    measurement's factors) and rows (the measurement and its factors' constraints);
+    the transition into it (the step's factors; the dynamics and their constraints)."""
+
+    z: NDArray[np.int64]
+    cols: NDArray[np.int64]
+    rows: NDArray[np.int64]
+    tcols: NDArray[np.int64]
+    trows: NDArray[np.int64]
 
 
 class HistoryLP:
@@ -117,8 +132,16 @@ class HistoryLP:
         self.box_lp = BoxLP()  # (the LP itself: columns, rows, warm models)
         self._z = np.zeros(0, dtype=np.int64)  # columns of the newest state
         self.box: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._box_prev: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.steps = 0
         self._products: dict[int, tuple] = {}
+        # the LP's blocks, for cutting it (drop_oldest): the head (the first state's
+        # start set: the start posterior's factors and rows, or a hull of points, or
+        # nothing for a box) and per state its own columns and rows (z_j, the
+        # measurement's factors and rows) and the transition into it (the step's
+        # factors, the dynamics and the factors' constraint rows)
+        self._head = (_EMPTY, _EMPTY)
+        self._states: list[_Block] = []
 
     @property
     def retries(self) -> int:
@@ -161,6 +184,8 @@ class HistoryLP:
                           np.concatenate([Z.c, Z.b]), np.concatenate([Z.c_err, Z.b_err]))
         H._z = z
         H.box = (np.asarray(lo, float), np.asarray(hi, float))
+        H._head = (xi, r0 + np.arange(N + Z.n_con))
+        H._states = [_Block(z, z, _EMPTY, _EMPTY, _EMPTY)]
         H.box_lp.begin()
         return H
 
@@ -231,6 +256,7 @@ class HistoryLP:
         r = IMPLIED_WIDEN * r * (1.0 + _PRIOR_SLACK) + _PRIOR_SLACK * (np.abs(c) + r) + _TINY
         zlo, zhi = round_down(c - r), round_up(c + r)
         z_prev = self._z
+        c0, r0 = lp.n_col, lp.n_row
         z = lp.add_cols(zlo, zhi)
         # dynamics: z+ - A_o z - sum M G sigma = Gamma u + sum M c
         base = lp.n_row
@@ -251,6 +277,7 @@ class HistoryLP:
                     rhs, b_err)
         for sig, S in extra_rows:
             self._constraint_rows(sig, S)
+        c1, r1 = lp.n_col, lp.n_row
         # measurement
         y = e.y
         msk = ~np.isnan(y)
@@ -283,6 +310,9 @@ class HistoryLP:
         self._z_prev, self._z = z_prev, z
         self._box_prev, self.box = self.box, None
         self.steps += 1
+        own = np.concatenate([z, np.arange(c1, lp.n_col)])
+        self._states.append(_Block(z, own, np.arange(r1, lp.n_row),
+                                   np.arange(c0 + N, c1), np.arange(r0, r1)))
 
     def _constraint_rows(self, cols, S: ConstrainedZonotope) -> None:
         base = self.box_lp.n_row
@@ -294,6 +324,168 @@ class HistoryLP:
         self.box_lp.undo()
         self._z, self.box = self._z_prev, self._box_prev
         self.steps -= 1
+        self._states.pop()
+
+    # ------------------------------------------------------------------ cutting
+    @property
+    def length(self) -> int:
+        """Steps of history in the LP (its states less one)."""
+        return len(self._states) - 1
+
+    def state_cols(self) -> NDArray[np.int64]:
+        """The columns of every state in the LP, oldest first (``(length + 1) N``)."""
+        return np.concatenate([b.z for b in self._states])
+
+    def drop_oldest(self, lo: NDArray[np.float64], hi: NDArray[np.float64],
+                    duals: NDArray[np.float64] | None = None, count: int = 1) -> None:
+        """Cut the LP's oldest ``count`` steps: remove the head (the start set's rows, or
+        earlier cuts), the oldest states with their measurements and the transitions out
+        of them; the next state becomes the first, in the box ``[lo, hi]`` (its certified
+        hull: a set that contains every state of a history consistent with the data).
+        The HiGHS models keep their bases (:meth:`setobs.lp.boxlp.BoxLP.delete`).
+
+        With ``duals`` (row multipliers of this LP, one row per objective: those of its
+        last certified bounds), each becomes a *cut* on the new first state, which
+        replaces what is removed (:meth:`_cuts`): the aggregate of the removed rows by
+        the multiplier, with the removed variables at their worst in their boxes,
+
+        .. math::  (A_{R,z}^\top y_R)^\top z \\ge y_R^\top b_R
+                   - \\sum_{i \\in D} \\max(r_i l_i, r_i u_i),\\quad r = A_{R,D}^\top y_R,
+
+        valid for every point of the LP (weak duality over the removed part), and with
+        the objective's own multiplier it keeps that objective's bound unchanged.
+
+        Parameters
+        ----------
+        lo, hi : ndarray
+            The new first state's box.
+        duals : ndarray, shape (m, n_row), optional
+            Multipliers whose cuts replace the removed steps.
+        count : int
+            Steps removed.
+        """
+        if not 1 <= count < len(self._states):
+            raise InternalError(f"HistoryLP.drop_oldest: {count} of {self.length} steps")
+        hc, hr = self._head
+        new = self._states[count]
+        cols = np.unique(np.concatenate(
+            [hc] + [b.cols for b in self._states[:count]]
+            + [b.tcols for b in self._states[1:count + 1]]))
+        rows = np.unique(np.concatenate(
+            [hr] + [b.rows for b in self._states[:count]]
+            + [b.trows for b in self._states[1:count + 1]]))
+        lo = round_down(np.asarray(lo, float))
+        hi = round_up(np.asarray(hi, float))
+        cuts = None if duals is None else self._cuts(duals, rows, cols, new.z, lo, hi)
+        self.box_lp.delete(cols, rows, demote=new.z)
+
+        def col(i):
+            return i - np.searchsorted(cols, i)
+
+        def row(i):
+            return i - np.searchsorted(rows, i)
+
+        self._states = [_Block(col(b.z), col(b.cols), row(b.rows), col(b.tcols), row(b.trows))
+                        for b in self._states[count:]]
+        first = self._states[0]
+        self._states[0] = _Block(first.z, first.cols, first.rows, _EMPTY, _EMPTY)
+        self._head = (_EMPTY, _EMPTY)
+        self._z = col(self._z)
+        self._z_prev = self._z  # (no undo across a cut: BoxLP.delete ends the block)
+        self._box_prev = self.box
+        self.box_lp.set_bounds(first.z, lo, hi)
+        if cuts is not None:
+            Gc, rhs, top = cuts
+            lp = self.box_lp
+            t = lp.add_cols(np.zeros(rhs.size), top)
+            m = rhs.size
+            base = lp.n_row
+            N = self.N
+            rr = [np.repeat(np.arange(m), N), np.arange(m)]
+            cc = [np.tile(first.z, m), t]
+            vv = [Gc.ravel(), -np.ones(m)]
+            lp.add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                        rhs, np.zeros(m))
+            self._head = (t, base + np.arange(m))
+            lp.begin()
+
+    def _cuts(self, Y, rows, cols, z, zlo, zhi):
+        """The cuts ``G z - t = rhs``, ``0 <= t <= top`` of the multipliers ``Y`` over
+        the removed ``rows`` and ``cols`` (:meth:`drop_oldest`), every product's rounding
+        taken off ``rhs`` (so each holds exactly for every point of the LP); ``None``
+        when none is finite."""
+        clo, chi, b, berr, A, _, _ = self.box_lp.arrays()
+        Ar = A[rows]  # (rows of the removed part: entries only in cols and z)
+        A_D = Ar[:, cols]
+        A_z = Ar[:, z]
+        Yr = Y[:, rows]
+        aY = np.abs(Yr)
+        g = gamma(max(rows.size, 1) + 4)
+        G = np.asarray((A_z.T @ Yr.T).T)
+        r = np.asarray((A_D.T @ Yr.T).T)
+        lD, uD = clo[cols], chi[cols]
+        mag = np.maximum(np.abs(lD), np.abs(uD))
+        worst = np.maximum(r * lD, r * uD).sum(axis=1)
+        beta = Yr @ b[rows] - aY @ berr[rows] - worst
+        absAD = abs(A_D)
+        absAz = abs(A_z)
+        err = g * (aY @ np.abs(b[rows]) + aY @ berr[rows] + np.abs(r) @ mag) \
+            + g * np.asarray((absAD.T @ aY.T).T) @ mag \
+            + g * np.asarray((absAz.T @ aY.T).T) @ np.maximum(np.abs(zlo), np.abs(zhi))
+        rhs = round_down(beta - err * (1.0 + gamma(4)))
+        top = np.maximum(G, 0.0) @ zhi + np.minimum(G, 0.0) @ zlo - rhs
+        top = round_up(np.maximum(top, 0.0) * (1.0 + g) + g * (np.abs(G) @ np.maximum(
+            np.abs(zlo), np.abs(zhi)) + np.abs(rhs)) + _TINY)
+        big = np.abs(G).max(axis=1, initial=0.0)
+        ok = np.isfinite(rhs) & np.isfinite(top) & (big > 0)
+        if not ok.any():
+            return None
+        G, rhs, top, big = G[ok], rhs[ok], top[ok], big[ok]
+        # each cut scaled by a power of two to unit size (exact), the repeated ones once
+        sc = np.ldexp(1.0, -np.frexp(big)[1])[:, None]
+        G, rhs, top = G * sc, rhs * sc[:, 0], top * sc[:, 0]
+        _, keep = np.unique(np.round(G, 12), axis=0, return_index=True)
+        keep = np.sort(keep)
+        return G[keep], rhs[keep], top[keep]
+
+    def attach_hull(self, P: NDArray[np.float64]) -> None:
+        """Restrict the first state to the convex hull of the rows of ``P``: ``z = P^T
+        lam``, ``sum lam = 1``, ``lam >= 0`` (replacing any head but a box). Each row a
+        state of a history consistent with the data, the LP's values are those of such
+        histories (an inner bound of the exact set's support).
+
+        Parameters
+        ----------
+        P : ndarray, shape (m, N)
+            The points.
+        """
+        if self._head[0].size or self._head[1].size:
+            raise InternalError("HistoryLP.attach_hull: the first state has a head")
+        m = P.shape[0]
+        lp = self.box_lp
+        lp.begin()
+        lam = lp.add_cols(np.zeros(m), np.ones(m))
+        N = self.N
+        z = self._states[0].z
+        base = lp.n_row
+        rr = [np.arange(N), np.repeat(np.arange(N), m), np.full(m, N)]
+        cc = [z, np.tile(lam, N), lam]
+        vv = [np.ones(N), -P.T.ravel(), np.ones(m)]
+        lp.add_rows(base + np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                    np.r_[np.zeros(N), 1.0], np.zeros(N + 1))
+        self._head = (lam, base + np.arange(N + 1))
+        lp.begin()
+
+    def clone(self) -> HistoryLP:
+        """A copy of the LP (its data and block structure; the HiGHS model starts from
+        this one's basis: :meth:`setobs.lp.boxlp.BoxLP.clone`)."""
+        other = HistoryLP.__new__(HistoryLP)
+        other.__dict__.update(self.__dict__)
+        other.box_lp = self.box_lp.clone()
+        other._states = list(self._states)
+        other._products = {}
+        other.gaps = self.gaps.copy()
+        return other
 
     # ------------------------------------------------------------------ solving
     def certify(self, w_cols: NDArray[np.int64], w: NDArray[np.float64],

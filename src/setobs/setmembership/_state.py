@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from ..exceptions import InternalError, SkipLimitError
 from ..geometry import Box, ConstrainedZonotope
 from ..lp.fastlp import LPState
+from ._bounded import BoundedHistory
 from ._closed_form import ClosedForm
 from ._history import HistoryLP
 from ._hrep import HState
@@ -33,7 +34,7 @@ __all__ = ["Handoff", "Outcome", "Posterior", "Resumes", "SMFDOState"]
 #: The carried posterior: a constrained zonotope (the set recursion), exact mode's
 #: H-representation or whole-history LP, the closed form's data (a fast window step),
 #: or ``None`` before the first step.
-Posterior = ConstrainedZonotope | HState | HistoryLP | ClosedForm | None
+Posterior = ConstrainedZonotope | HState | HistoryLP | BoundedHistory | ClosedForm | None
 
 
 class Outcome(NamedTuple):
@@ -63,6 +64,10 @@ class Outcome(NamedTuple):
     def with_posterior(self, Z_src: Posterior) -> Outcome:
         """The same outcome carrying another representation of its posterior."""
         return self._replace(Z_src=Z_src)
+
+    def with_status(self, status: str) -> Outcome:
+        """The same outcome with another status."""
+        return self._replace(status=status)
 
 
 class Resumes(Protocol):
@@ -182,7 +187,7 @@ class SMFDOState:
         """The carried posterior as a constrained zonotope (a fast-path step's set is
         built from its closed form on first access, and kept)."""
         src = self.Z_src
-        if isinstance(src, HState | HistoryLP):
+        if isinstance(src, HState | HistoryLP | BoundedHistory):
             return src.to_cz()
         if isinstance(src, ClosedForm):
             Z = src.to_cz()

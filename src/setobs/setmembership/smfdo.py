@@ -135,9 +135,11 @@ from ..exceptions import (
 from ..geometry import Box, ConstrainedZonotope
 from ..models.linear import DisturbanceInputs, LinearSystem, require_system
 from ..tolerances import DATA_RTOL, MISSING_WARN_FRACTION
+from ._bounded import BoundedHistory
 from ._closed_form import MODEL_CACHE as MODEL_CACHE  # (re-exported: one cache per process)
 from ._closed_form import ClosedForm, WindowModel
 from ._commit import commit
+from ._history import HistoryLP
 from ._hrep import HState
 from ._model import IncrementSpec, NoiseSpec, SMFDOModel, SMFDOOptions, build_model
 from ._restart import DEFAULT_RESTART_DEPTH
@@ -482,6 +484,19 @@ class SMFDO:
         if not isinstance(src, ClosedForm):
             return None
         return src.model, src.c, src.b, src.h
+
+    @property
+    def history_length(self) -> int | None:
+        """Steps of history exact mode's LP holds with noise (the whole record until its
+        history is cut, then the outer cut LP's: :mod:`._bounded`), or ``None`` when no
+        such LP carries the posterior (windowed mode, exact mode without noise, before
+        the posterior is bounded)."""
+        src = self._state.Z_src
+        if isinstance(src, BoundedHistory):
+            return src.k - src.first if src.cut else src.k
+        if isinstance(src, HistoryLP):
+            return src.length
+        return None
 
     @property
     def hull_from_state(self) -> bool:

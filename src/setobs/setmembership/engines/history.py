@@ -8,6 +8,8 @@ import numpy as np
 from ...exceptions import SetobsError
 from ...geometry.reduction import reduce_exact
 from ...tolerances import EXACT_RTOL
+from .. import _bounded
+from .._bounded import BoundedHistory
 from .._closed_form import allowance_fraction
 from .._history import HistoryLP
 from .._model import Entry, SMFDOModel
@@ -43,7 +45,7 @@ class HistoryEngine:
         if k == 0:
             return None
         H = s.Z_src
-        if not isinstance(H, HistoryLP):
+        if not isinstance(H, HistoryLP | BoundedHistory):
             H = self._start(m, s, k)
             if H is None:
                 return None
@@ -61,7 +63,8 @@ class HistoryEngine:
         return Outcome(H, box, box_o, None, box_x, "inexact" if gap > EXACT_RTOL else "ok",
                        0, e, gap=gap)
 
-    def _start(self, m: SMFDOModel, s: SMFDOState, k: int) -> HistoryLP | None:
+    def _start(self, m: SMFDOModel, s: SMFDOState, k: int
+               ) -> HistoryLP | BoundedHistory | None:
         """Exact mode's whole-history LP from the current posterior, once it is
         bounded; ``None`` before (the set recursion goes on)."""
         box = s.box_o_last
@@ -81,6 +84,9 @@ class HistoryEngine:
             H = None
         if H is None:
             self.retry_at = k + HISTORY_RETRY
+            return None
+        if _bounded.BOUNDED:
+            return BoundedHistory(H, m.margin, m.reported_rows)
         return H
 
     @staticmethod
@@ -99,10 +105,15 @@ class HistoryEngine:
         """
         H = handoff.carried
         box = out.box_o
-        if isinstance(H, HistoryLP) and out.status in ("ok", "inexact", "fallback", "skipped") \
+        if isinstance(H, HistoryLP | BoundedHistory) \
+                and out.status in ("ok", "inexact", "fallback", "skipped") \
                 and box is not None and np.isfinite(box.lo).all() \
                 and np.isfinite(box.hi).all():
             H.push(out.entry)
             H.box = (box.lo.copy(), box.hi.copy())
+            if isinstance(H, BoundedHistory) and H.cut and out.status == "ok":
+                # (decided from the outer cut's set, which contains the exact one: the
+                # bounds are sound but not certified exact)
+                out = out.with_status("inexact")
             return out.with_posterior(H)
         return out
