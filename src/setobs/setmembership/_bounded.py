@@ -52,10 +52,15 @@ the start set consistent with the data up to ``j``).
 The history length ``L`` is chosen per step: after a step whose largest gap fraction
 is at most :data:`DROP_FRACTION` of the tolerance the oldest step is dropped (``L``
 stays), at most :data:`DROP_FRACTION` cubed two are dropped (``L`` shrinks), else
-none (``L`` grows by one: the fallback, toward the whole history). The first cut is
-tried on copies while the whole-history LP still decides the step
-(:data:`CUT_START`, then every :data:`CUT_RETRY` steps); the cut is taken only if its
-bracket closes there.
+none (``L`` grows by one: the fallback, toward the whole history). The inner LP drops
+its oldest steps only on a closed bracket and keeps at least :data:`INNER_HISTORY`
+steps; the outer LP keeps at least as many as the inner one. The first cut is tried
+once the whole-history LP has :data:`CUT_ROWS` rows (:data:`CUT_START` steps deep, each
+later try :data:`CUT_RETRY` deeper): its two LPs are solved beside the whole-history
+LP, which decides those steps, and the whole history is dropped only after
+:data:`TRIAL_STEPS` closed brackets (at the cut's own step the bracket closes by
+construction, so that step proves nothing); a step the whole-history LP itself leaves
+inexact puts the try off to the next step.
 """
 
 from __future__ import annotations
@@ -244,6 +249,10 @@ class BoundedHistory:
         self._keep_points(H, self.k - self.try_length - CUT_RETRY)
         if self.trial is not None:
             self._judge_trial()
+        elif due and self._fraction(out, H.gaps) > EXACT_RTOL:
+            # (the whole-history LP's own certificate gap is open, and a cut's bracket
+            # cannot close where the uncut LP's does not in practice: the next step)
+            self.next_try = self.k + 1
         elif due:
             self._try_cut(H)
         return out
