@@ -20,8 +20,9 @@ unscaled): the largest excess over it as a fraction of the width (the bounds' di
 from the exact set), the largest deficit (inside it: never above the oracle's own
 tolerance), and the truth inside.
 
-The bounded history is off by default (``_bounded.BOUNDED``); this benchmark turns it
-on. Run: ``python benchmarks/exact_bounded.py [--plants fast,slow,dense] [--steps 235,120,120]``;
+The bounded history is exact mode's default (``_bounded.BOUNDED``); this benchmark
+makes sure it is on. Run:
+``python benchmarks/exact_bounded.py [--plants fast,slow,dense] [--steps 235,120,120]``;
 writes ``benchmarks/results/exact_bounded.json``.
 """
 

@@ -271,20 +271,30 @@ class BoxLP:
         self._undo = []
         self._cache = None
 
+    @staticmethod
+    def _basis_codes(hs, n_col: int, n_row: int):
+        """A model's basis as status codes and its point, ``(col codes, row codes, x)``;
+        ``None`` when the basis is not valid or not of ``n_col`` columns and ``n_row``
+        rows."""
+        basis = hs.getBasis()
+        if not basis.valid:
+            return None
+        cs = np.array([int(st) for st in basis.col_status], dtype=np.int64)
+        rs = np.array([int(st) for st in basis.row_status], dtype=np.int64)
+        x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
+        if cs.size != n_col or rs.size != n_row or x.size != n_col:
+            return None
+        return cs, rs, x
+
     def _cut_model(self, hs, cols, rows, kc, kr, pref) -> None:
         """Cut one HiGHS model and give it its basis back, repaired to a square count."""
-        basis = hs.getBasis()
-        ok = bool(basis.valid)
-        if ok:
-            cs = np.array([int(st) for st in basis.col_status], dtype=np.int64)
-            rs = np.array([int(st) for st in basis.row_status], dtype=np.int64)
-            x = np.asarray(hs.getSolution().col_value, dtype=np.float64)
-            ok = cs.size == kc.size and rs.size == kr.size and x.size == kc.size
+        got = self._basis_codes(hs, kc.size, kr.size)
         if rows.size:
             hs.deleteRows(rows.size, rows.astype(np.int32))
         if cols.size:
             hs.deleteCols(cols.size, cols.astype(np.int32))
-        if ok:
+        if got is not None:
+            cs, rs, x = got
             self._set_statuses(hs, cs[kc], rs[kr], x[kc], pref)
 
     def _set_statuses(self, hs, cs, rs, x, pref) -> bool:
@@ -347,12 +357,7 @@ class BoxLP:
             other._ent = [(r.copy(), c.copy(), v.copy())]
         other.n_col, other.n_row = self.n_col, self.n_row
         if self._models:
-            basis = self._models[0].getBasis()
-            x = np.asarray(self._models[0].getSolution().col_value, dtype=np.float64)
-            if basis.valid and x.size == self.n_col:
-                other._seed = (np.array([int(v) for v in basis.col_status], dtype=np.int64),
-                               np.array([int(v) for v in basis.row_status], dtype=np.int64),
-                               x)
+            other._seed = self._basis_codes(self._models[0], self.n_col, self.n_row)
         return other
 
     def _padded_seed(self, n_col, n_row, lo, scale):

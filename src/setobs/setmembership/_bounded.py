@@ -155,7 +155,6 @@ class BoundedHistory:
         self.gaps = np.zeros(0)
         self.try_length = CUT_START
         self.next_try = CUT_START + CUT_RETRY
-        self.tries = 0  # (first cuts tried)
         #: a first cut on trial: its outer and inner LPs and the steps its bracket closed
         self.trial: tuple[HistoryLP, HistoryLP, int] | None = None
 
@@ -182,6 +181,11 @@ class BoundedHistory:
         for H in self._lps():
             H.box = value
         self.boxes[self.k] = value
+
+    @property
+    def length(self) -> int:
+        """Steps of history the reported LP holds (:attr:`HistoryLP.length`)."""
+        return self.active.length
 
     @property
     def steps(self) -> int:
@@ -349,7 +353,6 @@ class BoundedHistory:
         """Put a first cut on trial: copies of the whole-history LP cut to
         ``L`` = :data:`CUT_START` steps (each later try :data:`CUT_RETRY` deeper), judged
         on the next :data:`TRIAL_STEPS` steps (:meth:`_judge_trial`)."""
-        self.tries += 1
         self.next_try = self.k + CUT_RETRY + TRIAL_STEPS
         s = self.k - self.try_length
         si = max(s, self.k - INNER_HISTORY)

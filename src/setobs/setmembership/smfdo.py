@@ -492,9 +492,7 @@ class SMFDO:
         such LP carries the posterior (windowed mode, exact mode without noise, before
         the posterior is bounded)."""
         src = self._state.Z_src
-        if isinstance(src, BoundedHistory):
-            return src.k - src.first if src.cut else src.k
-        if isinstance(src, HistoryLP):
+        if isinstance(src, HistoryLP | BoundedHistory):
             return src.length
         return None
 
