@@ -133,13 +133,14 @@ def test_the_oscillators_late_band_is_within_three_times_for_any_hull_gap(monkey
     """The late band (k = 199) at most 3 times the inner bound's width for every early
     stop of the step's hulls near the default (``HULL_REL_GAP`` 1e-3; each bound certified,
     within its gap of the exact hull). It is not: from k = 145, where a hull's bound moved
-    by 1.3e-4 of its width (both answers within the gap), the run takes one of two courses
-    (from k = 182: x1's band at the measurement's, x2's growing to 4.4 times its width on
-    the other course by k = 199, 5.9 times the inner bound's). Which one depends on the
-    simplex's path (the basis factorization, ties) as much as on the gap: with the compiled
-    simplex's dense inverse, gap 5e-4 takes the wide course and 1e-3 and 2e-3 the narrow
-    one (2.2 times); with a sparse LU in its place (the same pivot rules), 1e-3 took the
-    wide one and the others the narrow one. Development runs, not in a results file."""
+    by 1.3e-4 of its width (both answers within the gap), the run takes one of two courses:
+    at k = 199 x2's band is 0.125 on the narrow one and 0.545 on the wide one (from k = 182
+    x1's band sits at the measurement's and x2's grows), against the inner bound's 0.093
+    (1.3 and 5.9 times). Which one depends on the simplex's path (the basis factorization,
+    ties) as much as on the gap: with the compiled simplex's dense inverse, gap 5e-4 takes
+    the wide course and 1e-3 and 2e-3 the narrow one; with a sparse LU in its place (the
+    same pivot rules), 1e-3 took the wide one and the others the narrow one. Development
+    runs, not in a results file."""
     import setobs.setmembership.nonlinear as nl
 
     case = van_der_pol()
