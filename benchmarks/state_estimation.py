@@ -32,8 +32,9 @@ Writes ``benchmarks/results/state_estimation.json``.
 
 Run: ``python benchmarks/state_estimation.py [--steps N] [--quick]`` (plants with
 more than 6 states: 40 steps, the box and the default restart only);
-``--r30 STEPS`` times only a random 30-state plant with 21 outputs (windows 3, 5 and
-10, box restart; widths against window 10's) into ``state_estimation_r30.json``.
+``--r30 STEPS`` runs only a random 30-state plant with 21 outputs (dense ``A``; windows
+3, 5 and 10 and exact mode, widths against the whole-history LP at three steps) into
+``state_estimation_r30.json``.
 """
 
 from __future__ import annotations
@@ -261,34 +262,51 @@ def study(name, A, B, C, rw, rv, N, windows, exact, peer, seed=0,
 
 
 def r30_timing(steps: int) -> list[dict]:
-    """Windows 3, 5 and 10 (box restart) on a random 30-state plant with 21 outputs: time
-    per step after the window has filled, and each window's state-band widths against
-    window 10's (no history LP: its HiGHS solves take minutes)."""
+    """Window 10 (box and the default restart), windows 5 and 3 (box) and exact mode on a
+    random 30-state plant with 21 outputs (dense ``A``): time per step after the window
+    has filled, simplex iterations, and each run's state-band widths against the
+    whole-history LP of the state (``tests.oracles.history_lp_highs``, independent of the
+    SMFDO's LPs) at three steps after the window has filled (and against window 10's)."""
     A, B, C, rw, rv = random_system(30, 21, 5)
     n = A.shape[0]
     X, Y, U = record(A, B, C, rw, rv, steps, 0)
+    X0 = so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n))
+    nkw, noise_w = noise_model(rw, n)
+    ks = sorted({min(k, steps - 1) for k in (10, (10 + steps) // 2, steps - 1)})
+    t0 = time.perf_counter()
+    ref = {k: history_lp_highs(A, np.zeros((n, 0)), C, Y, k, 0.0, U=U, Gamma=B, states=True,
+                               x_box=(X0.lo, X0.hi), noise_w=noise_w,
+                               noise_v=(np.eye(C.shape[0]), np.full(C.shape[0], rv)))
+           for k in ks}
+    t_ref = (time.perf_counter() - t0) / len(ks)
+    print(f"random_30: history LP at k = {ks}: {t_ref:.1f} s per step", flush=True)
     rows, widths = [], {}
-    for w in (10, 5, 3):
+    for w, restart in ((10, "box"), (10, "auto"), (5, "box"), (3, "box"), (None, "exact")):
         unit0 = linprog_unit()
-        obs = so.SMFDO(so.LinearSystem(A, np.zeros((n, 0)), C, B), window=w, restart="box",
-                       process_noise=rw, measurement_noise=rv, state_bounds=True,
-                       initial_state_set=so.Box(-2.0 * np.ones(n), 2.0 * np.ones(n)))
+        sys_ = so.LinearSystem(A, np.zeros((n, 0)), C, B)
+        kw = dict(measurement_noise=rv, state_bounds=True, initial_state_set=X0, **nkw)
+        obs = (so.SMFDO(sys_, window=w, restart=restart, **kw) if w is not None
+               else so.SMFDO(sys_, window=None, **kw))
         times, lo, hi = state_bands(obs, Y, U)
-        widths[w] = hi - lo
+        widths[(w, restart)] = hi - lo
         dt = statistics.median(times[10:]) if steps > 10 else statistics.median(times)
         unit = min(unit0, linprog_unit())
         inside = bool(np.all((X >= lo) & (X <= hi)))
-        ratio = widths[w][12:] / widths[10][12:]
-        print(f"random_30 w={w:<3d} box      {1e3 * dt:8.1f} ms/step ({dt / unit:8.1f} LP)"
-              f"  width / window 10: {ratio.mean():.3f} / {ratio.max():.3f}", flush=True)
+        mean, worst, best = ratios(lo, hi, ref, ks)
+        rat10 = widths[(w, restart)][ks] / widths[(10, "box")][ks]
+        print(f"random_30 w={w!s:4s} {restart:5s} {1e3 * dt:8.1f} ms/step ({dt / unit:8.1f} LP)"
+              f"  width / history LP: {mean:.4f} / {worst:.4f} (min {best:.6f})", flush=True)
         rows.append({"system": "random_30_21", "n": n, "l": C.shape[0], "estimator": "SMFDO",
-                     "window": w, "restart": "box", "ms_per_step": 1e3 * dt,
+                     "window": w, "restart": restart, "ms_per_step": 1e3 * dt,
                      "per_linprog": dt / unit, "linprog_ms": 1e3 * unit, "steps": steps,
-                     "truth_inside": inside,
-                     "width_vs_window10_mean": float(ratio.mean()),
-                     "width_vs_window10_worst": float(ratio.max()),
+                     "truth_inside": inside, "width_ratio_mean": mean,
+                     "width_ratio_worst": worst, "width_ratio_min": best,
+                     "width_vs_window10_box_mean": float(rat10.mean()),
+                     "width_vs_window10_box_worst": float(rat10.max()),
                      "stats": dict(obs.stats),
                      **iteration_fields(obs, steps, float(np.mean(times)))})
+    rows.append({"system": "random_30_21", "estimator": "history LP (HiGHS, tests.oracles)",
+                 "window": None, "restart": None, "checked_steps": ks, "s_per_checked_step": t_ref})
     return rows
 
 
@@ -333,9 +351,9 @@ def main() -> None:
     ap.add_argument("--n60", action="store_true",
                     help="also the 60-tank cascade (tens of minutes today)")
     ap.add_argument("--r30", type=int, default=0, metavar="STEPS",
-                    help="only a random 30-state plant with 21 outputs (the issue's large "
-                         "case), windows 3, 5 and 10 with the box restart, STEPS steps "
-                         "(about 7 s per step at window 10); writes "
+                    help="only a random 30-state plant with 21 outputs (dense A), windows "
+                         "3, 5 and 10 and exact mode against the whole-history LP, STEPS "
+                         "steps (about 3 s per step at window 10); writes "
                          "state_estimation_r30.json")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"
                                          / "state_estimation.json"))
@@ -345,9 +363,21 @@ def main() -> None:
     if args.r30:
         r30 = r30_timing(args.r30)
         out = {"linprog_45x40_ms": 1e3 * unit, "rows": r30,
-               "targets": [target("random 30-state plant, 21 outputs, window 10 (target: "
-                                  "at most 10 linprog)", find(r30, "random_30_21", 10, "box"),
-                                  10.0)],
+               "targets": [target("random 30-state plant, 21 outputs, window 10, default "
+                                  "restart (target: at most 10 linprog)",
+                                  find(r30, "random_30_21", 10, "auto"), 10.0),
+                           target("random 30-state plant, window 10, mean width / exact at "
+                                  "most 1.05", find(r30, "random_30_21", 10, "auto"), 1.05,
+                                  "width_ratio_mean"),
+                           target("random 30-state plant, window 10, worst width / exact at "
+                                  "most 1.5", find(r30, "random_30_21", 10, "auto"), 1.5,
+                                  "width_ratio_worst"),
+                           target("random 30-state plant, exact mode: never narrower than the "
+                                  "history LP (smallest ratio at least 1 - 1e-6)",
+                                  find(r30, "random_30_21", None, "exact"), 1.0 - 1e-6,
+                                  "width_ratio_min", at_least=True),
+                           target("random 30-state plant, exact mode: at most 30 linprog per "
+                                  "step", find(r30, "random_30_21", None, "exact"), 30.0)],
                "machine": platform.platform(), "python": platform.python_version()}
         path = Path(args.out).with_name("state_estimation_r30.json")
         path.write_text(json.dumps({**stamp(), **out}, indent=1))

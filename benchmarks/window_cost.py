@@ -9,12 +9,17 @@ Two measurements on plants of ``benchmarks/state_estimation.py`` (its records):
   stop, ``WINDOW_REL_GAP``), and by HiGHS (no presolve) as a chain on one
   model, the first LP cold and each next one from the previous LP's optimal basis by
   the primal simplex, or by the dual simplex. Simplex iterations per data set (HiGHS's
-  ``simplex_iteration_count``; ours: primal and dual pivots and bound flips).
+  ``simplex_iteration_count``; ours: primal and dual pivots and bound flips), and our
+  early-stopped chain's time per set and per iteration.
 * ``steady``: time per step of window 10 (``restart="auto"`` and ``"box"``) over the
-  steps after the first ``WARM`` (the start-up, the first restarts and the first
+  steps after the first ones (``PLANTS``: the start-up, the first restarts and the first
   probe left out), timed step by step with ``SMFDO.update``, in units of one 45 x 40
   ``scipy.optimize.linprog`` timed around each run (the faster), with the simplex
-  iterations per step.
+  iterations per step and the step's time per iteration (everything in the step
+  included: an upper bound on one iteration's cost).
+
+Plants: a random 6-state plant, the 30-tank cascade with 21 levels measured (sparse
+``A``), a random 30-state plant with 21 outputs (dense ``A``).
 
 Writes ``benchmarks/results/window_cost.json``. Run: ``python benchmarks/window_cost.py``.
 """
@@ -42,9 +47,11 @@ from setobs.setmembership import _closed_form  # noqa: E402
 from state_estimation import noise_model, random_system, record, tanks_outputs  # noqa: E402
 
 SETS = 5
-WARM = 40
-PLANTS = {"random_6": (lambda: random_system(6, 4, 3), 120),
-          "tanks_30_21": (lambda: tanks_outputs(30, 21), 120)}
+#: plant: (system, steps of the steady run, steps left out at its start, steps run
+#: before the last SETS data sets are taken for the chains)
+PLANTS = {"random_6": (lambda: random_system(6, 4, 3), 120, 40, 120),
+          "tanks_30_21": (lambda: tanks_outputs(30, 21), 120, 40, 40),
+          "random_30_21": (lambda: random_system(30, 21, 5), 30, 12, 20)}
 
 
 def setup(name: str, steps: int):
@@ -87,7 +94,7 @@ def highs_chain(lp, hB, bred, dual: bool) -> list[int]:
 
 
 def chains(name: str) -> dict:
-    sys_, kw, _, Y, U = setup(name, PLANTS[name][1] if name == "random_6" else 40)
+    sys_, kw, _, Y, U = setup(name, PLANTS[name][3])
     calls = []
     orig = fastlp.FixedStructureLP.minimize_all_unchecked
 
@@ -108,12 +115,16 @@ def chains(name: str) -> dict:
         st2, st3 = copy.deepcopy(st), copy.deepcopy(st)
         orig(lp, b, h, st2, b_scale, b_err)
         ours = int(st2.iters.sum() - st.iters.sum())
+        t0 = time.perf_counter()
         orig(lp, b, h, st3, b_scale, b_err, _closed_form.WINDOW_REL_GAP)
+        dt = time.perf_counter() - t0
         ours_early = int(st3.iters.sum() - st.iters.sum())
         hB, bred, ok = lp.reduced_data(b, h, b_scale)
         assert ok
         primal, dual = highs_chain(lp, hB, bred, False), highs_chain(lp, hB, bred, True)
         out.append({"ours": ours, "ours_early_stop": ours_early,
+                    "ours_early_stop_ms": 1e3 * dt,
+                    "us_per_iteration": 1e6 * dt / max(ours_early, 1),
                     "highs_primal_chain": sum(primal),
                     "highs_dual_chain": sum(dual), "highs_first_lp_cold": primal[0]})
     mean = {k: float(np.mean([o[k] for o in out])) for k in out[0]}
@@ -124,7 +135,7 @@ def chains(name: str) -> dict:
 
 
 def steady(name: str, restart: str) -> dict:
-    steps = PLANTS[name][1]
+    _, steps, warm, _ = PLANTS[name]
     sys_, kw, X, Y, U = setup(name, steps)
     obs = so.SMFDO(sys_, window=10, restart=restart, **kw)
     unit0 = linprog_unit()
@@ -135,15 +146,17 @@ def steady(name: str, restart: str) -> dict:
         t0 = time.perf_counter()
         est = obs.step(Y[k], None if U is None else U[k])
         dt = time.perf_counter() - t0
-        if k >= WARM:
+        if k >= warm:
             times.append(dt)
             its.append(sum(obs.simplex_iterations) - it0)
         inside &= bool(np.all((X[k] >= est.state_lo) & (X[k] <= est.state_hi)))
     unit = min(unit0, linprog_unit())
-    row = {"plant": name, "restart": restart, "steps": f"{WARM}-{steps - 1}",
+    row = {"plant": name, "restart": restart, "steps": f"{warm}-{steps - 1}",
            "ms_per_step": 1e3 * float(np.mean(times)),
            "per_linprog": float(np.mean(times)) / unit, "linprog_ms": 1e3 * unit,
-           "iterations_per_step": float(np.mean(its)), "truth_inside": inside,
+           "iterations_per_step": float(np.mean(its)),
+           "us_per_iteration": 1e6 * float(np.sum(times)) / max(float(np.sum(its)), 1.0),
+           "truth_inside": inside,
            "stats": dict(obs.stats)}
     print(f"{name} {restart}: {row['ms_per_step']:.2f} ms/step ({row['per_linprog']:.2f} LP), "
           f"{row['iterations_per_step']:.0f} iterations, inside {inside}", flush=True)
