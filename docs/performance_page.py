@@ -68,11 +68,14 @@ ABOUT: dict[str, tuple[str, str]] = {
                          "the whole-history LP and cost per step, by plant, window and "
                          "restart."),
     "state_estimation_r30": ("state_estimation", "The same on a random 30-state plant with 21 "
-                             "outputs (`--r30`), by window."),
+                             "outputs and a dense `A` (`--r30`): windows 3, 5 and 10 and exact "
+                             "mode against the whole-history LP."),
     "verdict_campaign": ("verdict_campaign", "Statuses and verdicts at calibrated noise bounds "
                          "against an independent whole-history LP, on random systems."),
     "window_cost": ("window_cost", "Where the window's cost goes: the objective chain against "
-                    "HiGHS's on the same LPs, and the steady-state cost."),
+                    "HiGHS's on the same LPs (iterations, our time per iteration), and the "
+                    "steady-state cost, on a random 6-state plant, the 30-tank cascade and a "
+                    "random 30-state plant."),
 }
 
 INTRO = """# Performance
