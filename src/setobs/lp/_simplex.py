@@ -785,6 +785,14 @@ def solve_batch(structure, data, state, params, out):
                     and wd > 0.0):
                 gstop[i] = rel_gap * wd
     solved = np.zeros(n_lp, np.bool_)
+    wnz = np.empty(nb, np.int64)
+    # Q2 = I (no redundant rows): the multiplier's lift needs no product
+    q2_eye = mr == m
+    if q2_eye:
+        for k in range(m):
+            for t2 in range(mr):
+                if Q2[k, t2] != (1.0 if k == t2 else 0.0):
+                    q2_eye = False
     for ii in range(n_lp):
         i = order[ii]
         if dirstat[i] == 1:
@@ -824,10 +832,16 @@ def solve_batch(structure, data, state, params, out):
         # the opposite bound, is often the worst start)
         src = -1
         best_v = np.inf
+        nnz = 0
+        for j in range(nb):  # (over the objective's nonzeros: the same sums)
+            if Wred[i, j] != 0.0:
+                wnz[nnz] = j
+                nnz += 1
         for j2 in range(n_lp):
             if solved[j2]:
                 v = 0.0
-                for j in range(nb):
+                for t2 in range(nnz):
+                    j = wnz[t2]
                     v += Wred[i, j] * xs[j2, j]
                 if v < best_v:
                     best_v = v
@@ -883,8 +897,11 @@ def solve_batch(structure, data, state, params, out):
             obj += t
             oabs += abs(t)
             s = yU[i, k]
-            for t2 in range(mr):
-                s += Q2[k, t2] * z[t2]
+            if q2_eye:  # (the same sum: the other terms are exact zeros)
+                s += z[k]
+            else:
+                for t2 in range(mr):
+                    s += Q2[k, t2] * z[t2]
             y[k] = R[k] * s
         bnd, slack = lower_bound(Wfull[i], indptr, indices, cdata, b, neg_h, h, y, fidx,
                                  pinvU, radius, tol_unb, b_err, no_err, no_pair, no_err,
