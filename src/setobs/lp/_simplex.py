@@ -568,7 +568,7 @@ def dual_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit):
 
 @njit(cache=True)
 def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit,
-                   gap_stop=0.0):
+                   gap_stop=0.0, x_given=False):
     """Bounded primal simplex for ``min w^T x, A x = b, |x_j| <= h_j`` from a primal
     feasible basis (the optimal basis of another objective on the same data).
 
@@ -594,6 +594,11 @@ def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit,
     improve it (the others, at their bound, and the basic columns contribute nothing),
     a sum the pricing loop forms anyway. The caller certifies the bound of ``y`` either
     way; it is then within ``gap_stop`` (and rounding) of the minimum.
+
+    ``x_given``: ``x`` already holds the basic solution of the start, as computed from
+    scratch for this basis, inverse and data (the objective chain's start: another LP's
+    optimal vertex on the same data), so the first computation is skipped unless a
+    refactorisation comes first.
     """
     m, n = A.shape
     isb, dtol = _start(basis, w, n)
@@ -613,8 +618,11 @@ def primal_simplex(A, sp, b, h, w, basis, upper, BinvT, npiv, x, y, maxit, nit,
                 return NUMERICAL
             npiv[0] = 0
             need_full = True
+            x_given = False
         if need_full:
-            _basic_solution(sp[1], b, h, basis, upper, isb, BinvT, x, rhs)
+            if not x_given:
+                _basic_solution(sp[1], b, h, basis, upper, isb, BinvT, x, rhs)
+            x_given = False
             if first:
                 for i in range(m):
                     j = basis[i]
@@ -910,8 +918,9 @@ def solve_batch(structure, data, state, params, out):
             binv[i, :, :] = binv[src]
             npiv[i] = npiv[src]
             nit[0] = 0
+            x[:] = xs[src]  # (src's basic solution, computed from scratch at its optimum)
             code = primal_simplex(Ared, sp, bred, hB, Wred[i], bases[i], upper[i],
-                                  binv[i], npiv[i:i + 1], x, z, maxit, nit, gstop[i])
+                                  binv[i], npiv[i:i + 1], x, z, maxit, nit, gstop[i], True)
             est[i, 1] = nit[0] if code == OPTIMAL else 1e9
             est[i, 0] *= EST_DECAY
             iters[0] += nit[0]
