@@ -126,6 +126,13 @@ def test_unbounded_directions_are_minus_inf_like_the_reference():
     for i in range(4):
         assert _agree(bounds[i], fp.minimize(W[i]).bound)
     assert np.isinf(bounds[:2]).all()
+    # every multiplier a step reports is written, the unbounded directions' too (zero):
+    # the window's allowances |y| b_err read them all (a stale row once gave NaN there)
+    state = S.new_state()
+    state.ys[:] = np.nan
+    b2, ok2 = S.minimize_all(np.array([0.5]), h, state)
+    assert ok2.all() and np.isfinite(state.ys).all() and np.array_equal(b2, bounds)
+    assert (state.ys[:2] == 0.0).all()
     # xi_0 + xi_1 = 0.5 - xi_2 is in [-0.5, 1.5]
     assert bounds[2] <= -0.5 and bounds[2] > -0.5 - 1e-12
     assert bounds[3] <= -1.5 and bounds[3] > -1.5 - 1e-12

@@ -862,6 +862,7 @@ def solve_batch(structure, data, state, params, out):
             bounds[i] = -np.inf
             objs[i] = -np.inf
             codes[i] = OPTIMAL
+            ys[i, :] = 0.0  # (no multiplier: the bound is -inf, its allowance none)
             continue
         if dirstat[i] == 2:
             codes[i] = AMBIGUOUS

@@ -156,7 +156,7 @@ class LPState:
         self.bounds = np.empty(n_lp)
         self.objs = np.empty(n_lp)
         self.codes = np.full(n_lp, -1, dtype=np.int64)  # (none solved yet)
-        self.ys = np.empty((n_lp, lp.m))
+        self.ys = np.zeros((n_lp, lp.m))  # (read by the window's allowances)
 
 
 class FixedStructureLP:
