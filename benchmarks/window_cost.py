@@ -103,6 +103,11 @@ def chains(name: str) -> dict:
                       None if b_err is None else b_err.copy()))
         return orig(self, b, h, st, b_scale, b_err, rel_gap)
 
+    # the states a measurement row reads alone (a row of C with one nonzero)
+    C = np.asarray(sys_.Xi)
+    single = np.count_nonzero(C, axis=1) == 1
+    measured = np.zeros(C.shape[1], bool)
+    measured[np.argmax(C[single] != 0, axis=1)] = True
     fastlp.FixedStructureLP.minimize_all_unchecked = record_call
     try:
         so.SMFDO(sys_, window=10, restart="box", **kw).run(Y, U)
@@ -122,9 +127,21 @@ def chains(name: str) -> dict:
         hB, bred, ok = lp.reduced_data(b, h, b_scale)
         assert ok
         primal, dual = highs_chain(lp, hB, bred, False), highs_chain(lp, hB, bred, True)
+        # where the early-stopped chain's pivots go: the first LP (the dual simplex from
+        # its last basis) and each later LP's primal pivots (est[i, 1]: this set's), by
+        # whether the LP bounds a measured state or an unmeasured one
+        piv = st3.est[lp.order[1:], 1]
+        meas = measured[lp.order[1:] // 2] if lp.n_lp == 2 * measured.size else None
+        split = {} if meas is None else {
+            "primal_pivots_measured_states": float(piv[meas].sum()),
+            "lps_measured_states": int(meas.sum()),
+            "primal_pivots_unmeasured_states": float(piv[~meas].sum()),
+            "lps_unmeasured_states": int((~meas).sum())}
         out.append({"ours": ours, "ours_early_stop": ours_early,
                     "ours_early_stop_ms": 1e3 * dt,
                     "us_per_iteration": 1e6 * dt / max(ours_early, 1),
+                    "first_lp_dual_iterations": int(st3.iters[1] - st.iters[1]),
+                    **split,
                     "highs_primal_chain": sum(primal),
                     "highs_dual_chain": sum(dual), "highs_first_lp_cold": primal[0]})
     mean = {k: float(np.mean([o[k] for o in out])) for k in out[0]}
