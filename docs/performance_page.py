@@ -26,6 +26,9 @@ ABOUT: dict[str, tuple[str, str]] = {
                  "window's LPs and exact mode's whole-history LP."),
     "early_stop": ("early_stop", "The window's early-stopped bounds: how much wider than the "
                    "bounds solved to the optimum, over random plants."),
+    "exact_floor": ("exact_floor", "What holds exact mode's step cost on 30-state plants: "
+                    "HiGHS's fixed cost per solve and per iteration, the work outside the "
+                    "solver, and the LP bases' structure (what a sparse LU would factor)."),
     "exact_long": ("exact_long", "Exact mode with noise on the 30-tank cascade over a long "
                    "record: the whole-history LP's cost per step, checked against an "
                    "independent LP."),
