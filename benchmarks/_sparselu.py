@@ -28,37 +28,6 @@ SINGULAR_RTOL = 1e-11
 
 
 @njit(cache=True)
-def _dfs(j, Lp, Li, pinv, top, xi, pstack, mark, stamp):
-    """Depth-first search of ``L``'s graph from row ``j`` (CSparse ``cs_dfs``): pushes
-    the rows reached, in reverse topological order, onto ``xi[top-1], xi[top-2], ...``."""
-    head = 0
-    xi[0] = j
-    while head >= 0:
-        j = xi[head]
-        jnew = pinv[j]
-        if mark[j] != stamp:
-            mark[j] = stamp
-            pstack[head] = 0 if jnew < 0 else Lp[jnew] + 1  # (skip the unit diagonal)
-        done = True
-        pend = 0 if jnew < 0 else Lp[jnew + 1]
-        p = pstack[head]
-        while p < pend:
-            i = Li[p]
-            if mark[i] != stamp:
-                pstack[head] = p + 1
-                head += 1
-                xi[head] = i
-                done = False
-                break
-            p += 1
-        if done:
-            head -= 1
-            top -= 1
-            xi[top] = j
-    return top
-
-
-@njit(cache=True)
 def triangular_order(m, indptr, indices, cols):
     """Column order and preferred pivot rows of ``B = A[:, cols]`` (the positions in
     ``cols``): first the column singletons, removed one after another with their rows
@@ -228,11 +197,8 @@ def lu_factor(m, indptr, indices, data, cols, threshold):
         c = cols[q[k]]
         # pattern of x = L^-1 B[:, q_k]: reach of the column's rows in L's graph
         stamp = k + 1
-        top = m
-        for p in range(indptr[c], indptr[c + 1]):
-            i = indices[p]
-            if mark[i] != stamp:
-                top = _dfs(i, Lp, Li, pinv, top, xi, pstack, mark, stamp)
+        top = _reach(Lp, Li, True, False, indices[indptr[c]:indptr[c + 1]], pinv, xi, pstack,
+                     mark, stamp)
         for p in range(top, m):
             x[xi[p]] = 0.0
         colmax = 0.0
@@ -341,25 +307,27 @@ def lu_solve_transposed(Lp, Li, Lx, Up, Ui, Ux, pinv, q, c, out):
 
 
 @njit(cache=True)
-def _reach(Gp, Gi, skip_first, skip_last, bi, nb, xi, pstack, mark, stamp):
+def _reach(Gp, Gi, skip_first, skip_last, bi, col_of, xi, pstack, mark, stamp):
     """Nonzero pattern of ``G^-1 b`` for a triangular ``G`` (CSC; its diagonal stored
-    first or last, skipped) and the pattern ``bi[:nb]`` of ``b``: ``xi[top:]`` in
-    topological order (CSparse ``cs_reach``)."""
-    n = Gp.size - 1
-    top = n
-    for t in range(nb):
+    first or last, skipped) and the pattern ``bi`` of ``b``: ``xi[top:]`` in topological
+    order (CSparse ``cs_reach`` and ``cs_dfs``). Node ``j``'s edges are column
+    ``col_of[j]`` of ``G`` (none where it is ``-1``: in :func:`lu_factor`, a row not yet
+    pivotal). Returns ``top``."""
+    top = xi.size
+    for t in range(bi.size):
         j0 = bi[t]
         if mark[j0] == stamp:
             continue
         head = 0
         xi[0] = j0
-        while head >= 0:
+        while head >= 0:  # (the stack grows up from xi[0], the pattern down from xi[-1])
             j = xi[head]
+            J = col_of[j]
             if mark[j] != stamp:
                 mark[j] = stamp
-                pstack[head] = Gp[j] + (1 if skip_first else 0)
+                pstack[head] = 0 if J < 0 else Gp[J] + (1 if skip_first else 0)
             done = True
-            pend = Gp[j + 1] - (1 if skip_last else 0)
+            pend = 0 if J < 0 else Gp[J + 1] - (1 if skip_last else 0)
             p = pstack[head]
             while p < pend:
                 i = Gi[p]
@@ -378,19 +346,19 @@ def _reach(Gp, Gi, skip_first, skip_last, bi, nb, xi, pstack, mark, stamp):
 
 
 @njit(cache=True)
-def lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, bi, bx, x, xi, pstack, mark, stamp):
+def lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, bi, bx, x, xi, pstack, mark, stamp, ident):
     """``z = U^-1 L^-1 P b`` for a sparse ``b`` (rows ``bi``, values ``bx``), by the two
     triangular solves over their reach only. ``x`` (length ``m``) must be zero on entry;
     on return ``x[xi[top:]]`` holds ``z`` on its pattern (pivot order: ``B^-1 b`` is
-    ``Q z``), which the caller zeroes again; ``mark`` uses ``stamp`` and ``stamp + 1``.
-    Returns ``top``."""
+    ``Q z``), which the caller zeroes again; ``mark`` uses ``stamp`` and ``stamp + 1``;
+    ``ident`` is ``arange(m)``. Returns ``top``."""
     m = x.size
     nb = bi.size
     pb = np.empty(nb, np.int64)
     for t in range(nb):
         pb[t] = pinv[bi[t]]
         x[pb[t]] = bx[t]
-    top = _reach(Lp, Li, True, False, pb, nb, xi, pstack, mark, stamp)
+    top = _reach(Lp, Li, True, False, pb, ident, xi, pstack, mark, stamp)
     for px in range(top, m):
         j = xi[px]
         xj = x[j]
@@ -398,7 +366,7 @@ def lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, bi, bx, x, xi, pstack, mark, s
             for p in range(Lp[j] + 1, Lp[j + 1]):
                 x[Li[p]] -= Lx[p] * xj
     pat = xi[top:].copy()
-    top = _reach(Up, Ui, False, True, pat, pat.size, xi, pstack, mark, stamp + 1)
+    top = _reach(Up, Ui, False, True, pat, ident, xi, pstack, mark, stamp + 1)
     for px in range(top, m):
         j = xi[px]
         d = Up[j + 1] - 1
@@ -419,11 +387,13 @@ def ftran_columns(Lp, Li, Lx, Up, Ui, Ux, pinv, indptr, indices, data, qs):
     xi = np.empty(m, np.int64)
     pstack = np.empty(m, np.int64)
     mark = np.zeros(m, np.int64)
+    ident = np.arange(m)
     total = 0
     for t in range(qs.size):
         c = qs[t]
         top = lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, indices[indptr[c]:indptr[c + 1]],
-                              data[indptr[c]:indptr[c + 1]], x, xi, pstack, mark, 2 * t + 1)
+                              data[indptr[c]:indptr[c + 1]], x, xi, pstack, mark, 2 * t + 1,
+                              ident)
         total += m - top
         for px in range(top, m):
             x[xi[px]] = 0.0

@@ -53,35 +53,24 @@ def nucleus(B: sp.csc_matrix) -> tuple[int, int]:
     singletons (likewise) until there are none: the part that needs a factorisation (the
     rest is a permuted triangle)."""
     B = B.tocsc()
-    m = B.shape[0]
-    rows = np.ones(m, bool)
-    cols = np.ones(B.shape[1], bool)
+    on = [np.ones(B.shape[0], bool), np.ones(B.shape[1], bool)]  # (rows, columns left)
     while True:
-        sub = B[rows][:, cols].tocsc()
-        ri, ci = np.flatnonzero(rows), np.flatnonzero(cols)
-        cc = np.diff(sub.indptr)
-        sc = np.flatnonzero(cc == 1)
-        if sc.size:
-            taken = set()
-            for j in sc:
-                r = int(sub.indices[sub.indptr[j]])
-                if r not in taken:
-                    taken.add(r)
-                    cols[ci[j]] = False
-                    rows[ri[r]] = False
-            continue
-        sr = sub.tocsr()
-        rc = np.diff(sr.indptr)
-        srow = np.flatnonzero(rc == 1)
-        if not srow.size:
-            return int(rows.sum()), int(sub.nnz)
+        sub = B[on[0]][:, on[1]]
+        for axis in (1, 0):  # column singletons first, then row singletons
+            major = sub.tocsc() if axis == 1 else sub.tocsr()
+            single = np.flatnonzero(np.diff(major.indptr) == 1)
+            if single.size:
+                break
+        else:
+            return int(on[0].sum()), int(sub.nnz)
+        left_major, left_minor = np.flatnonzero(on[axis]), np.flatnonzero(on[1 - axis])
         taken = set()
-        for r in srow:
-            j = int(sr.indices[sr.indptr[r]])
-            if j not in taken:
-                taken.add(j)
-                rows[ri[r]] = False
-                cols[ci[j]] = False
+        for j in single:  # (each with its one entry's row, or column)
+            r = int(major.indices[major.indptr[j]])
+            if r not in taken:
+                taken.add(r)
+                on[axis][left_major[j]] = False
+                on[1 - axis][left_minor[r]] = False
 
 
 def model_facts(hs) -> dict:
@@ -153,7 +142,7 @@ def lu_probe(full: sp.csc_matrix, cols: np.ndarray, threshold: float = 0.1,
     for t, c in enumerate(qs[:20]):
         a = full[:, [c]].toarray().ravel()
         top = lu_solve_sparse(*f[:7], ix[ip[c]:ip[c + 1]], dx[ip[c]:ip[c + 1]], x, xi, ps,
-                              mark, 2 * t + 1)
+                              mark, 2 * t + 1, np.arange(m))
         z = np.zeros(m)
         z[xi[top:]] = x[xi[top:]]
         x[xi[top:]] = 0.0
