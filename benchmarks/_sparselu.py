@@ -28,6 +28,44 @@ SINGULAR_RTOL = 1e-11
 
 
 @njit(cache=True)
+def _peel(ptr, idx, tptr, tidx, cnt, tcnt, on, ton, out, tout, stack):
+    """Remove singletons of one side of ``B`` one after another: a line ``j`` (of the
+    side stored by ``ptr, idx``; the other side by ``tptr, tidx``) with one entry left,
+    in the cross line ``r``, goes with ``r``; ``cnt``/``tcnt`` count the entries left in
+    each line. Writes the pairs to ``out, tout``; returns their number."""
+    top = 0
+    for j in range(on.size):
+        if on[j] and cnt[j] == 1:
+            stack[top] = j
+            top += 1
+    n = 0
+    while top > 0:
+        top -= 1
+        j = stack[top]
+        if not on[j] or cnt[j] != 1:
+            continue
+        r = -1
+        for p in range(ptr[j], ptr[j + 1]):
+            if ton[idx[p]]:
+                r = idx[p]
+        on[j] = False
+        ton[r] = False
+        out[n] = j
+        tout[n] = r
+        n += 1
+        for p in range(ptr[j], ptr[j + 1]):
+            tcnt[idx[p]] -= 1
+        for p in range(tptr[r], tptr[r + 1]):
+            j2 = tidx[p]
+            if on[j2]:
+                cnt[j2] -= 1
+                if cnt[j2] == 1:
+                    stack[top] = j2
+                    top += 1
+    return n
+
+
+@njit(cache=True)
 def triangular_order(m, indptr, indices, cols):
     """Column order and preferred pivot rows of ``B = A[:, cols]`` (the positions in
     ``cols``): first the column singletons, removed one after another with their rows
@@ -38,14 +76,17 @@ def triangular_order(m, indptr, indices, cols):
     Returns ``(q, prefer, n_nucleus)``: ``prefer[k]`` is the row the ``k``-th column
     pivots on, ``-1`` in the nucleus.
     """
-    # B row-wise: for each row, the positions k of the columns with an entry in it
+    # B column-wise over the positions k (cp, ci) and row-wise (rp, rk)
     rowcnt = np.zeros(m, np.int64)
     colcnt = np.empty(m, np.int64)
+    cp = np.zeros(m + 1, np.int64)
     for k in range(m):
         c = cols[k]
         colcnt[k] = indptr[c + 1] - indptr[c]
+        cp[k + 1] = cp[k] + colcnt[k]
         for p in range(indptr[c], indptr[c + 1]):
             rowcnt[indices[p]] += 1
+    ci = np.empty(cp[m], np.int64)
     rp = np.zeros(m + 1, np.int64)
     for i in range(m):
         rp[i + 1] = rp[i] + rowcnt[i]
@@ -53,75 +94,24 @@ def triangular_order(m, indptr, indices, cols):
     rk = np.empty(rp[m], np.int64)
     for k in range(m):
         c = cols[k]
+        ci[cp[k]:cp[k + 1]] = indices[indptr[c]:indptr[c + 1]]
         for p in range(indptr[c], indptr[c + 1]):
             i = indices[p]
             rk[fillp[i]] = k
             fillp[i] += 1
     col_on = np.ones(m, np.bool_)
     row_on = np.ones(m, np.bool_)
+    stack = np.empty(m + rp[m], np.int64)
+    front_q = np.empty(m, np.int64)
+    front_r = np.empty(m, np.int64)
+    nf = _peel(cp, ci, rp, rk, colcnt, rowcnt, col_on, row_on, front_q, front_r, stack)
+    back_r = np.empty(m, np.int64)
+    back_q = np.empty(m, np.int64)
+    nb = _peel(rp, rk, cp, ci, rowcnt, colcnt, row_on, col_on, back_r, back_q, stack)
     q = np.empty(m, np.int64)
     prefer = np.full(m, -1, np.int64)
-    stack = np.empty(m + rp[m], np.int64)
-    nf = 0
-    top = 0
-    for k in range(m):
-        if colcnt[k] == 1:
-            stack[top] = k
-            top += 1
-    while top > 0:  # column singletons
-        top -= 1
-        k = stack[top]
-        if not col_on[k] or colcnt[k] != 1:
-            continue
-        c = cols[k]
-        r = -1
-        for p in range(indptr[c], indptr[c + 1]):
-            if row_on[indices[p]]:
-                r = indices[p]
-        col_on[k] = False
-        row_on[r] = False
-        q[nf] = k
-        prefer[nf] = r
-        nf += 1
-        for p in range(indptr[c], indptr[c + 1]):
-            rowcnt[indices[p]] -= 1
-        for t in range(rp[r], rp[r + 1]):
-            k2 = rk[t]
-            if col_on[k2]:
-                colcnt[k2] -= 1
-                if colcnt[k2] == 1:
-                    stack[top] = k2
-                    top += 1
-    back_q = np.empty(m, np.int64)
-    back_r = np.empty(m, np.int64)
-    nb = 0
-    top = 0
-    for i in range(m):
-        if row_on[i] and rowcnt[i] == 1:
-            stack[top] = i
-            top += 1
-    while top > 0:  # row singletons of the rest
-        top -= 1
-        r = stack[top]
-        if not row_on[r] or rowcnt[r] != 1:
-            continue
-        k = -1
-        for t in range(rp[r], rp[r + 1]):
-            if col_on[rk[t]]:
-                k = rk[t]
-        row_on[r] = False
-        col_on[k] = False
-        back_q[nb] = k
-        back_r[nb] = r
-        nb += 1
-        c = cols[k]
-        for p in range(indptr[c], indptr[c + 1]):
-            i = indices[p]
-            if row_on[i]:
-                rowcnt[i] -= 1
-                if rowcnt[i] == 1:
-                    stack[top] = i
-                    top += 1
+    q[:nf] = front_q[:nf]
+    prefer[:nf] = front_r[:nf]
     # the nucleus: by increasing count in its rows
     nn = m - nf - nb
     ncnt = np.empty(nn, np.int64)
@@ -130,9 +120,8 @@ def triangular_order(m, indptr, indices, cols):
     for k in range(m):
         if col_on[k]:
             cnt = 0
-            c = cols[k]
-            for p in range(indptr[c], indptr[c + 1]):
-                if row_on[indices[p]]:
+            for p in range(cp[k], cp[k + 1]):
+                if row_on[ci[p]]:
                     cnt += 1
             nk[t] = k
             ncnt[t] = cnt
@@ -144,6 +133,20 @@ def triangular_order(m, indptr, indices, cols):
         q[nf + nn + t] = back_q[nb - 1 - t]
         prefer[nf + nn + t] = back_r[nb - 1 - t]
     return q, prefer, nn
+
+
+@njit(cache=True)
+def _room(Ii, Ix, used, need):
+    """``(Ii, Ix)``, or copies of their first ``used`` entries in arrays twice as long, so
+    that ``need`` more entries fit."""
+    if used + need <= Ii.size:
+        return Ii, Ix
+    grow = 2 * Ii.size + need
+    Ii2 = np.empty(grow, np.int64)
+    Ix2 = np.empty(grow)
+    Ii2[:used] = Ii[:used]
+    Ix2[:used] = Ix[:used]
+    return Ii2, Ix2
 
 
 @njit(cache=True)
@@ -180,20 +183,8 @@ def lu_factor(m, indptr, indices, data, cols, threshold):
     for k in range(m):
         Lp[k] = lnz
         Up[k] = unz
-        if lnz + m > Li.size:
-            grow = 2 * Li.size + m
-            Li2 = np.empty(grow, np.int64)
-            Lx2 = np.empty(grow)
-            Li2[:lnz] = Li[:lnz]
-            Lx2[:lnz] = Lx[:lnz]
-            Li, Lx = Li2, Lx2
-        if unz + m > Ui.size:
-            grow = 2 * Ui.size + m
-            Ui2 = np.empty(grow, np.int64)
-            Ux2 = np.empty(grow)
-            Ui2[:unz] = Ui[:unz]
-            Ux2[:unz] = Ux[:unz]
-            Ui, Ux = Ui2, Ux2
+        Li, Lx = _room(Li, Lx, lnz, m)  # (a column adds at most m entries to each)
+        Ui, Ux = _room(Ui, Ux, unz, m)
         c = cols[q[k]]
         # pattern of x = L^-1 B[:, q_k]: reach of the column's rows in L's graph
         stamp = k + 1
@@ -262,24 +253,36 @@ def lu_factor(m, indptr, indices, data, cols, threshold):
 
 
 @njit(cache=True)
+def _lower_at(Lp, Li, Lx, x, j):
+    """Column ``j``'s step of the solve with ``L`` (its unit diagonal stored first)."""
+    xj = x[j]
+    if xj != 0.0:
+        for p in range(Lp[j] + 1, Lp[j + 1]):
+            x[Li[p]] -= Lx[p] * xj
+
+
+@njit(cache=True)
+def _upper_at(Up, Ui, Ux, x, j):
+    """Column ``j``'s step of the solve with ``U`` (its diagonal stored last)."""
+    d = Up[j + 1] - 1
+    x[j] /= Ux[d]
+    xj = x[j]
+    if xj != 0.0:
+        for p in range(Up[j], d):
+            x[Ui[p]] -= Ux[p] * xj
+
+
+@njit(cache=True)
 def lu_solve(Lp, Li, Lx, Up, Ui, Ux, pinv, q, b, out):
     """``out = B^-1 b`` from :func:`lu_factor` (``out[k]`` multiplies ``cols[k]``)."""
     m = b.size
     x = np.empty(m)
     for i in range(m):  # x = P b
         x[pinv[i]] = b[i]
-    for j in range(m):  # L x = x (unit diagonal first)
-        xj = x[j]
-        if xj != 0.0:
-            for p in range(Lp[j] + 1, Lp[j + 1]):
-                x[Li[p]] -= Lx[p] * xj
-    for j in range(m - 1, -1, -1):  # U x = x (diagonal last)
-        d = Up[j + 1] - 1
-        x[j] /= Ux[d]
-        xj = x[j]
-        if xj != 0.0:
-            for p in range(Up[j], d):
-                x[Ui[p]] -= Ux[p] * xj
+    for j in range(m):  # L x = x
+        _lower_at(Lp, Li, Lx, x, j)
+    for j in range(m - 1, -1, -1):  # U x = x
+        _upper_at(Up, Ui, Ux, x, j)
     for k in range(m):  # out = Q x
         out[q[k]] = x[k]
 
@@ -360,21 +363,11 @@ def lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, bi, bx, x, xi, pstack, mark, s
         x[pb[t]] = bx[t]
     top = _reach(Lp, Li, True, False, pb, ident, xi, pstack, mark, stamp)
     for px in range(top, m):
-        j = xi[px]
-        xj = x[j]
-        if xj != 0.0:
-            for p in range(Lp[j] + 1, Lp[j + 1]):
-                x[Li[p]] -= Lx[p] * xj
+        _lower_at(Lp, Li, Lx, x, xi[px])
     pat = xi[top:].copy()
     top = _reach(Up, Ui, False, True, pat, ident, xi, pstack, mark, stamp + 1)
     for px in range(top, m):
-        j = xi[px]
-        d = Up[j + 1] - 1
-        x[j] /= Ux[d]
-        xj = x[j]
-        if xj != 0.0:
-            for p in range(Up[j], d):
-                x[Ui[p]] -= Ux[p] * xj
+        _upper_at(Up, Ui, Ux, x, xi[px])
     return top
 
 
