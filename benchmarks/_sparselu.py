@@ -253,36 +253,26 @@ def lu_factor(m, indptr, indices, data, cols, threshold):
 
 
 @njit(cache=True)
-def _lower_at(Lp, Li, Lx, x, j):
-    """Column ``j``'s step of the solve with ``L`` (its unit diagonal stored first)."""
-    xj = x[j]
-    if xj != 0.0:
-        for p in range(Lp[j] + 1, Lp[j + 1]):
-            x[Li[p]] -= Lx[p] * xj
-
-
-@njit(cache=True)
-def _upper_at(Up, Ui, Ux, x, j):
-    """Column ``j``'s step of the solve with ``U`` (its diagonal stored last)."""
-    d = Up[j + 1] - 1
-    x[j] /= Ux[d]
-    xj = x[j]
-    if xj != 0.0:
-        for p in range(Up[j], d):
-            x[Ui[p]] -= Ux[p] * xj
-
-
-@njit(cache=True)
 def lu_solve(Lp, Li, Lx, Up, Ui, Ux, pinv, q, b, out):
     """``out = B^-1 b`` from :func:`lu_factor` (``out[k]`` multiplies ``cols[k]``)."""
     m = b.size
     x = np.empty(m)
     for i in range(m):  # x = P b
         x[pinv[i]] = b[i]
-    for j in range(m):  # L x = x
-        _lower_at(Lp, Li, Lx, x, j)
-    for j in range(m - 1, -1, -1):  # U x = x
-        _upper_at(Up, Ui, Ux, x, j)
+    # (the triangular steps written out here and in lu_solve_sparse: as a shared compiled
+    # helper they cost 3-5x, 46 -> 159-230 us on a 2295-row basis)
+    for j in range(m):  # L x = x (unit diagonal first)
+        xj = x[j]
+        if xj != 0.0:
+            for p in range(Lp[j] + 1, Lp[j + 1]):
+                x[Li[p]] -= Lx[p] * xj
+    for j in range(m - 1, -1, -1):  # U x = x (diagonal last)
+        d = Up[j + 1] - 1
+        x[j] /= Ux[d]
+        xj = x[j]
+        if xj != 0.0:
+            for p in range(Up[j], d):
+                x[Ui[p]] -= Ux[p] * xj
     for k in range(m):  # out = Q x
         out[q[k]] = x[k]
 
@@ -363,11 +353,21 @@ def lu_solve_sparse(Lp, Li, Lx, Up, Ui, Ux, pinv, bi, bx, x, xi, pstack, mark, s
         x[pb[t]] = bx[t]
     top = _reach(Lp, Li, True, False, pb, ident, xi, pstack, mark, stamp)
     for px in range(top, m):
-        _lower_at(Lp, Li, Lx, x, xi[px])
+        j = xi[px]
+        xj = x[j]
+        if xj != 0.0:
+            for p in range(Lp[j] + 1, Lp[j + 1]):
+                x[Li[p]] -= Lx[p] * xj
     pat = xi[top:].copy()
     top = _reach(Up, Ui, False, True, pat, ident, xi, pstack, mark, stamp + 1)
     for px in range(top, m):
-        _upper_at(Up, Ui, Ux, x, xi[px])
+        j = xi[px]
+        d = Up[j + 1] - 1
+        x[j] /= Ux[d]
+        xj = x[j]
+        if xj != 0.0:
+            for p in range(Up[j], d):
+                x[Ui[p]] -= Ux[p] * xj
     return top
 
 
