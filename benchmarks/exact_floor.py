@@ -6,8 +6,10 @@ in linprog units against the target of 30 per step.
 Per step of the steady state (after ``--warm`` steps): the HiGHS solves (``highs.solve``:
 ``run()`` and its status), their iterations and seconds, the solves that made no
 iteration (a start already optimal for the next objective: their time is HiGHS's fixed
-cost), and a least-squares fit ``seconds = a + b * iterations`` over the step's solves.
-At the end, on each of the bounded history's HiGHS models (outer and inner cut LP): its
+cost), and a least-squares fit ``seconds = a + b * iterations`` over the step's solves
+(its intercept ``a`` is ill-determined where no solve is without iterations, as on the
+dense plant: the direct measurement below is the better figure there). At the end, on
+each HiGHS model the last step solved on (the outer and the inner cut LP): its
 size, the time of ``run()`` again from its optimal basis (no iteration: the fixed cost
 measured directly, the best of five), and the structure of its optimal basis after
 triangularisation (column and row singletons removed until none is left), the part a
@@ -15,8 +17,9 @@ sparse LU would factor (its nonzeros) where the compiled simplex's dense explici
 inverse of the whole basis (``m x m``, one per LP of a chain) does not fit; and what a
 sparse LU of that basis costs (``_sparselu.py``, a probe not used by setobs): its
 factorisation's time and fill against SuperLU's, and the solve ``B^-1 a_q`` of a simplex
-iteration for random nonbasic columns (hyper-sparse and dense), with the results' density
-and the residuals against the basis itself.
+iteration for random nonbasic columns (hyper-sparse, timed as one compiled batch, and with
+a dense right-hand side, one call at a time from Python), with the results' density and
+the residuals against the basis itself.
 
 Run: ``python benchmarks/exact_floor.py [--plants fast,dense] [--warm 40,8] [--steps 10,3]``
 (the dense plant's steps cost ~100x the cascade's: fewer of them);
@@ -41,7 +44,13 @@ sys.path.insert(0, str(HERE))
 
 import setobs as so  # noqa: E402
 from _common import count_solves, linprog_unit, stamp  # noqa: E402
-from _sparselu import ftran_columns, lu_factor, lu_solve, lu_solve_sparse, lu_solve_transposed  # noqa: E402
+from _sparselu import (  # noqa: E402
+    ftran_columns,
+    lu_factor,
+    lu_solve,
+    lu_solve_sparse,
+    lu_solve_transposed,
+)
 from exact_bounded import plant  # noqa: E402
 from setobs.lp import highs  # noqa: E402
 from setobs.setmembership import _bounded  # noqa: E402
