@@ -9,13 +9,14 @@ dense right-hand side, and with a sparse one over the nonzero pattern found by a
 depth-first search (Gilbert-Peierls; the "hyper-sparse" solve of Hall and McKinnon 2005),
 in time proportional to the flops.
 
-The basis is ``B = A[:, cols]`` for an ``m x n`` matrix ``A`` given column-wise
-(``indptr, indices, data``) and ``m`` distinct column indices ``cols``. In each column the
-pivot is, among the rows not yet pivotal whose entry is at least ``threshold`` times the
-column's largest, the triangular part's own row, else the one with the fewest nonzeros in
-``B``. The result is ``P B Q = L U`` with ``L`` unit lower triangular and ``U`` upper
-triangular, both stored by columns in pivot order. A column with no entry above
-``SINGULAR_RTOL`` times its largest in ``B`` makes the basis singular (``ok = False``).
+The basis is ``B = A[:, cols]`` for an ``m x n`` matrix ``A`` given column-wise (``indptr,
+indices, data``) and ``m`` distinct column indices ``cols``. In each column, after the
+solve with the columns of ``L`` so far, the pivot is, among the rows not yet pivotal whose
+entry is at least ``threshold`` times the largest such entry, the triangular part's own
+row, else the one with the fewest nonzeros in ``B``. The result is ``P B Q = L U`` with
+``L`` unit lower triangular and ``U`` upper triangular, both stored by columns in pivot
+order. A column whose largest such entry is at most ``SINGULAR_RTOL`` times its largest in
+``B`` makes the basis singular (``ok = False``).
 """
 
 from __future__ import annotations
