@@ -164,7 +164,7 @@ def lu_probe(full: sp.csc_matrix, cols: np.ndarray, threshold: float = 0.1,
         lu_solve_transposed(*f, a, out)
         worst = max(worst, float(np.abs(B.T @ out - a).max()))
     return {"threshold": threshold, "factor_ms": 1e3 * min(times),
-            "lu_nonzeros": int(f[0][-1] + f[3][-1]),
+            "factor_nonzeros": int(f[0][-1] + f[3][-1]),
             "superlu_ms": 1e3 * t_slu, "superlu_nonzeros": int(slu.L.nnz + slu.U.nnz),
             "sparse_solve_us": 1e6 * t_sparse, "result_density": total / columns / m,
             "dense_solve_us": 1e6 * float(np.median(t_dense)),
@@ -218,8 +218,14 @@ def run(name: str, warm: int, steps: int) -> dict:
         highs.solve = plain
     # the models the last step solved on (the outer and the inner cut LP, or the whole
     # history's), in the order of their first solve in it
-    models = [{"solves_in_last_step": sum(1 for h in last if h is hs), **model_facts(hs)}
-              for hs in dict.fromkeys(last)]
+    # (one flat row per model, for the performance page's table)
+    models = []
+    for i, hs in enumerate(dict.fromkeys(last)):
+        facts = model_facts(hs)
+        probe = facts.pop("sparse_lu_probe", {})
+        models.append({"plant": name, "model": i,
+                       "solves_in_last_step": sum(1 for h in last if h is hs), **facts,
+                       **{f"lu_{key}": val for key, val in probe.items()}})
 
     def mean(key):
         return float(np.mean([r[key] for r in rows]))
@@ -250,12 +256,15 @@ def main() -> None:
     out = {**stamp(), "target_mean_per_linprog": 30.0, "plants": []}
     warms = [int(v) for v in args.warm.split(",")]
     counts = [int(v) for v in args.steps.split(",")]
+    out["bases"] = []
     for name, warm, steps in zip(args.plants.split(","), warms, counts, strict=True):
-        out["plants"].append(run(name, warm, steps))
+        row = run(name, warm, steps)
+        out["bases"] += row.pop("models")
+        out["plants"].append(row)
         gc.collect()
         Path(args.out).write_text(json.dumps(out, indent=1))
-    print(json.dumps([{k: v for k, v in p.items() if k != "per_step"} for p in out["plants"]],
-                     indent=1))
+    print(json.dumps([{k: v for k, v in p.items() if k != "per_step"} for p in out["plants"]]
+                     + out["bases"], indent=1))
 
 
 if __name__ == "__main__":
