@@ -29,7 +29,6 @@ writes ``benchmarks/results/exact_floor.json``.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import sys
 import time
@@ -50,41 +49,16 @@ from _sparselu import (  # noqa: E402
     lu_solve,
     lu_solve_sparse,
     lu_solve_transposed,
+    triangular_order,
 )
 from exact_bounded import plant  # noqa: E402
 from setobs.lp import highs  # noqa: E402
 from setobs.setmembership import _bounded  # noqa: E402
 
 
-def nucleus(B: sp.csc_matrix) -> tuple[int, int]:
-    """Size and nonzeros of what is left of the square ``B`` after removing column
-    singletons (a column with one nonzero in the remaining rows, with its row) and row
-    singletons (likewise) until there are none: the part that needs a factorisation (the
-    rest is a permuted triangle)."""
-    B = B.tocsc()
-    on = [np.ones(B.shape[0], bool), np.ones(B.shape[1], bool)]  # (rows, columns left)
-    while True:
-        sub = B[on[0]][:, on[1]]
-        for axis in (1, 0):  # column singletons first, then row singletons
-            major = sub.tocsc() if axis == 1 else sub.tocsr()
-            single = np.flatnonzero(np.diff(major.indptr) == 1)
-            if single.size:
-                break
-        else:
-            return int(on[0].sum()), int(sub.nnz)
-        left_major, left_minor = np.flatnonzero(on[axis]), np.flatnonzero(on[1 - axis])
-        taken = set()
-        for j in single:  # (each with its one entry's row, or column)
-            r = int(major.indices[major.indptr[j]])
-            if r not in taken:
-                taken.add(r)
-                on[axis][left_major[j]] = False
-                on[1 - axis][left_minor[r]] = False
-
-
 def model_facts(hs) -> dict:
     """A solved HiGHS model's size, its fixed cost per ``run()`` (measured: again from its
-    optimal basis, no iteration) and its optimal basis's nucleus (:func:`nucleus`)."""
+    optimal basis, no iteration), its optimal basis's nucleus and the LU probe on it."""
     import highspy
 
     lp = hs.getLp()
@@ -101,20 +75,26 @@ def model_facts(hs) -> dict:
     basic = int(highspy.HighsBasisStatus.kBasic)
     bc = np.flatnonzero(np.array([int(s) for s in bas.col_status]) == basic)
     br = np.flatnonzero(np.array([int(s) for s in bas.row_status]) == basic)
-    B = sp.hstack([M[:, bc], sp.eye(m, format="csc")[:, br]]).tocsc()
-    size, nnz = nucleus(B) if B.shape[1] == m else (None, None)
+    full = sp.hstack([M, sp.eye(m, format="csc")]).tocsc()  # (a slack column per row)
+    cols = np.concatenate([bc, n + br]).astype(np.int64)
+    B = full[:, cols].tocsc()
     facts = {"rows": m, "cols": n, "nonzeros": int(M.nnz),
              "rerun_ms_no_iteration": 1e3 * min(zero) if zero else None,
-             "basis_nonzeros": int(B.nnz), "nucleus_size": size, "nucleus_nonzeros": nnz,
-             "dense_inverse_MB": 8.0 * m * m / 1e6}
-    if B.shape[1] == m:
-        full = sp.hstack([M, sp.eye(m, format="csc")]).tocsc()
-        facts["sparse_lu_probe"] = lu_probe(full, np.concatenate([bc, n + br]))
+             "basis_nonzeros": int(B.nnz), "dense_inverse_MB": 8.0 * m * m / 1e6}
+    if cols.size == m:
+        # the nucleus: what is left after the column and row singletons (the probe's
+        # triangular order; -1 marks its columns, the rest pivot on their own rows)
+        q, prefer, size = triangular_order(m, full.indptr.astype(np.int64),
+                                           full.indices.astype(np.int64), cols)
+        rows = np.setdiff1d(np.arange(m), prefer[prefer >= 0])
+        facts.update(nucleus_size=int(size),
+                     nucleus_nonzeros=int(B[rows][:, q[prefer < 0]].nnz),
+                     sparse_lu_probe=lu_probe(full, cols, B))
     return facts
 
 
-def lu_probe(full: sp.csc_matrix, cols: np.ndarray, threshold: float = 0.1,
-             columns: int = 200) -> dict:
+def lu_probe(full: sp.csc_matrix, cols: np.ndarray, B: sp.csc_matrix,
+             threshold: float = 0.1, columns: int = 200) -> dict:
     """What a sparse LU of this basis costs (``_sparselu``: triangularisation, then
     Gilbert-Peierls with threshold ``threshold``): the factorisation's time (best of five)
     and fill against SuperLU's (``scipy.sparse.linalg.splu``, COLAMD), and the solve
@@ -125,8 +105,6 @@ def lu_probe(full: sp.csc_matrix, cols: np.ndarray, threshold: float = 0.1,
 
     m = full.shape[0]
     ip, ix, dx = full.indptr.astype(np.int64), full.indices.astype(np.int64), full.data
-    cols = cols.astype(np.int64)
-    B = full[:, cols].tocsc()
     times = []
     for _ in range(5):
         t0 = time.perf_counter()
@@ -261,7 +239,6 @@ def main() -> None:
         row = run(name, warm, steps)
         out["bases"] += row.pop("models")
         out["plants"].append(row)
-        gc.collect()
         Path(args.out).write_text(json.dumps(out, indent=1))
     print(json.dumps([{k: v for k, v in p.items() if k != "per_step"} for p in out["plants"]]
                      + out["bases"], indent=1))
