@@ -48,6 +48,10 @@ ABOUT: dict[str, tuple[str, str]] = {
                          "with outer and inner restart sets."),
     "geometry_ops": ("geometry_ops", "The set operations and queries against cvxpy and "
                      "ZonoOpt on the same random sets (time and answers)."),
+    "hybrid_zonotopes": ("hybrid_zonotopes", "Hybrid zonotopes against ZonoOpt's: time of "
+                         "each operation and query on unions of 2-64 sets in 2-10 dimensions and "
+                         "a piecewise-affine reachability horizon, and every answer against the "
+                         "enumerated truth."),
     "import_time": ("import_time", "The time of `import setobs` and of the first use of each "
                     "heavy engine."),
     "interval_hull": ("interval_hull", "The certified interval hull against cvxpy."),

@@ -50,7 +50,7 @@ def blocks(text: str) -> list[tuple[str, str, str | None]]:
 
 
 def test_blocks_are_found():
-    assert len(GUIDE_ORDER) == 10 and set(GUIDE_ORDER) == {
+    assert len(GUIDE_ORDER) == 11 and set(GUIDE_ORDER) == {
         p.stem for p in (ROOT / "docs" / "guide").glob("*.md")}
     langs = [lang for text in PAGES.values() for lang, _, _ in blocks(text)]
     assert langs.count("python") >= 12 and langs.count("bash") >= 3 and "yaml" in langs

@@ -44,7 +44,7 @@ from .exceptions import (
     SolverWarning,
     UnboundedSetError,
 )
-from .geometry import Box, ConstrainedZonotope
+from .geometry import Box, ConstrainedZonotope, HybridZonotope
 from .models import LinearSystem, NonlinearModel, NonlinearSystem
 from .setmembership import SMFDO, NonlinearSetObserver, calibrate_noise, noise_tradeoff
 
@@ -61,6 +61,7 @@ __all__ = [
     "DomainError",
     "EmptySetError",
     "ExistenceError",
+    "HybridZonotope",
     "ImmutableError",
     "InternalError",
     "InvalidValueError",

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 __all__ = [
     "ALLOWANCE_RTOL",
+    "BINARY_TOL",
     "CALIBRATION_ACTIVE_RTOL",
     "CALIBRATION_ATOL",
     "CALIBRATION_CHECK_TOL",
@@ -83,6 +84,12 @@ __all__ = [
 #: (1e308); larger entries are refused with a message that names the matrix.
 MAX_MAGNITUDE: float = 1e150
 FEASIBILITY_TOL: float = 1e-9
+
+#: Distance from +-1 within which a relaxed binary factor of a hybrid zonotope counts as
+#: integral in a node's LP point (the branch and bound then closes the node with its
+#: certified bound, which a leaf attains up to the solver's accuracy; soundness does not
+#: depend on it).
+BINARY_TOL: float = 1e-9
 
 #: Radius of unbounded factors up to which certified bounds hold (see module docs).
 UNBOUNDED_RADIUS: float = 1e8

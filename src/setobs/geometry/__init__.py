@@ -2,6 +2,7 @@
 
 from ..lp.factor import EmptinessReport, FactorPolytope, LPResult
 from .box import Box
+from .hybrid import BranchAndBoundResult, HybridEmptiness, HybridZonotope, pwa_reachable_sets
 from .measure import (
     DistanceResult,
     QPResult,
@@ -30,12 +31,15 @@ from .zonotope import ConstrainedZonotope, compiled_set_operations
 
 __all__ = [
     "Box",
+    "BranchAndBoundResult",
     "ConstrainedZonotope",
     "ContainmentResult",
     "DistanceResult",
     "EmptinessReport",
     "FactorPolytope",
     "HRep",
+    "HybridEmptiness",
+    "HybridZonotope",
     "LPResult",
     "QPResult",
     "VolumeResult",
@@ -57,6 +61,7 @@ __all__ = [
     "nearest_point",
     "polygon_2d",
     "pontryagin_difference",
+    "pwa_reachable_sets",
     "quad_map",
     "reduce_exact",
     "reduce_order",

@@ -1084,6 +1084,16 @@ def trusted_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.flo
     return ConstrainedZonotope._trusted(G, c, A, b, h, unbounded_radius, cerr, berr, op=op)
 
 
+def owned_cz(G: NDArray[np.float64], c: NDArray[np.float64], A: NDArray[np.float64],
+             b: NDArray[np.float64], h: NDArray[np.float64],
+             unbounded_radius: float = UNBOUNDED_RADIUS, cerr: NDArray[np.float64] | None = None,
+             berr: NDArray[np.float64] | None = None, op: str = "building a set"
+             ) -> ConstrainedZonotope:
+    """:func:`trusted_cz` for fresh float64 arrays the caller hands over (no other
+    reference to them remains): not copied, made read-only."""
+    return ConstrainedZonotope._owned(G, c, A, b, h, unbounded_radius, cerr, berr, op)
+
+
 def magnitude(Z: ConstrainedZonotope) -> float:
     """A bound on ``max |z|`` over the set without an LP: ``|c| + |G| h`` on the finite
     factors (``inf`` when a factor is unbounded), at least the largest ``|c|``."""

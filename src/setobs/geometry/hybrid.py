@@ -1,0 +1,1153 @@
+"""Hybrid zonotopes (Bird, Pangborn, Jain, Hinrichs 2023) with certified queries.
+
+A hybrid zonotope is the set
+
+.. math::  \\{G_c \\xi_c + G_b \\xi_b + c : A_c \\xi_c + A_b \\xi_b = b,\\
+           |\\xi_{c,j}| \\le h_j,\\ \\xi_b \\in \\{-1, 1\\}^{n_b}\\}
+
+(Bird et al. 2023, Definition 3, with the extended constrained zonotope's factor bounds
+``h``, ``h_j = inf`` allowed, Li-Cong-Dong Definition 2): a union of up to ``2^n_b``
+constrained zonotopes, one per assignment of the binary factors (its *leaves*), written
+with a size that grows linearly where a list of polytopes grows exponentially.
+
+Representation
+--------------
+A :class:`HybridZonotope` holds its *convex relaxation* (the binary factors relaxed to
+``[-1, 1]``), an extended :class:`~setobs.ConstrainedZonotope`, and which of its factors
+are binary. The set operations are the relaxation's exact operations (Scott et al. 2016,
+Sec. 3; Bird et al. 2023, Propositions 1-3: linear map, Minkowski sum, generalised
+intersection and Cartesian product act on the factors as for a constrained zonotope), the
+binary flags following their factors; the rounding bounds of centres and right-hand sides
+(``c_err``, ``b_err``) are carried as for constrained zonotopes.
+
+Certified queries (branch and bound)
+------------------------------------
+A node of the search fixes some binary factors to ``+-1`` and relaxes the rest: it is a
+constrained zonotope (the fixed columns moved into the centre and the right-hand side,
+with their rounding bounded), which contains every leaf below it. Every bound is a
+certified answer of the constrained-zonotope core (:mod:`setobs.lp.factor`):
+
+* *support function* ``max d^T z``: best-first (or depth-first) search; a node is closed
+  when its relaxation is certified empty (pruned), when it is a leaf, or when its LP's
+  maximiser has every free binary at ``+-1`` within :data:`~setobs.tolerances.BINARY_TOL`
+  (the relaxation's value is then attained by a leaf, up to the solver's accuracy); a node
+  whose certified bound does not exceed the largest certified bound of the closed nodes
+  cannot raise the answer and is pruned. The answer is the largest certified bound over
+  the closed nodes and, when a node or time limit stops the search, over the open ones
+  too: **an outer bound whenever the search stops**, with the gap to the best value
+  attained at a leaf (:class:`BranchAndBoundResult`).
+* *emptiness*: depth-first; the set is empty only when every node on the frontier is
+  certified empty (a phase-1 LP's certified violation above the tolerance), non-empty
+  when a leaf is not (its phase-1 point is the witness), undecided when a limit stops
+  the search.
+* *point containment*: the emptiness of ``H cap {x}``.
+* *interval hull*: ``2 n`` support searches.
+
+The bound of a node is valid for every leaf below it because a leaf's factor set is
+the node's factor set with more factors fixed, a subset; so the largest node bound over
+a frontier that covers every leaf bounds the set's support function. Nothing in a bound
+depends on the branching order or on the solver's tolerances.
+
+Unions (a disjunctive formulation)
+----------------------------------
+:meth:`HybridZonotope.from_union` writes ``Z_1 cup ... cup Z_N`` with a selector
+``lam_i = (1 + beta_i) / 2`` per operand (``beta_i`` binary, ``sum beta_i = 2 - N``: one
+selected) and copies of each operand's factors scaled by its selector (Balas 1979,
+"Disjunctive programming"; the sharp unions of Glunt, Robbins, Siefert, Silvestre and
+Pangborn 2025): for a continuous factor ``|xi_j| <= h_j`` the copy ``xt_j`` with two
+slacks ``s1, s2 in [-1, 1]``,
+
+.. math::  \\tfrac{h_j}{2}\\beta_i - \\tilde\\xi_j - h_j s_1 = \\tfrac{h_j}{2},\\qquad
+           \\tfrac{h_j}{2}\\beta_i + \\tilde\\xi_j - h_j s_2 = \\tfrac{h_j}{2},
+
+which say ``|xt_j| <= h_j lam_i`` (their sum is ``beta_i - s1 - s2 = 1``: at ``beta_i = -1``
+both slacks are ``-1`` and ``xt_j = 0``; at ``beta_i = 1``, ``xt_j = -h_j s1`` is free in
+``[-h_j, h_j]``); for an operand's binary factor ``b_j`` the copy ``bt_j`` (binary) with
+``bt_j - beta_i + s = -1``, ``s in [-1, 1]`` (that is, ``(1 + bt_j)/2 <= lam_i``); the
+operand's rows ``A_c xt + A_b bt - ((A_b 1 + b)/2) beta_i = (b - A_b 1)/2`` and its point
+``G_c xt + G_b bt + ((c - G_b 1)/2) beta_i + (c + G_b 1)/2``. With ``lam_i = 1`` these
+are the operand itself (``bt = b``); with ``lam_i = 0`` every copy is zero and the rows
+read ``0 = 0``. For constrained-zonotope operands the relaxation is the convex hull of the
+union (the formulation is sharp), so the search's bounds are as tight as they can be at
+the root. Operands' rounding bounds ``c_err``, ``b_err`` are first turned into bounded
+factors (the certified set they stand for), so that the construction itself is exact but
+for the sums ``G_b 1``, ``A_b 1`` and the union's centre (the centre's and right-hand
+sides' rounding bounded; the rounding of generator and constraint entries is not tracked,
+as in :class:`~setobs.ConstrainedZonotope`). An operand with an unbounded factor is
+refused: a copy of an unbounded factor cannot be forced to zero.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import heapq
+import time
+import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import as_matrix, as_vector, readonly
+from ..exceptions import (
+    ArgumentError,
+    DimensionError,
+    EmptySetError,
+    ImmutableError,
+    InvalidValueError,
+    SolverError,
+    SolverWarning,
+    UnboundedSetError,
+)
+from ..tolerances import BINARY_TOL, FEASIBILITY_TOL, UNBOUNDED_RADIUS
+from ._bounds import cat_err, map_err
+from .box import Box
+from .operations import empty_set
+from .operations import from_vertices as cz_from_vertices
+from .zonotope import (
+    ConstrainedZonotope,
+    factor_polytope,
+    owned_cz,
+    support_point_factors,
+    support_unwarned,
+    trusted_cz,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+
+__all__ = ["NODE_LIMIT", "BranchAndBoundResult", "HybridEmptiness", "HybridZonotope",
+           "pwa_reachable_sets"]
+
+#: Default number of nodes (LPs) a branch-and-bound query may evaluate before it stops
+#: with its certified outer answer and status ``"node_limit"``.
+NODE_LIMIT = 20000
+
+
+@dataclasses.dataclass(frozen=True)
+class BranchAndBoundResult:
+    """A certified support value of a hybrid zonotope from a branch and bound.
+
+    Attributes
+    ----------
+    value : float
+        Certified upper bound of ``max d^T z`` over the set (``+inf`` if unbounded or not
+        certifiably bounded), whatever ``status`` is.
+    attained : float
+        The largest ``d^T z`` at an LP maximiser of a closed leaf (a point of the set up to
+        the solver's accuracy; not certified); ``-inf`` if none was found.
+    gap : float
+        ``value - attained`` (``inf`` when nothing was attained).
+    status : str
+        ``"optimal"`` (every node closed or pruned: ``value`` is the support function
+        up to the LPs' certification gaps), ``"node_limit"`` or ``"time_limit"`` (stopped
+        early: ``value`` is still an outer bound, looser by up to ``gap``).
+    nodes : int
+        Nodes evaluated (one LP each).
+    open_nodes : int
+        Nodes left open when the search stopped.
+    binaries : ndarray or None
+        The binary factors (``+-1``) of the leaf that attained ``attained``.
+    """
+
+    value: float
+    attained: float
+    gap: float
+    status: str
+    nodes: int
+    open_nodes: int
+    binaries: NDArray[np.float64] | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class HybridEmptiness:
+    """Outcome of a hybrid zonotope's emptiness test.
+
+    Attributes
+    ----------
+    empty : bool
+        ``True`` only when certified: every node of a frontier covering all leaves is
+        certified empty (:meth:`~setobs.geometry.FactorPolytope.emptiness`).
+    status : str
+        ``"empty"``, ``"nonempty"`` (a leaf not certified empty: ``witness``) or
+        ``"undecided"`` (a node or time limit stopped the search; ``empty`` is ``False``
+        but not certified).
+    witness : ndarray or None
+        A point of a non-empty leaf (its phase-1 point, within ``tol`` of the normalised
+        constraints).
+    binaries : ndarray or None
+        That leaf's binary factors (``+-1``).
+    nodes : int
+        Nodes evaluated.
+    tol : float
+        The feasibility tolerance used.
+    """
+
+    empty: bool
+    status: str
+    witness: NDArray[np.float64] | None
+    binaries: NDArray[np.float64] | None
+    nodes: int
+    tol: float = FEASIBILITY_TOL
+
+
+def _rebuild(Z: ConstrainedZonotope, binary: NDArray[np.bool_]) -> HybridZonotope:
+    """Unpickling helper of :class:`HybridZonotope`."""
+    return HybridZonotope.from_relaxation(Z, binary)
+
+
+class HybridZonotope:
+    r"""Hybrid zonotope ``{Gc xc + Gb xb + c : Ac xc + Ab xb = b, |xc| <= h, xb in {-1,1}^nb}``.
+
+    Parameters
+    ----------
+    Gc : array_like, shape (n, n_c)
+        Generators of the continuous factors.
+    Gb : array_like, shape (n, n_b)
+        Generators of the binary factors.
+    c : array_like, shape (n,)
+        Centre.
+    Ac : array_like, shape (n_con, n_c), optional
+        Constraint matrix of the continuous factors (default: no constraints).
+    Ab : array_like, shape (n_con, n_b), optional
+        Constraint matrix of the binary factors.
+    b : array_like, shape (n_con,), optional
+        Constraint right-hand side (required with ``Ac`` or ``Ab``).
+    h : array_like, shape (n_c,), optional
+        Bounds of the continuous factors in ``[0, +inf]`` (default: all ones).
+    unbounded_radius : float
+        As for :class:`~setobs.ConstrainedZonotope`.
+
+    Raises
+    ------
+    DimensionError
+        On inconsistent shapes.
+    InvalidValueError
+        On NaN or inf in the data, negative or NaN entries of ``h``.
+    ArgumentError
+        On constraint matrices without ``b`` (or the reverse).
+
+    Notes
+    -----
+    Bird, Pangborn, Jain and Hinrichs (2023), "Hybrid zonotopes: a new set representation
+    for reachability analysis of mixed logical dynamical systems", Automatica 154,
+    Definition 3. The module docstring (:mod:`setobs.geometry.hybrid`) has the
+    representation, the certified branch and bound and the union's construction.
+    Objects are immutable.
+
+    Examples
+    --------
+    Two unit squares, centred at ``-2`` and ``+2`` on the first axis:
+
+    >>> import numpy as np
+    >>> H = HybridZonotope(np.eye(2), [[2.0], [0.0]], [0.0, 0.0])
+    >>> H.contains([0.0, 0.0]), H.contains([2.5, 0.5])
+    (False, True)
+    >>> bool(abs(H.support([1.0, 0.0]) - 3.0) < 1e-9)
+    True
+    """
+
+    __slots__ = ("_Z", "_binary", "_cache")
+    _Z: ConstrainedZonotope
+    _binary: NDArray[np.bool_]
+    _cache: dict
+    __array_ufunc__ = None  # so that ndarray @ H calls H.__rmatmul__
+
+    def __init__(self, Gc: ArrayLike, Gb: ArrayLike, c: ArrayLike, Ac: ArrayLike | None = None,
+                 Ab: ArrayLike | None = None, b: ArrayLike | None = None,
+                 h: ArrayLike | None = None, *,
+                 unbounded_radius: float = UNBOUNDED_RADIUS) -> None:
+        c_a = as_vector("c", c)
+        n = c_a.size
+        Gc_a = np.zeros((n, 0)) if np.size(Gc) == 0 else as_matrix("Gc", Gc, rows=n)
+        Gb_a = np.zeros((n, 0)) if np.size(Gb) == 0 else as_matrix("Gb", Gb, rows=n)
+        ng, nb = Gc_a.shape[1], Gb_a.shape[1]
+        if (Ac is None and Ab is None) != (b is None):
+            raise ArgumentError("Ac/Ab and b must be given together (or all omitted)")
+        if b is None:
+            A = np.zeros((0, ng + nb))
+            b_a = np.zeros(0)
+        else:
+            b_a = as_vector("b", b) if np.size(b) else np.zeros(0)
+            m = b_a.size
+            Ac_a = (np.zeros((m, ng)) if Ac is None or np.size(Ac) == 0
+                    else as_matrix("Ac", Ac, rows=m, cols=ng))
+            Ab_a = (np.zeros((m, nb)) if Ab is None or np.size(Ab) == 0
+                    else as_matrix("Ab", Ab, rows=m, cols=nb))
+            if Ac_a.shape != (m, ng) or Ab_a.shape != (m, nb):
+                raise DimensionError(f"Ac must be {m} x {ng} and Ab {m} x {nb} (b has {m} "
+                                     f"entries), got {Ac_a.shape} and {Ab_a.shape}")
+            A = np.hstack([Ac_a, Ab_a])
+        h_a = np.ones(ng) if h is None else as_vector("h", h, size=ng, allow_inf=True)
+        if (h_a < 0).any():
+            j = int(np.argmax(h_a < 0))
+            raise InvalidValueError(f"h must be nonnegative (h[{j}] = {h_a[j]})")
+        Z = ConstrainedZonotope(np.hstack([Gc_a, Gb_a]), c_a, A, b_a,
+                                np.concatenate([h_a, np.ones(nb)]),
+                                unbounded_radius=unbounded_radius)
+        self._set(Z, np.concatenate([np.zeros(ng, bool), np.ones(nb, bool)]))
+
+    def _set(self, Z: ConstrainedZonotope, binary: NDArray[np.bool_]) -> None:
+        object.__setattr__(self, "_Z", Z)
+        object.__setattr__(self, "_binary", readonly(np.array(binary, dtype=bool)))
+        object.__setattr__(self, "_cache", {})
+
+    @classmethod
+    def from_relaxation(cls, Z: ConstrainedZonotope, binary: ArrayLike) -> HybridZonotope:
+        """The hybrid zonotope whose convex relaxation is ``Z`` with the factors flagged
+        in ``binary`` restricted to ``{-1, 1}``.
+
+        Parameters
+        ----------
+        Z : ConstrainedZonotope
+            The relaxation (a binary factor's bound ``h_j`` must be 1).
+        binary : array_like of bool, shape (Z.n_gen,)
+            Which factors are binary.
+        """
+        if not isinstance(Z, ConstrainedZonotope):
+            raise ArgumentError(f"from_relaxation expects a ConstrainedZonotope, got "
+                                f"{type(Z).__name__}")
+        mask = np.asarray(binary, dtype=bool).reshape(-1)
+        if mask.size != Z.n_gen:
+            raise DimensionError(f"binary must have one flag per factor ({Z.n_gen}), got "
+                                 f"{mask.size}")
+        if (Z.h[mask] != 1.0).any():
+            raise InvalidValueError("a binary factor's bound h_j must be 1 (it takes -1 or 1)")
+        self = object.__new__(cls)
+        self._set(Z, mask)
+        return self
+
+    @classmethod
+    def from_constrained_zonotope(cls, Z: ConstrainedZonotope) -> HybridZonotope:
+        """``Z`` as a hybrid zonotope without binary factors.
+
+        Parameters
+        ----------
+        Z : ConstrainedZonotope
+            The set.
+        """
+        return cls.from_relaxation(Z, np.zeros(Z.n_gen, bool))
+
+    @classmethod
+    def from_union(cls, sets: Sequence[ConstrainedZonotope | HybridZonotope]
+                   ) -> HybridZonotope:
+        """The union of constrained or hybrid zonotopes, exactly (the disjunctive
+        formulation of the module docstring: sharp for constrained zonotopes).
+
+        Parameters
+        ----------
+        sets : sequence of ConstrainedZonotope or HybridZonotope
+            The operands (at least one, of one dimension, every factor bounded).
+
+        Raises
+        ------
+        ArgumentError
+            On an empty sequence, an operand of another type, or an operand with an
+            unbounded factor.
+        DimensionError
+            On operands of different dimensions.
+        """
+        ops = [_as_hybrid(S, "from_union") for S in sets]
+        if not ops:
+            raise ArgumentError("from_union needs at least one set")
+        n = ops[0].dim
+        for i, H in enumerate(ops):
+            if H.dim != n:
+                raise DimensionError(f"union: operand {i} has dimension {H.dim}, operand 0 {n}")
+            if np.isinf(H._Z.h).any():
+                raise ArgumentError(f"union: operand {i} has an unbounded factor (h = inf), "
+                                    f"which the disjunctive construction cannot switch off")
+        if len(ops) == 1:
+            return ops[0]
+        return _union(ops)
+
+    @classmethod
+    def from_vertices(cls, polytopes: Sequence[ArrayLike]) -> HybridZonotope:
+        """The union of polytopes given by their vertices (one array of shape ``(m_i, n)``
+        per polytope; :func:`~setobs.geometry.from_vertices` for each).
+
+        Parameters
+        ----------
+        polytopes : sequence of array_like
+            The polytopes' points, one row per point.
+        """
+        return cls.from_union([cz_from_vertices(V) for V in polytopes])
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise ImmutableError("HybridZonotope is immutable; operations return new objects")
+
+    def __reduce__(self):
+        return (_rebuild, (self._Z, np.array(self._binary)))
+
+    # ------------------------------------------------------------------ data
+    @property
+    def relaxation(self) -> ConstrainedZonotope:
+        """The convex relaxation (binary factors in ``[-1, 1]``): a constrained zonotope
+        that contains the set (its convex hull, for unions of constrained zonotopes)."""
+        return self._Z
+
+    @property
+    def binary(self) -> NDArray[np.bool_]:
+        """Which of the relaxation's factors are binary, shape ``(n_cont + n_bin,)``."""
+        return self._binary
+
+    @property
+    def Gc(self) -> NDArray[np.float64]:
+        """Continuous generators, shape ``(n, n_cont)``."""
+        return readonly(self._Z.G[:, ~self._binary])
+
+    @property
+    def Gb(self) -> NDArray[np.float64]:
+        """Binary generators, shape ``(n, n_bin)``."""
+        return readonly(self._Z.G[:, self._binary])
+
+    @property
+    def Ac(self) -> NDArray[np.float64]:
+        """Constraint matrix of the continuous factors, shape ``(n_con, n_cont)``."""
+        return readonly(self._Z.A[:, ~self._binary])
+
+    @property
+    def Ab(self) -> NDArray[np.float64]:
+        """Constraint matrix of the binary factors, shape ``(n_con, n_bin)``."""
+        return readonly(self._Z.A[:, self._binary])
+
+    @property
+    def c(self) -> NDArray[np.float64]:
+        """Centre, shape ``(n,)``."""
+        return self._Z.c
+
+    @property
+    def b(self) -> NDArray[np.float64]:
+        """Constraint right-hand side, shape ``(n_con,)``."""
+        return self._Z.b
+
+    @property
+    def h(self) -> NDArray[np.float64]:
+        """Bounds of the continuous factors, shape ``(n_cont,)``."""
+        return readonly(self._Z.h[~self._binary])
+
+    @property
+    def dim(self) -> int:
+        """Dimension ``n`` of the ambient space."""
+        return self._Z.dim
+
+    @property
+    def n_cont(self) -> int:
+        """Number of continuous factors."""
+        return int(self._binary.size - self._binary.sum())
+
+    @property
+    def n_bin(self) -> int:
+        """Number of binary factors."""
+        return int(self._binary.sum())
+
+    @property
+    def n_con(self) -> int:
+        """Number of equality constraints."""
+        return self._Z.n_con
+
+    def __repr__(self) -> str:
+        return (f"HybridZonotope(dim={self.dim}, n_cont={self.n_cont}, n_bin={self.n_bin}, "
+                f"n_con={self.n_con})")
+
+    # ------------------------------------------------------------------ exact operations
+    def linear_map(self, M: ArrayLike) -> HybridZonotope:
+        """Image under ``x -> M x`` (Bird et al. 2023, Proposition 1).
+
+        Parameters
+        ----------
+        M : array_like, shape (m, n)
+            The matrix.
+        """
+        return HybridZonotope.from_relaxation(self._Z.linear_map(M), self._binary)
+
+    __rmatmul__ = linear_map
+
+    def __matmul__(self, other: Any) -> HybridZonotope:
+        return NotImplemented
+
+    def minkowski_sum(self, other: HybridZonotope | ConstrainedZonotope | ArrayLike
+                      ) -> HybridZonotope:
+        """Minkowski sum with a hybrid or constrained zonotope or a vector (Bird et al.
+        2023, Proposition 2).
+
+        Parameters
+        ----------
+        other : HybridZonotope, ConstrainedZonotope or array_like, shape (n,)
+            The summand.
+        """
+        if isinstance(other, HybridZonotope | ConstrainedZonotope):
+            o = _as_hybrid(other, "minkowski_sum")
+            return HybridZonotope.from_relaxation(self._Z + o._Z,
+                                                  np.concatenate([self._binary, o._binary]))
+        return HybridZonotope.from_relaxation(self._Z + as_vector("vector", other,
+                                                                  size=self.dim),
+                                              self._binary)
+
+    def __add__(self, other: Any) -> HybridZonotope:
+        if isinstance(other, HybridZonotope | ConstrainedZonotope) or np.ndim(other) == 1:
+            return self.minkowski_sum(other)
+        return NotImplemented
+
+    __radd__ = __add__
+
+    def intersect(self, other: HybridZonotope | ConstrainedZonotope,
+                  R: ArrayLike | None = None) -> HybridZonotope:
+        """Generalised intersection ``{z in self : R z in other}`` (Bird et al. 2023,
+        Proposition 3; ``R`` defaults to the identity).
+
+        Parameters
+        ----------
+        other : HybridZonotope or ConstrainedZonotope
+            The set ``W``.
+        R : array_like, shape (m, n), optional
+            The map (default the identity).
+        """
+        o = _as_hybrid(other, "intersect")
+        return HybridZonotope.from_relaxation(self._Z.intersect(o._Z, R),
+                                              np.concatenate([self._binary, o._binary]))
+
+    def __and__(self, other: Any) -> HybridZonotope:
+        """``H & W``: :meth:`intersect` (exact)."""
+        if isinstance(other, HybridZonotope | ConstrainedZonotope):
+            return self.intersect(other)
+        return NotImplemented
+
+    __rand__ = __and__
+
+    def cartesian(self, other: HybridZonotope | ConstrainedZonotope) -> HybridZonotope:
+        """Cartesian product ``self x other``.
+
+        Parameters
+        ----------
+        other : HybridZonotope or ConstrainedZonotope
+            The second factor.
+        """
+        o = _as_hybrid(other, "cartesian")
+        return HybridZonotope.from_relaxation(self._Z.cartesian(o._Z),
+                                              np.concatenate([self._binary, o._binary]))
+
+    def union(self, *others: HybridZonotope | ConstrainedZonotope) -> HybridZonotope:
+        """``self cup others`` (:meth:`from_union`).
+
+        Parameters
+        ----------
+        *others : HybridZonotope or ConstrainedZonotope
+            The other operands.
+        """
+        return HybridZonotope.from_union([self, *others])
+
+    def __or__(self, other: Any) -> HybridZonotope:
+        """``H | W``: :meth:`union` (exact)."""
+        if isinstance(other, HybridZonotope | ConstrainedZonotope):
+            return self.union(other)
+        return NotImplemented
+
+    __ror__ = __or__
+
+    def project(self, dims: Sequence[int] | NDArray[np.integer]) -> HybridZonotope:
+        """Projection onto the coordinates ``dims`` (in that order).
+
+        Parameters
+        ----------
+        dims : sequence of int
+            Coordinates kept, in this order.
+        """
+        return HybridZonotope.from_relaxation(self._Z.project(dims), self._binary)
+
+    def intersect_halfspace(self, a: ArrayLike, beta: float) -> HybridZonotope:
+        """``{z in H : a^T z <= beta}`` (exact).
+
+        As :func:`~setobs.geometry.intersect_halfspace`, with the lower end of the slack's
+        interval a certified lower bound of ``a^T z`` over the relaxation (valid for the
+        set, which the relaxation contains).
+
+        Parameters
+        ----------
+        a : array_like, shape (n,)
+            Normal.
+        beta : float
+            Offset.
+
+        Raises
+        ------
+        UnboundedSetError
+            If ``a^T z`` is not bounded below on the relaxation.
+        """
+        av = as_vector("a", a, size=self.dim)
+        if not np.isfinite(beta):
+            raise InvalidValueError(f"beta must be finite, got {beta}")
+        try:
+            low = -support_unwarned(self._Z, -av)
+            high = support_unwarned(self._Z, av)
+        except EmptySetError:
+            return self
+        if not np.isfinite(low):
+            raise UnboundedSetError("a^T z is not bounded below on the set's relaxation: the "
+                                    "cut is not representable with bounded slack")
+        if high <= beta:
+            return self
+        if low > beta:
+            return HybridZonotope.from_constrained_zonotope(empty_set(self.dim))
+        # (the interval [low, beta]: its lower end cuts nothing, a^T z >= low on the set)
+        return self.intersect(ConstrainedZonotope.from_box([low], [beta]), av[None, :])
+
+    def intersect_polytope(self, H: ArrayLike, k: ArrayLike) -> HybridZonotope:
+        """``{z in self : H z <= k}``, one half-space at a time (exact).
+
+        Parameters
+        ----------
+        H : array_like, shape (m, n)
+            Normals, one per row.
+        k : array_like, shape (m,)
+            Offsets.
+        """
+        H_a = as_matrix("H", H, cols=self.dim)
+        k_a = as_vector("k", k, size=H_a.shape[0])
+        out = self
+        for row, val in zip(H_a, k_a, strict=True):
+            out = out.intersect_halfspace(row, float(val))
+        return out
+
+    # ------------------------------------------------------------------ nodes
+    def _node(self, cols: NDArray[np.int64], vals: NDArray[np.float64]
+              ) -> tuple[ConstrainedZonotope, NDArray[np.int64]]:
+        """The node that fixes the relaxation's factors ``cols`` to ``vals`` (``+-1``), as
+        a constrained zonotope, and the positions of the free binary factors in it."""
+        Z = self._Z
+        free = self._binary.copy()
+        free[cols] = False
+        if cols.size == 0:
+            return Z, np.flatnonzero(free)
+        keep = np.ones(Z.n_gen, bool)
+        keep[cols] = False
+        n, m = Z.dim, Z.n_con
+        Mc = np.hstack([np.eye(n), Z.G[:, cols]])
+        vc = np.concatenate([Z.c, vals])
+        c = Mc @ vc
+        cerr = map_err(Mc, vc, cat_err(_err(Z.c_err), n, None, cols.size))
+        Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
+        vb = np.concatenate([Z.b, vals])
+        b = Mb @ vb
+        berr = map_err(Mb, vb, cat_err(_err(Z.b_err), m, None, cols.size)) if m else None
+        node = trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, Z.h[keep], Z.unbounded_radius,
+                          cerr, berr, op="fixing binary factors")
+        return node, np.flatnonzero(free[keep])
+
+    def _leaf_values(self, cols, vals, free_root, xi_free) -> NDArray[np.float64]:
+        """The binary factors (relaxation order) of the leaf that fixes ``cols`` to
+        ``vals`` and the free ones to the signs of ``xi_free``."""
+        out = np.zeros(self._Z.n_gen)
+        out[cols] = vals
+        out[free_root] = np.where(xi_free >= 0.0, 1.0, -1.0)
+        return out[self._binary]
+
+    # ------------------------------------------------------------------ certified queries
+    def support_bounds(self, direction: ArrayLike, *, node_limit: int = NODE_LIMIT,
+                       time_limit: float | None = None, search: str = "best"
+                       ) -> BranchAndBoundResult:
+        """Certified support value ``max d^T z`` by branch and bound, with its status.
+
+        Parameters
+        ----------
+        direction : array_like, shape (n,)
+            The direction ``d``.
+        node_limit : int
+            Nodes (LPs) after which the search stops with an outer answer.
+        time_limit : float, optional
+            Seconds after which the search stops with an outer answer.
+        search : {"best", "depth"}
+            Best-first (the open node with the largest bound next) or depth-first.
+
+        Raises
+        ------
+        EmptySetError
+            If the set is certified empty.
+        """
+        d = as_vector("direction", direction, size=self.dim)
+        if search not in ("best", "depth"):
+            raise ArgumentError(f"search must be 'best' or 'depth', got {search!r}")
+        if not (isinstance(node_limit, int | np.integer) and node_limit >= 1):
+            raise InvalidValueError(f"node_limit must be a positive integer, got {node_limit!r}")
+        return _maximize(self, d, int(node_limit), time_limit, search)
+
+    def support(self, direction: ArrayLike) -> float:
+        """Certified support function ``max_{z in H} d^T z`` (``+inf`` if unbounded);
+        :meth:`support_bounds` for the status and the limits.
+
+        Parameters
+        ----------
+        direction : array_like, shape (n,)
+            The direction ``d``.
+
+        Raises
+        ------
+        EmptySetError
+            If the set is certified empty.
+
+        Warns
+        -----
+        SolverWarning
+            If the search stopped at its node limit (the value is then a looser outer
+            bound).
+        """
+        out = self.support_bounds(direction)
+        if out.status != "optimal":
+            warnings.warn(f"the branch and bound stopped ({out.status}); the support value "
+                          f"is an outer bound within {out.gap:.3g} of a leaf's value",
+                          SolverWarning, stacklevel=2)
+        return out.value
+
+    def interval_hull(self, *, node_limit: int = NODE_LIMIT,
+                      time_limit: float | None = None) -> Box:
+        """Certified interval hull (``2 n`` support searches).
+
+        Parameters
+        ----------
+        node_limit : int
+            Nodes per search after which it stops with an outer answer.
+        time_limit : float, optional
+            Seconds per search after which it stops with an outer answer.
+
+        Raises
+        ------
+        EmptySetError
+            If the set is certified empty.
+
+        Warns
+        -----
+        SolverWarning
+            If a search stopped early (the box is then a looser outer bound).
+        """
+        n = self.dim
+        lo, hi = np.empty(n), np.empty(n)
+        early = []
+        for i in range(n):
+            e = np.zeros(n)
+            e[i] = 1.0
+            up = self.support_bounds(e, node_limit=node_limit, time_limit=time_limit)
+            dn = self.support_bounds(-e, node_limit=node_limit, time_limit=time_limit)
+            hi[i], lo[i] = up.value, -dn.value
+            early += [r.gap for r in (up, dn) if r.status != "optimal"]
+        if early:
+            warnings.warn(f"{len(early)} of {2 * n} searches of the interval hull stopped "
+                          f"early; the box is an outer bound (largest gap {max(early):.3g})",
+                          SolverWarning, stacklevel=2)
+        return Box(lo, hi)
+
+    def emptiness(self, tol: float = FEASIBILITY_TOL, *, node_limit: int = NODE_LIMIT,
+                  time_limit: float | None = None) -> HybridEmptiness:
+        """Certified emptiness by a depth-first branch and bound (:class:`HybridEmptiness`).
+
+        Parameters
+        ----------
+        tol : float
+            Feasibility tolerance of the phase-1 LPs (normalised constraint violation).
+        node_limit : int
+            Nodes after which the search stops, undecided.
+        time_limit : float, optional
+            Seconds after which the search stops, undecided.
+        """
+        return _emptiness(self, float(tol), int(node_limit), time_limit)
+
+    def is_empty(self, tol: float = FEASIBILITY_TOL) -> bool:
+        """Whether the set is empty (``True`` certified, as for a constrained zonotope).
+
+        Parameters
+        ----------
+        tol : float
+            Feasibility tolerance (normalised constraint violation).
+
+        Warns
+        -----
+        SolverWarning
+            If the search stopped undecided (``False`` is then not certified).
+        """
+        rep = self.emptiness(tol)
+        if rep.status == "undecided":
+            warnings.warn("the emptiness search stopped at its node limit, undecided; "
+                          "reported non-empty (not certified)", SolverWarning, stacklevel=2)
+        return rep.empty
+
+    def contains(self, x: ArrayLike, tol: float = FEASIBILITY_TOL) -> bool:
+        """Whether ``x`` is in the set up to ``tol`` (``False`` certified: every leaf
+        certified not to contain it).
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            The point.
+        tol : float
+            Feasibility tolerance (normalised constraint violation).
+
+        Warns
+        -----
+        SolverWarning
+            If the search stopped undecided (``True`` is then not certified).
+        """
+        xv = as_vector("x", x, size=self.dim)
+        rep = self.intersect(ConstrainedZonotope.point(xv)).emptiness(tol)
+        if rep.status == "undecided":
+            warnings.warn("the containment search stopped at its node limit, undecided; "
+                          "reported contained (not certified)", SolverWarning, stacklevel=2)
+        return not rep.empty
+
+    def to_constrained_zonotopes(self, tol: float = FEASIBILITY_TOL
+                                 ) -> list[ConstrainedZonotope]:
+        """The leaves not certified empty, each a constrained zonotope (depth-first, a
+        subtree dropped when its relaxation is certified empty; at most ``2^n_bin``).
+
+        Parameters
+        ----------
+        tol : float
+            Feasibility tolerance of the emptiness tests.
+        """
+        out = []
+        stack = [(np.zeros(0, np.int64), np.zeros(0))]
+        bins = np.flatnonzero(self._binary)
+        while stack:
+            cols, vals = stack.pop()
+            Zn, free = self._node(cols, vals)
+            if Zn.n_con and factor_polytope(Zn).emptiness(tol).empty:
+                continue
+            if free.size == 0:
+                out.append(Zn)
+                continue
+            j = bins[~np.isin(bins, cols)][0]
+            for v in (1.0, -1.0):
+                stack.append((np.append(cols, j), np.append(vals, v)))
+        return out
+
+    def plot(self, ax: Axes | None = None, dims: Sequence[int] = (0, 1), **kwargs: Any
+             ) -> list:
+        """Plot the projection of every non-empty leaf onto ``dims``
+        (:meth:`ConstrainedZonotope.plot`); returns the patches.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            The axes (default: the current ones).
+        dims : sequence of int
+            The two coordinates.
+        **kwargs
+            Passed to each leaf's plot.
+        """
+        return [Z.plot(ax=ax, dims=dims, **kwargs) for Z in self.to_constrained_zonotopes()]
+
+
+# ---------------------------------------------------------------------- helpers
+def _err(e: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    return e if np.count_nonzero(e) else None
+
+
+def _as_hybrid(S: Any, what: str) -> HybridZonotope:
+    if isinstance(S, HybridZonotope):
+        return S
+    if isinstance(S, ConstrainedZonotope):
+        return HybridZonotope.from_constrained_zonotope(S)
+    raise ArgumentError(f"{what} expects hybrid or constrained zonotopes, got {type(S).__name__}")
+
+
+def _absorbed(H: HybridZonotope) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """``(G, c, A, b, h, binary)`` of ``H``'s relaxation with its centre's and right-hand
+    side's rounding bounds as bounded continuous factors (the certified set they stand
+    for: ``c + e + G xi`` with ``|e| <= c_err``, ``A xi = b + f`` with ``|f| <= b_err``)."""
+    Z = H.relaxation
+    G, A, h, binary = Z.G, Z.A, Z.h, H.binary
+    ce, be = Z.c_err, Z.b_err
+    ic, ib = np.flatnonzero(ce), np.flatnonzero(be)
+    if ic.size or ib.size:
+        n, m = Z.dim, Z.n_con
+        Gx = np.zeros((n, ic.size + ib.size))
+        Gx[ic, np.arange(ic.size)] = ce[ic]
+        Ax = np.zeros((m, ic.size + ib.size))
+        Ax[ib, ic.size + np.arange(ib.size)] = -be[ib]
+        G, A = np.hstack([G, Gx]), np.hstack([A, Ax])
+        h = np.concatenate([h, np.ones(Gx.shape[1])])
+        binary = np.concatenate([binary, np.zeros(Gx.shape[1], bool)])
+    return G, Z.c, A, Z.b, h, binary
+
+
+def _union(ops: list[HybridZonotope]) -> HybridZonotope:
+    """The disjunctive construction of the module docstring for two or more operands."""
+    N = len(ops)
+    n = ops[0].dim
+    parts = [_absorbed(H) for H in ops]
+    n_fac = N + sum(2 * bn.size for *_, bn in parts)
+    n_row = 1 + sum(A.shape[0] + bn.size for _, _, A, _, _, bn in parts)
+    G = np.zeros((n, n_fac))
+    A = np.zeros((n_row, n_fac))
+    b = np.zeros(n_row)
+    berr = np.zeros(n_row)
+    h = np.ones(n_fac)
+    binary = np.zeros(n_fac, bool)
+    binary[:N] = True  # the selectors beta_i
+    A[n_row - 1, :N] = 1.0  # sum beta_i = 2 - N
+    b[n_row - 1] = 2.0 - N
+    c_terms = []
+    f, r = N, 0  # next factor, next row
+    for i, (Gi, ci, Ai, bi, hi, bn) in enumerate(parts):
+        C, B = np.flatnonzero(~bn), np.flatnonzero(bn)
+        nc, nb, m = C.size, B.size, Ai.shape[0]
+        s1 = f + np.arange(nc)  # xt = h ((beta_i - 1)/2 - s1): the copies, substituted
+        s2 = s1 + nc
+        bt = f + 2 * nc + np.arange(nb)  # the copies of the binary factors
+        tb = bt + nb
+        f += 2 * (nc + nb)
+        binary[bt] = True
+        P = Gi[:, C] * hi[C]  # (G diag(h), and A diag(h): the copies' scaled columns)
+        Q = Ai[:, C] * hi[C]
+        GB, AB = Gi[:, B], Ai[:, B]
+        # the point: -P s1 + G_B bt + ((c - G_B 1 + P 1)/2) beta_i + (c + G_B 1 - P 1)/2
+        G[:, s1] = -P
+        G[:, bt] = GB
+        G[:, i] = 0.5 * (ci - GB.sum(axis=1) + P.sum(axis=1))
+        c_terms.append(np.column_stack([0.5 * ci, 0.5 * GB, -0.5 * P]))
+        # the operand's rows: -Q s1 + A_B bt + ((Q 1 - A_B 1 - b)/2) beta_i
+        #                     = (b - A_B 1 + Q 1)/2
+        ra = r + np.arange(m)
+        A[np.ix_(ra, s1)] = -Q
+        A[np.ix_(ra, bt)] = AB
+        A[ra, i] = 0.5 * (Q.sum(axis=1) - AB.sum(axis=1) - bi)
+        T = np.column_stack([0.5 * bi, -0.5 * AB, 0.5 * Q])
+        one = np.ones(T.shape[1])
+        b[ra] = T @ one
+        if T.shape[1] > 1 and m:
+            berr[ra] = map_err(T, one, None)
+        r += m
+        # |xt_j| <= h_j lam_i: s1 + s2 - beta_i = -1
+        rb = r + np.arange(nc)
+        A[rb, s1] = 1.0
+        A[rb, s2] = 1.0
+        A[rb, i] = -1.0
+        b[rb] = -1.0
+        r += nc
+        # (1 + bt_j)/2 <= lam_i: bt_j - beta_i + t_j = -1
+        rc = r + np.arange(nb)
+        A[rc, bt] = 1.0
+        A[rc, i] = -1.0
+        A[rc, tb] = 1.0
+        b[rc] = -1.0
+        r += nb
+    T = np.hstack(c_terms)
+    one = np.ones(T.shape[1])
+    c = T @ one
+    cerr = map_err(T, one, None)
+    Z = owned_cz(G, c, A, b, h, min(H.relaxation.unbounded_radius for H in ops),
+                   None if cerr is None else _err(cerr), _err(berr), op="union")
+    return HybridZonotope.from_relaxation(Z, binary)
+
+
+def _integral(xi: NDArray[np.float64]) -> bool:
+    return bool((np.abs(np.abs(xi) - 1.0) <= BINARY_TOL).all())
+
+
+def _branch_factor(H: HybridZonotope, cols, xi_free, free_root) -> int:
+    """The free binary factor to branch on: the most fractional in the LP's point (the
+    first free one without a point)."""
+    if xi_free is None or xi_free.size == 0:
+        return int(free_root[0])
+    return int(free_root[int(np.argmin(np.abs(xi_free)))])
+
+
+def _evaluate(H: HybridZonotope, cols, vals, d):
+    """A node's certified support value, its LP maximiser (``None`` if none), the free
+    binary factors (relaxation order and node order); ``None`` if certified empty."""
+    Zn, free = H._node(cols, vals)
+    free_root = np.flatnonzero(H.binary & ~np.isin(np.arange(H.binary.size), cols))
+    try:
+        s, x, xi = support_point_factors(Zn, d)
+    except EmptySetError:
+        return None
+    except UnboundedSetError:
+        return np.inf, None, None, free_root, free
+    except SolverError:
+        try:
+            s = support_unwarned(Zn, d)
+        except EmptySetError:
+            return None
+        return s, None, None, free_root, free
+    return s, x, xi, free_root, free
+
+
+def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
+              ) -> BranchAndBoundResult:
+    t0 = time.perf_counter()
+    best = -np.inf  # the largest certified bound of a closed node
+    attained, leaf = -np.inf, None
+    nodes = 0
+    open_: list = []  # (-bound, count, cols, vals, xi_free, free_root): a heap or a stack
+    count = 0
+
+    def visit(cols, vals) -> None:
+        nonlocal best, attained, leaf, nodes, count
+        nodes += 1
+        ev = _evaluate(H, cols, vals, d)
+        if ev is None:
+            return
+        s, x, xi, free_root, free = ev
+        xi_free = None if xi is None else xi[free]
+        if free_root.size == 0 or (xi_free is not None and _integral(xi_free)):
+            best = max(best, s)
+            if x is not None and float(d @ x) > attained:
+                attained = float(d @ x)
+                leaf = H._leaf_values(cols, vals, free_root,
+                                      xi_free if xi_free is not None else np.zeros(0))
+            return
+        if s <= best:
+            return
+        count += 1
+        item = (-s, count, cols, vals, xi_free, free_root)
+        if search == "best":
+            heapq.heappush(open_, item)
+        else:
+            open_.append(item)
+
+    visit(np.zeros(0, np.int64), np.zeros(0))
+    status = "optimal"
+    while open_:
+        item = heapq.heappop(open_) if search == "best" else open_.pop()
+        neg, _, cols, vals, xi_free, free_root = item
+        if -neg <= best:
+            if search == "best":
+                open_.clear()
+                break
+            continue
+        if nodes >= node_limit or (time_limit is not None
+                                   and time.perf_counter() - t0 > time_limit):
+            open_.append(item)  # (still open; the order no longer matters)
+            status = "node_limit" if nodes >= node_limit else "time_limit"
+            break
+        j = _branch_factor(H, cols, xi_free, free_root)
+        near = 1.0
+        if xi_free is not None and xi_free.size:
+            near = 1.0 if xi_free[int(np.flatnonzero(free_root == j)[0])] >= 0.0 else -1.0
+        for v in (-near, near):  # (depth-first: the nearer child is on top)
+            visit(np.append(cols, j), np.append(vals, v))
+    left = [-item[0] for item in open_ if -item[0] > best]
+    value = max([best, *left])
+    if value == -np.inf:
+        raise EmptySetError("the hybrid zonotope is empty (every node certified empty)")
+    gap = value - attained if np.isfinite(attained) else np.inf
+    return BranchAndBoundResult(value=float(value), attained=float(attained), gap=float(gap),
+                                status=status, nodes=nodes, open_nodes=len(left),
+                                binaries=leaf)
+
+
+def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
+               ) -> HybridEmptiness:
+    t0 = time.perf_counter()
+    stack = [(np.zeros(0, np.int64), np.zeros(0))]
+    nodes = 0
+    while stack:
+        if nodes >= node_limit or (time_limit is not None
+                                   and time.perf_counter() - t0 > time_limit):
+            return HybridEmptiness(False, "undecided", None, None, nodes, tol)
+        cols, vals = stack.pop()
+        nodes += 1
+        Zn, free = H._node(cols, vals)
+        free_root = np.flatnonzero(H.binary & ~np.isin(np.arange(H.binary.size), cols))
+        if Zn.n_con == 0:
+            xi = np.zeros(Zn.n_gen)
+            xi[free] = 1.0
+            return HybridEmptiness(False, "nonempty", Zn.G @ xi + Zn.c,
+                                   H._leaf_values(cols, vals, free_root, xi[free]), nodes, tol)
+        rep = factor_polytope(Zn).emptiness(tol)
+        if rep.empty:
+            continue
+        xi = rep.witness
+        if free.size == 0:
+            w = None if xi is None else Zn.G @ xi + Zn.c
+            return HybridEmptiness(False, "nonempty", w,
+                                   H._leaf_values(cols, vals, free_root, np.zeros(0)),
+                                   nodes, tol)
+        xi_free = None if xi is None else xi[free]
+        if xi_free is not None and _integral(xi_free):
+            # the phase-1 point is a leaf's: try that leaf directly
+            signs = np.where(xi_free >= 0.0, 1.0, -1.0)
+            Zl, _ = H._node(np.concatenate([cols, free_root]), np.concatenate([vals, signs]))
+            nodes += 1
+            lrep = factor_polytope(Zl).emptiness(tol) if Zl.n_con else None
+            if lrep is None or not lrep.empty:
+                w = Zl.c if lrep is None or lrep.witness is None else Zl.G @ lrep.witness + Zl.c
+                return HybridEmptiness(False, "nonempty", w,
+                                       H._leaf_values(cols, vals, free_root, signs), nodes, tol)
+        j = _branch_factor(H, cols, xi_free, free_root)
+        near = 1.0
+        if xi_free is not None:
+            near = 1.0 if xi_free[int(np.flatnonzero(free_root == j)[0])] >= 0.0 else -1.0
+        for v in (-near, near):  # the nearer child on top
+            stack.append((np.append(cols, j), np.append(vals, v)))
+    return HybridEmptiness(True, "empty", None, None, nodes, tol)
+
+
+# ---------------------------------------------------------------------- use
+def pwa_reachable_sets(modes: Sequence[tuple[ConstrainedZonotope, ArrayLike, ArrayLike]],
+                       initial_set: ConstrainedZonotope | HybridZonotope, steps: int, *,
+                       disturbance: ConstrainedZonotope | None = None
+                       ) -> list[HybridZonotope]:
+    """The exact reachable sets of a piecewise-affine system, each one hybrid zonotope.
+
+    The system is ``x+ = A_i x + f_i (+ w)`` for ``x`` in the region ``P_i`` of mode
+    ``i`` (``w`` in ``disturbance`` if given). The graph of the map,
+    ``Psi = union_i {(x, A_i x + f_i) : x in P_i}``, is one hybrid zonotope
+    (:meth:`HybridZonotope.from_union`), and each step is
+    ``X_(k+1) = [0 I] (Psi cap_([I 0]) X_k) (+ W)`` (Bird et al. 2023, Sec. 5: the
+    state-update set), so a step adds ``Psi``'s factors once: the size grows linearly
+    with the horizon, where the list of one set per mode sequence grows as ``N^k``.
+
+    Parameters
+    ----------
+    modes : sequence of (ConstrainedZonotope, array_like, array_like)
+        Per mode its region ``P_i`` (bounded), ``A_i`` of shape ``(n, n)`` and ``f_i`` of
+        shape ``(n,)``.
+    initial_set : ConstrainedZonotope or HybridZonotope
+        ``X_0``.
+    steps : int
+        The horizon ``K`` (``>= 0``).
+    disturbance : ConstrainedZonotope, optional
+        The set of ``w``.
+
+    Returns
+    -------
+    list of HybridZonotope
+        ``[X_0, X_1, ..., X_K]``.
+
+    Notes
+    -----
+    The regions are closed: a state on a boundary shared by two regions has both modes'
+    successors (the union's semantics), a superset of any single-valued choice there.
+    Points outside every region have no successor.
+    """
+    X = _as_hybrid(initial_set, "pwa_reachable_sets")
+    n = X.dim
+    if not modes:
+        raise ArgumentError("pwa_reachable_sets needs at least one mode")
+    if not (isinstance(steps, int | np.integer) and steps >= 0):
+        raise InvalidValueError(f"steps must be a nonnegative integer, got {steps!r}")
+    graphs = []
+    for i, mode in enumerate(modes):
+        if len(mode) != 3:
+            raise ArgumentError(f"mode {i} must be (region, A, f), got {len(mode)} items")
+        P, Ai, fi = mode
+        if not isinstance(P, ConstrainedZonotope):
+            raise ArgumentError(f"mode {i}: the region must be a ConstrainedZonotope, got "
+                                f"{type(P).__name__}")
+        if P.dim != n:
+            raise DimensionError(f"mode {i}: the region has dimension {P.dim}, the state {n}")
+        A_a = as_matrix(f"A of mode {i}", Ai, rows=n, cols=n)
+        f_a = as_vector(f"f of mode {i}", fi, size=n)
+        graphs.append(P.linear_map(np.vstack([np.eye(n), A_a]))
+                      + np.concatenate([np.zeros(n), f_a]))
+    if disturbance is not None and not isinstance(disturbance, ConstrainedZonotope):
+        raise ArgumentError("disturbance must be a ConstrainedZonotope")
+    Psi = HybridZonotope.from_union(graphs)
+    R = np.hstack([np.eye(n), np.zeros((n, n))])
+    out = [X]
+    for _ in range(int(steps)):
+        X = Psi.intersect(X, R).project(np.arange(n, 2 * n))
+        if disturbance is not None:
+            X = X + disturbance
+        out.append(X)
+    return out

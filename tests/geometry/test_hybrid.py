@@ -1,0 +1,343 @@
+"""Hybrid zonotopes against independent oracles: brute-force enumeration of the binary
+assignments (each leaf built here from the data and queried through the constrained
+zonotope's certified queries), pycddlib's vertex enumeration of the leaves in 2-D, and
+points sampled from the operands (soundness of the operations)."""
+
+from __future__ import annotations
+
+import itertools
+import pickle
+
+import numpy as np
+import pytest
+
+import setobs as so
+from setobs.exceptions import (
+    ArgumentError,
+    DimensionError,
+    EmptySetError,
+    ImmutableError,
+    InvalidValueError,
+)
+from setobs.geometry import HybridZonotope, from_vertices, vertices
+
+CZ = so.ConstrainedZonotope
+REL = 1e-9  # (the issue's agreement: 1e-9 of the set's scale)
+
+
+def random_hybrid(rng, n=2, ng=4, nb=3, nc=2, spread=3.0):
+    """A hybrid zonotope with at least one non-empty leaf (``b`` from a feasible point)."""
+    Gc = rng.normal(size=(n, ng))
+    Gb = spread * rng.normal(size=(n, nb))
+    Ac = rng.normal(size=(nc, ng))
+    Ab = rng.normal(size=(nc, nb))
+    xi = rng.uniform(-0.6, 0.6, ng)
+    beta = rng.choice([-1.0, 1.0], nb)
+    b = Ac @ xi + Ab @ beta
+    return HybridZonotope(Gc, Gb, rng.normal(size=n), Ac, Ab, b), (Gc, Gb, Ac, Ab, b)
+
+
+def leaves(H):
+    """Every assignment's constrained zonotope, built from the public data."""
+    out = []
+    for v in itertools.product([-1.0, 1.0], repeat=H.n_bin):
+        v = np.array(v)
+        out.append((v, CZ(H.Gc, H.c + H.Gb @ v, H.Ac, H.b - H.Ab @ v, H.h)))
+    return out
+
+
+def enumerated_support(H, d):
+    """max over the non-empty leaves of their certified support (``-inf``: all empty)."""
+    best = -np.inf
+    for _, L in leaves(H):
+        try:
+            best = max(best, L.support(d))
+        except EmptySetError:
+            pass
+    return best
+
+
+def scale(H):
+    return 1.0 + np.abs(H.c).max() + np.abs(H.Gc).sum() + np.abs(H.Gb).sum()
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_support_and_hull_equal_enumeration(seed):
+    rng = np.random.default_rng(seed)
+    H, _ = random_hybrid(rng, n=3, ng=5, nb=4, nc=2)
+    s = scale(H)
+    for _ in range(4):
+        d = rng.normal(size=3)
+        want = enumerated_support(H, d)
+        for search in ("best", "depth"):
+            got = H.support_bounds(d, search=search)
+            assert got.status == "optimal"
+            assert abs(got.value - want) <= REL * s, (search, got, want)
+            assert got.attained <= got.value
+    box = H.interval_hull()
+    for i in range(3):
+        e = np.eye(3)[i]
+        assert abs(box.hi[i] - enumerated_support(H, e)) <= REL * s
+        assert abs(box.lo[i] + enumerated_support(H, -e)) <= REL * s
+
+
+def test_ten_binary_factors_agree_with_the_1024_leaves():
+    rng = np.random.default_rng(11)
+    H, _ = random_hybrid(rng, n=2, ng=6, nb=10, nc=3, spread=1.0)
+    d = np.array([0.6, -0.8])
+    got = H.support_bounds(d)
+    assert got.status == "optimal"
+    assert abs(got.value - enumerated_support(H, d)) <= REL * scale(H)
+    # the search needs far fewer LPs than the leaves
+    assert got.nodes < 2 ** 10
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_early_stops_are_outer(seed):
+    rng = np.random.default_rng(100 + seed)
+    H, _ = random_hybrid(rng, n=2, ng=4, nb=6, nc=3)
+    d = rng.normal(size=2)
+    # a value the set attains: a leaf's LP maximiser (a point of the leaf)
+    attained = max(float(d @ L.support_point(d)) for _, L in leaves(H) if not L.is_empty())
+    exact = enumerated_support(H, d)
+    for limit in (1, 2, 3, 5):
+        for search in ("best", "depth"):
+            out = H.support_bounds(d, node_limit=limit, search=search)
+            assert out.value >= attained - 1e-12 * scale(H), (limit, search, out)
+            if out.status != "optimal":
+                assert out.value >= exact - REL * scale(H)
+                assert out.gap >= 0.0
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_emptiness_and_containment_equal_enumeration(seed):
+    rng = np.random.default_rng(200 + seed)
+    n, ng, nb, nc = 2, 3, 4, 3
+    Gc, Gb = rng.normal(size=(n, ng)), 2.0 * rng.normal(size=(n, nb))
+    Ac, Ab = rng.normal(size=(nc, ng)), rng.normal(size=(nc, nb))
+    # half of the cases: b at a feasible point; the others random (often every leaf empty)
+    if seed % 2:
+        b = Ac @ rng.uniform(-0.5, 0.5, ng) + Ab @ rng.choice([-1.0, 1.0], nb)
+    else:
+        b = 3.0 * rng.normal(size=nc)
+    H = HybridZonotope(Gc, Gb, np.zeros(n), Ac, Ab, b)
+    L = leaves(H)
+    nonempty = [Z for _, Z in L if not Z.is_empty()]
+    rep = H.emptiness()
+    assert rep.empty == (not nonempty)
+    if rep.empty:
+        with pytest.raises(EmptySetError):
+            H.support([1.0, 0.0])
+    else:
+        # the witness is in some leaf
+        assert any(Z.contains(rep.witness, tol=1e-7) for Z in nonempty)
+    # containment at points of the leaves and at random points
+    pts = [Z.sample(3, rng=rng) for Z in nonempty[:3]]
+    pts.append(rng.normal(scale=3.0, size=(6, n)))
+    for x in np.vstack(pts):
+        want = any(Z.contains(x) for Z in nonempty)
+        assert H.contains(x) == want
+
+
+def test_union_is_the_operands_and_its_relaxation_their_convex_hull():
+    rng = np.random.default_rng(3)
+    ops = [CZ(rng.normal(size=(2, 3)), 4.0 * rng.normal(size=2),
+              rng.normal(size=(1, 3)), rng.uniform(-0.3, 0.3, 1)) for _ in range(5)]
+    U = HybridZonotope.from_union(ops)
+    assert U.n_bin == 5
+    for _ in range(6):
+        d = rng.normal(size=2)
+        want = max(Z.support(d) for Z in ops)
+        assert abs(U.support(d) - want) <= REL * 20
+        # sharp: the relaxation's support is the convex hull's, max over the operands
+        assert abs(U.relaxation.support(d) - want) <= REL * 20
+    for Z in ops:
+        for x in Z.sample(5, rng=rng):
+            assert U.contains(x)
+    for x in rng.normal(scale=6.0, size=(20, 2)):
+        assert U.contains(x) == any(Z.contains(x) for Z in ops)
+    # the leaves: one per operand (the other assignments violate the selector's row)
+    assert len(U.to_constrained_zonotopes()) == 5
+
+
+def test_leaves_of_a_union_of_polygons_have_the_polygons_vertices():
+    """pycddlib's vertex enumeration of each leaf against the polygons given."""
+    rng = np.random.default_rng(4)
+    polys = []
+    for k in range(4):
+        t = np.sort(rng.uniform(0, 2 * np.pi, 5))
+        polys.append(np.column_stack([np.cos(t), np.sin(t)]) + np.array([3.0 * k, (-1) ** k]))
+    U = HybridZonotope.from_vertices(polys)
+    got = [vertices(L) for L in U.to_constrained_zonotopes()]
+    assert len(got) == 4
+    for P in polys:
+        matches = [V for V in got if V.shape == P.shape
+                   and np.abs(np.sort(V, axis=0) - np.sort(P, axis=0)).max() < 1e-7]
+        assert len(matches) == 1
+
+
+def test_union_of_hybrid_zonotopes_enumerates_to_all_their_leaves():
+    rng = np.random.default_rng(5)
+    H1, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
+    H2, _ = random_hybrid(rng, n=2, ng=2, nb=3, nc=2)
+    Z3 = CZ.from_box([5.0, 5.0], [6.0, 7.0])
+    U = H1 | H2 | Z3
+    s = scale(H1) + scale(H2) + 10.0
+    for _ in range(5):
+        d = rng.normal(size=2)
+        want = max(enumerated_support(H1, d), enumerated_support(H2, d), Z3.support(d))
+        assert abs(U.support(d) - want) <= REL * s
+
+
+def test_operations_agree_with_enumeration_of_the_operands():
+    rng = np.random.default_rng(6)
+    H1, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
+    H2, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
+    M = rng.normal(size=(3, 2))
+    L1 = [Z for _, Z in leaves(H1) if not Z.is_empty()]
+    L2 = [Z for _, Z in leaves(H2) if not Z.is_empty()]
+    s = 10 * (scale(H1) + scale(H2))
+    for _ in range(3):
+        d3, d2 = rng.normal(size=3), rng.normal(size=2)
+        assert abs((M @ H1).support(d3) - max((M @ Z).support(d3) for Z in L1)) <= REL * s
+        assert abs((H1 + H2).support(d2)
+                   - max(Z.support(d2) + W.support(d2) for Z in L1 for W in L2)) <= REL * s
+        dd = rng.normal(size=4)
+        assert abs(H1.cartesian(H2).support(dd)
+                   - max(Z.cartesian(W).support(dd) for Z in L1 for W in L2)) <= REL * s
+    B = CZ.from_box([-1.0, -1.0], [1.0, 1.0])
+    cut = H1 & B
+    pairs = [Z & B for Z in L1]
+    live = [Z for Z in pairs if not Z.is_empty()]
+    assert cut.is_empty() == (not live)
+    if live:
+        d2 = rng.normal(size=2)
+        assert abs(cut.support(d2) - max(Z.support(d2) for Z in live)) <= REL * s
+
+
+def test_random_chains_never_lose_a_sampled_point():
+    rng = np.random.default_rng(7)
+    for trial in range(4):
+        ops = [CZ(rng.normal(size=(2, 3)), 3.0 * rng.normal(size=2)) for _ in range(3)]
+        U = HybridZonotope.from_union(ops)
+        W = CZ(0.5 * rng.normal(size=(2, 2)), rng.normal(size=2))
+        M = rng.normal(size=(2, 2))
+        a, beta = rng.normal(size=2), 0.5
+        chain = (M @ (U + W)).intersect_halfspace(a, beta)
+        for _ in range(15):
+            p = ops[rng.integers(3)].sample(1, rng=rng)[0]
+            q = W.sample(1, rng=rng)[0]
+            z = M @ (p + q)
+            if a @ z <= beta - 1e-9:
+                assert chain.contains(z), trial
+        box = chain.interval_hull() if not chain.is_empty() else None
+        if box is not None:
+            # the hull contains the hull of the sampled points that passed the cut
+            assert np.all(box.lo <= box.hi)
+
+
+def test_halfspace_and_polytope_cuts_equal_enumeration():
+    rng = np.random.default_rng(8)
+    polys = [rng.normal(size=(6, 2)) + np.array([4.0 * k, 0.0]) for k in range(3)]
+    U = HybridZonotope.from_vertices(polys)
+    Hm = np.array([[1.0, 0.0], [0.0, 1.0]])
+    k = np.array([5.0, 0.2])
+    cut = U.intersect_polytope(Hm, k)
+    pieces = [from_vertices(P).intersect_polytope(Hm, k) for P in polys]
+    live = [Z for Z in pieces if not Z.is_empty()]
+    for _ in range(4):
+        d = rng.normal(size=2)
+        assert abs(cut.support(d) - max(Z.support(d) for Z in live)) <= 1e-8
+    # a cut that misses everything is empty; one that keeps everything returns the set
+    assert U.intersect_halfspace([1.0, 0.0], -100.0).is_empty()
+    assert U.intersect_halfspace([1.0, 0.0], 100.0) is U
+
+
+def test_bad_input_and_conventions():
+    with pytest.raises(DimensionError, match="Gc"):
+        HybridZonotope(np.eye(3), [[1.0], [0.0]], [0.0, 0.0])
+    with pytest.raises(ArgumentError, match="together"):
+        HybridZonotope(np.eye(2), [[1.0], [0.0]], [0.0, 0.0], Ac=[[1.0, 0.0]])
+    with pytest.raises(DimensionError):
+        HybridZonotope(np.eye(2), [[1.0], [0.0]], [0.0, 0.0], Ac=[[1.0, 0.0, 1.0]], b=[0.0])
+    with pytest.raises(InvalidValueError, match="h must be nonnegative"):
+        HybridZonotope(np.eye(2), [[1.0], [0.0]], [0.0, 0.0], h=[1.0, -1.0])
+    with pytest.raises(ArgumentError, match="at least one"):
+        HybridZonotope.from_union([])
+    with pytest.raises(ArgumentError, match="unbounded"):
+        HybridZonotope.from_union([CZ(np.eye(2), [0.0, 0.0], h=[np.inf, 1.0]),
+                                   CZ.from_box([0, 0], [1, 1])])
+    with pytest.raises(DimensionError, match="dimension"):
+        HybridZonotope.from_union([CZ.from_box([0], [1]), CZ.from_box([0, 0], [1, 1])])
+    with pytest.raises(ArgumentError, match="hybrid or constrained"):
+        HybridZonotope.from_union([np.eye(2)])
+    H = HybridZonotope(np.eye(2), [[2.0], [0.0]], [0.0, 0.0])
+    with pytest.raises(ImmutableError):
+        H.c = np.zeros(2)
+    with pytest.raises(ArgumentError, match="search"):
+        H.support_bounds([1.0, 0.0], search="breadth")
+    with pytest.raises(InvalidValueError, match="node_limit"):
+        H.support_bounds([1.0, 0.0], node_limit=0)
+    H2 = pickle.loads(pickle.dumps(H))
+    assert np.array_equal(H2.Gb, H.Gb) and np.array_equal(H2.binary, H.binary)
+    # unbounded continuous factors are allowed; the support is then +inf where they reach
+    Hu = HybridZonotope(np.eye(2), [[2.0], [0.0]], [0.0, 0.0], h=[np.inf, 1.0])
+    assert Hu.support([1.0, 0.0]) == np.inf
+    assert abs(Hu.support([0.0, 1.0]) - 1.0) < 1e-9
+
+
+def test_pwa_reachable_sets_equal_the_union_over_mode_sequences():
+    """The reachable sets of a two-mode piecewise-affine system (a set that straddles the
+    switching line) against the sets of every mode sequence, propagated one by one."""
+    from setobs.geometry import pwa_reachable_sets
+
+    def rot(t):
+        return np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+
+    P1, P2 = CZ.from_box([-4.0, -4.0], [0.0, 4.0]), CZ.from_box([0.0, -4.0], [4.0, 4.0])
+    modes = [(P1, 0.95 * rot(1.2), [0.4, 0.0]), (P2, 0.9 * rot(-0.9), [-0.5, 0.1])]
+    X0 = CZ.from_box([-1.0, -0.5], [1.0, 0.5])
+    W = CZ.from_box([-0.05, -0.05], [0.05, 0.05])
+    K = 4
+    Xs = pwa_reachable_sets(modes, X0, K, disturbance=W)
+    assert len(Xs) == K + 1
+    # linear growth: each step adds the graph's factors once
+    assert Xs[2].n_bin - Xs[1].n_bin == Xs[4].n_bin - Xs[3].n_bin == 2
+    rng = np.random.default_rng(9)
+    for k in (1, 2, 4):
+        seqs = []
+        for sig in itertools.product(range(2), repeat=k):
+            S = X0
+            for m in sig:
+                P, A, f = modes[m]
+                S = A @ (S & P) + np.asarray(f) + W
+            if not S.is_empty():
+                seqs.append(S)
+        assert len(seqs) >= 2
+        for _ in range(4):
+            d = rng.normal(size=2)
+            want = max(S.support(d) for S in seqs)
+            assert abs(Xs[k].support(d) - want) <= 1e-8, k
+    # a point simulated forward (the truth) is inside
+    x = np.array([0.3, -0.2])
+    for k in range(1, K + 1):
+        m = 0 if x[0] <= 0.0 else 1
+        _, A, f = modes[m]
+        x = A @ x + np.asarray(f) + rng.uniform(-0.05, 0.05, 2)
+        assert Xs[k].contains(x)
+    with pytest.raises(ArgumentError, match="at least one mode"):
+        pwa_reachable_sets([], X0, 2)
+    with pytest.raises(DimensionError):
+        pwa_reachable_sets([(CZ.from_box([0], [1]), [[1.0]], [0.0])], X0, 2)
+    with pytest.raises(InvalidValueError, match="steps"):
+        pwa_reachable_sets(modes, X0, -1)
+
+
+def test_projection_equals_the_leaves_projections():
+    rng = np.random.default_rng(10)
+    H, _ = random_hybrid(rng, n=3, ng=4, nb=3, nc=2)
+    Hp = H.project([2, 0])
+    L = [Z.project([2, 0]) for _, Z in leaves(H) if not Z.is_empty()]
+    for _ in range(3):
+        d = rng.normal(size=2)
+        assert abs(Hp.support(d) - max(Z.support(d) for Z in L)) <= REL * scale(H)
