@@ -107,6 +107,9 @@ def test_early_stops_are_outer(seed):
             if out.status != "optimal":
                 assert out.value >= exact - REL * scale(H)
                 assert out.gap >= 0.0
+    out = H.support_bounds(d, time_limit=1e-9)
+    assert out.value >= exact - REL * scale(H)
+    assert out.status in ("optimal", "time_limit")
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -278,6 +281,12 @@ def test_bad_input_and_conventions():
         H.support_bounds([1.0, 0.0], search="breadth")
     with pytest.raises(InvalidValueError, match="node_limit"):
         H.support_bounds([1.0, 0.0], node_limit=0)
+    with pytest.raises(InvalidValueError, match="time_limit"):
+        H.support_bounds([1.0, 0.0], time_limit=-1.0)
+    with pytest.raises(InvalidValueError, match="tol"):
+        H.emptiness(tol=float("nan"))
+    with pytest.raises(InvalidValueError, match="node_limit"):
+        H.emptiness(node_limit=0)
     H2 = pickle.loads(pickle.dumps(H))
     assert np.array_equal(H2.Gb, H.Gb) and np.array_equal(H2.binary, H.binary)
     # unbounded continuous factors are allowed; the support is then +inf where they reach

@@ -668,8 +668,7 @@ class HybridZonotope:
         d = as_vector("direction", direction, size=self.dim)
         if search not in ("best", "depth"):
             raise ArgumentError(f"search must be 'best' or 'depth', got {search!r}")
-        if not (isinstance(node_limit, int | np.integer) and node_limit >= 1):
-            raise InvalidValueError(f"node_limit must be a positive integer, got {node_limit!r}")
+        _check_limits(node_limit, time_limit)
         return _maximize(self, d, int(node_limit), time_limit, search)
 
     def support(self, direction: ArrayLike) -> float:
@@ -749,6 +748,9 @@ class HybridZonotope:
         time_limit : float, optional
             Seconds after which the search stops, undecided.
         """
+        _check_limits(node_limit, time_limit)
+        if not (np.isfinite(tol) and tol >= 0.0):
+            raise InvalidValueError(f"tol must be a finite nonnegative number, got {tol!r}")
         return _emptiness(self, float(tol), int(node_limit), time_limit)
 
     def is_empty(self, tol: float = FEASIBILITY_TOL) -> bool:
@@ -837,6 +839,14 @@ class HybridZonotope:
 
 
 # ---------------------------------------------------------------------- helpers
+def _check_limits(node_limit: Any, time_limit: Any) -> None:
+    if not (isinstance(node_limit, int | np.integer) and node_limit >= 1):
+        raise InvalidValueError(f"node_limit must be a positive integer, got {node_limit!r}")
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
+        raise InvalidValueError(f"time_limit must be a positive number of seconds or None, "
+                                f"got {time_limit!r}")
+
+
 def _err(e: NDArray[np.float64]) -> NDArray[np.float64] | None:
     return e if np.count_nonzero(e) else None
 

@@ -2,6 +2,7 @@
 
 from ..exceptions import SkipLimitError
 from .calibrate import NoiseCalibration, NoiseTradeoff, calibrate_noise, noise_tradeoff
+from .diagnosis import ModeDiagnosis, diagnose_modes
 from .estimates import PointEstimate, chebyshev_center, interval_center
 from .nonlinear import NonlinearSetObserver
 from .smfdo import (
@@ -18,6 +19,7 @@ from .smfdo import (
 __all__ = [
     "SMFDO",
     "ExistenceError",
+    "ModeDiagnosis",
     "ModelInvalidatedError",
     "ModelInvalidatedWarning",
     "NoiseCalibration",
@@ -31,6 +33,7 @@ __all__ = [
     "SkipLimitError",
     "calibrate_noise",
     "chebyshev_center",
+    "diagnose_modes",
     "interval_center",
     "noise_tradeoff",
 ]
