@@ -22,7 +22,7 @@ from setobs.exceptions import (
 from setobs.geometry import HybridZonotope, from_vertices, vertices
 
 CZ = so.ConstrainedZonotope
-REL = 1e-9  # (the agreement: 1e-9 of the set's scale)
+REL = 1e-9  # (agreement with enumeration: 1e-9 of the set's scale)
 
 
 def random_hybrid(rng, n=2, ng=4, nb=3, nc=2, spread=3.0):

@@ -612,14 +612,16 @@ class HybridZonotope:
 
     # ------------------------------------------------------------------ nodes
     def _node(self, cols: NDArray[np.int64], vals: NDArray[np.float64]
-              ) -> tuple[ConstrainedZonotope, NDArray[np.int64]]:
+              ) -> tuple[ConstrainedZonotope, NDArray[np.int64], NDArray[np.int64]]:
         """The node that fixes the relaxation's factors ``cols`` to ``vals`` (``+-1``), as
-        a constrained zonotope, and the positions of the free binary factors in it."""
+        a constrained zonotope, and the free binary factors' positions in it and in the
+        relaxation (the same factors, in the same order)."""
         Z = self._Z
         free = self._binary.copy()
         free[cols] = False
+        free_root = np.flatnonzero(free)
         if cols.size == 0:
-            return Z, np.flatnonzero(free)
+            return Z, free_root, free_root
         keep = np.ones(Z.n_gen, bool)
         keep[cols] = False
         n, m = Z.dim, Z.n_con
@@ -633,7 +635,7 @@ class HybridZonotope:
         berr = map_err(Mb, vb, cat_err(_err(Z.b_err), m, None, cols.size)) if m else None
         node = trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, Z.h[keep], Z.unbounded_radius,
                           cerr, berr, op="fixing binary factors")
-        return node, np.flatnonzero(free[keep])
+        return node, np.flatnonzero(free[keep]), free_root
 
     def _leaf_values(self, cols, vals, free_root, xi_free) -> NDArray[np.float64]:
         """The binary factors (relaxation order) of the leaf that fixes ``cols`` to
@@ -807,16 +809,15 @@ class HybridZonotope:
         """
         out = []
         stack = [(np.zeros(0, np.int64), np.zeros(0))]
-        bins = np.flatnonzero(self._binary)
         while stack:
             cols, vals = stack.pop()
-            Zn, free = self._node(cols, vals)
+            Zn, _, free_root = self._node(cols, vals)
             if Zn.n_con and factor_polytope(Zn).emptiness(tol).empty:
                 continue
-            if free.size == 0:
+            if free_root.size == 0:
                 out.append(Zn)
                 continue
-            j = bins[~np.isin(bins, cols)][0]
+            j = free_root[0]
             for v in (1.0, -1.0):
                 stack.append((np.append(cols, j), np.append(vals, v)))
         return out
@@ -953,19 +954,20 @@ def _integral(xi: NDArray[np.float64]) -> bool:
     return bool((np.abs(np.abs(xi) - 1.0) <= BINARY_TOL).all())
 
 
-def _branch_factor(H: HybridZonotope, cols, xi_free, free_root) -> int:
-    """The free binary factor to branch on: the most fractional in the LP's point (the
-    first free one without a point)."""
+def _branch_factor(xi_free, free_root) -> tuple[int, float]:
+    """The free binary factor to branch on, the most fractional in the LP's point (the
+    first free one without a point), and the value its point is nearer to (``+1`` without
+    a point)."""
     if xi_free is None or xi_free.size == 0:
-        return int(free_root[0])
-    return int(free_root[int(np.argmin(np.abs(xi_free)))])
+        return int(free_root[0]), 1.0
+    t = int(np.argmin(np.abs(xi_free)))
+    return int(free_root[t]), 1.0 if xi_free[t] >= 0.0 else -1.0
 
 
 def _evaluate(H: HybridZonotope, cols, vals, d):
     """A node's certified support value, its LP maximiser (``None`` if none), the free
     binary factors (relaxation order and node order); ``None`` if certified empty."""
-    Zn, free = H._node(cols, vals)
-    free_root = np.flatnonzero(H.binary & ~np.isin(np.arange(H.binary.size), cols))
+    Zn, free, free_root = H._node(cols, vals)
     try:
         s, x, xi = support_point_factors(Zn, d)
     except EmptySetError:
@@ -1029,10 +1031,7 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
             open_.append(item)  # (still open; the order no longer matters)
             status = "node_limit" if nodes >= node_limit else "time_limit"
             break
-        j = _branch_factor(H, cols, xi_free, free_root)
-        near = 1.0
-        if xi_free is not None and xi_free.size:
-            near = 1.0 if xi_free[int(np.flatnonzero(free_root == j)[0])] >= 0.0 else -1.0
+        j, near = _branch_factor(xi_free, free_root)
         for v in (-near, near):  # (depth-first: the nearer child is on top)
             visit(np.append(cols, j), np.append(vals, v))
     left = [-item[0] for item in open_ if -item[0] > best]
@@ -1056,8 +1055,7 @@ def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
             return HybridEmptiness(False, "undecided", None, None, nodes, tol)
         cols, vals = stack.pop()
         nodes += 1
-        Zn, free = H._node(cols, vals)
-        free_root = np.flatnonzero(H.binary & ~np.isin(np.arange(H.binary.size), cols))
+        Zn, free, free_root = H._node(cols, vals)
         if Zn.n_con == 0:
             xi = np.zeros(Zn.n_gen)
             xi[free] = 1.0
@@ -1076,17 +1074,15 @@ def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
         if xi_free is not None and _integral(xi_free):
             # the phase-1 point is a leaf's: try that leaf directly
             signs = np.where(xi_free >= 0.0, 1.0, -1.0)
-            Zl, _ = H._node(np.concatenate([cols, free_root]), np.concatenate([vals, signs]))
+            Zl, _, _ = H._node(np.concatenate([cols, free_root]),
+                               np.concatenate([vals, signs]))
             nodes += 1
             lrep = factor_polytope(Zl).emptiness(tol) if Zl.n_con else None
             if lrep is None or not lrep.empty:
                 w = Zl.c if lrep is None or lrep.witness is None else Zl.G @ lrep.witness + Zl.c
                 return HybridEmptiness(False, "nonempty", w,
                                        H._leaf_values(cols, vals, free_root, signs), nodes, tol)
-        j = _branch_factor(H, cols, xi_free, free_root)
-        near = 1.0
-        if xi_free is not None:
-            near = 1.0 if xi_free[int(np.flatnonzero(free_root == j)[0])] >= 0.0 else -1.0
+        j, near = _branch_factor(xi_free, free_root)
         for v in (-near, near):  # the nearer child on top
             stack.append((np.append(cols, j), np.append(vals, v)))
     return HybridEmptiness(True, "empty", None, None, nodes, tol)
