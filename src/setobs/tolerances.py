@@ -61,6 +61,7 @@ __all__ = [
     "MISSING_WARN_FRACTION",
     "NEAR_RESONANCE_RTOL",
     "NEWTON_RTOL",
+    "PINNED_FACTOR_RTOL",
     "PONTRYAGIN_MATCH_RTOL",
     "PRIMAL_RESIDUAL_RTOL",
     "PRODUCT_RTOL",
@@ -257,6 +258,11 @@ ELIMINATION_ERR_RTOL: float = 1e-12
 #: Smallest pivot, relative to the largest entry of its row, that
 #: :func:`reduce_exact` eliminates with (partial pivoting).
 ELIMINATION_PIVOT_TOL: float = 1e-3
+#: Half-width of a factor's certified range, relative to its bound, below which
+#: :meth:`HybridZonotope.remove_redundancy <setobs.HybridZonotope.remove_redundancy>`
+#: replaces the factor by the range's centre, the half-width carried in ``c_err`` and
+#: ``b_err`` (outward, so the set still contains the original).
+PINNED_FACTOR_RTOL: float = 1e-11
 
 # ---- studies (setobs.studies.baselines)
 #: Measurement covariance of the Kalman baseline on noise-free scenarios, relative

@@ -350,3 +350,107 @@ def test_projection_equals_the_leaves_projections():
     for _ in range(3):
         d = rng.normal(size=2)
         assert abs(Hp.support(d) - max(Z.support(d) for Z in L)) <= REL * scale(H)
+
+
+def _supports_agree_with_leaves(R, live, rng, dirs=6, tol=1e-8):
+    """``R``'s support equals the max over the constrained zonotopes ``live`` (and is
+    never below it) in random directions."""
+    for _ in range(dirs):
+        d = rng.normal(size=R.dim)
+        want = max(Z.support(d) for Z in live)
+        got = R.support(d)
+        assert got >= want - 1e-12 * (1.0 + abs(want))
+        assert got - want <= tol, (got, want)
+
+
+def test_remove_redundancy_fixes_the_binaries_a_cut_decides():
+    """Four squares in a row, cut at x <= 4.5: the two on the right are gone, so their
+    selectors are fixed (and their copies pinned); the leaves are the two squares left."""
+    rng = np.random.default_rng(31)
+    sets = [CZ.from_box([3.0 * i - 1, -1.0], [3.0 * i + 1, 1.0]) for i in range(4)]
+    H = HybridZonotope.from_union(sets).intersect_halfspace([1.0, 0.0], 4.5)
+    R = H.remove_redundancy()
+    assert R.n_bin == 2 and H.n_bin == 4
+    assert R.n_cont < H.n_cont and R.n_con < H.n_con
+    live = [Z.intersect_halfspace([1.0, 0.0], 4.5) for Z in sets[:2]]
+    _supports_agree_with_leaves(R, live, rng)
+    # the leaves left: the squares at 0 and 3, each a box ([-1, 1] or [2, 4] on x)
+    boxes = sorted((Z.interval_hull().lo[0], Z.interval_hull().hi[0])
+                   for Z in R.to_constrained_zonotopes())
+    assert np.allclose(boxes, [(-1.0, 1.0), (2.0, 4.0)], atol=1e-9)
+    # a cut that leaves one square: no binary left, the set is that square
+    R1 = HybridZonotope.from_union(sets).intersect_halfspace([1.0, 0.0], 1.5).remove_redundancy()
+    assert R1.n_bin == 0
+    assert np.allclose(R1.interval_hull().lo, [-1.0, -1.0], atol=1e-9)
+    assert np.allclose(R1.interval_hull().hi, [1.0, 1.0], atol=1e-9)
+
+
+def test_remove_redundancy_drops_unused_parts_dependent_rows_and_implied_bounds():
+    rng = np.random.default_rng(32)
+    H, (Gc, Gb, Ac, Ab, b) = random_hybrid(rng, n=2, ng=4, nb=3, nc=2)
+    live = [Z for _, Z in leaves(H) if not Z.is_empty()]
+    # a binary factor that appears nowhere, a zero continuous factor, a repeated row
+    # (twice the first), and a continuous factor with a bound the rows imply: x5 = 0.3 x1
+    # in a new row (|x5| <= 0.3 < 1, so its bound is redundant and it is eliminated)
+    n = 2
+    Gc2 = np.hstack([Gc, np.zeros((n, 1)), rng.normal(size=(n, 1))])
+    Gb2 = np.hstack([Gb, rng.normal(size=(n, 1))])  # used in G only: kept (it matters)
+    Gb3 = np.hstack([Gb2, np.zeros((n, 1))])  # nowhere: dropped
+    Ac2 = np.vstack([np.hstack([Ac, np.zeros((2, 2))]), 2.0 * np.hstack([Ac[:1], [[0, 0]]]),
+                     np.hstack([[[0.3, 0, 0, 0]], [[0.0, -1.0]]])])
+    Ab3 = np.vstack([np.hstack([Ab, np.zeros((2, 2))]), np.hstack([2.0 * Ab[:1], [[0, 0]]]),
+                     np.zeros((1, 5))])
+    b3 = np.concatenate([b, 2.0 * b[:1], [0.0]])
+    # (x6 = 0.3 x1 enters G: the set changes, and the oracle below is built from it)
+    H3 = HybridZonotope(Gc2, Gb3, H.c, Ac2, Ab3, b3)
+    R = H3.remove_redundancy()
+    assert R.n_bin == 4  # the unused binary factor is gone, the one in G stays
+    assert R.n_con <= 2  # the repeated row and the implied row are gone
+    assert R.n_cont <= 4  # the zero factor and the eliminated one
+    live3 = [Z for _, Z in leaves(H3) if not Z.is_empty()]
+    assert len(live3) >= 2
+    _supports_agree_with_leaves(R, live3, rng)
+    # and the untouched random set keeps its support
+    _supports_agree_with_leaves(H.remove_redundancy(), live, rng)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_remove_redundancy_keeps_the_leaves_of_random_sets(seed):
+    rng = np.random.default_rng(400 + seed)
+    H, _ = random_hybrid(rng, n=2, ng=4, nb=5, nc=3)
+    # cut through the set so that some assignments die
+    d0 = rng.normal(size=2)
+    H = H.intersect_halfspace(d0, 0.5 * (H.support(d0) - H.support(-d0)))
+    live = [Z for _, Z in leaves(H) if not Z.is_empty()]
+    R = H.remove_redundancy()
+    assert R.n_bin <= H.n_bin and R.n_con <= H.n_con
+    _supports_agree_with_leaves(R, live, rng, tol=REL * scale(H))
+    got = [Z for Z in R.to_constrained_zonotopes() if not Z.is_empty()]
+    assert len(got) == len(live)  # (the fixed binaries removed only empty leaves)
+    for x in np.vstack([Z.sample(3, rng=rng) for Z in live]):
+        assert R.contains(x, tol=1e-7)
+
+
+def test_remove_redundancy_of_an_empty_set_is_the_empty_set():
+    sets = [CZ.from_box([3.0 * i - 1, -1.0], [3.0 * i + 1, 1.0]) for i in range(3)]
+    U = HybridZonotope.from_union(sets)
+    # each cut keeps the relaxation (the convex hull) but no square: x in [1.5, 1.8]
+    H = U.intersect_halfspace([1.0, 0.0], 1.8).intersect_halfspace([-1.0, 0.0], -1.5)
+    assert H.is_empty()
+    R = H.remove_redundancy()
+    assert R.is_empty() and R.n_bin == 0
+
+
+def test_a_pinned_factor_keeps_its_range_outward():
+    """``x2 + x3 = 2 - 1e-12`` with ``|x2|, |x3| <= 1`` pins both to ``[1 - 1e-12, 1]`` (at
+    their bounds, so they cannot be eliminated) while ``x2``'s generator is ``1e6``: the
+    set is ``[-1, 1] + 1e6 [1 - 1e-12, 1] + {-2, 2}`` (closed form), and the reduced set's
+    supports must reach its ends (the pinned range carried in the centre's error)."""
+    delta = 1e-12
+    H = HybridZonotope([[1.0, 1e6, 0.0]], [[2.0]], [0.0], [[0.0, 1.0, 1.0]], [[0.0]],
+                       [2.0 - delta])
+    R = H.remove_redundancy()
+    assert (R.n_cont, R.n_con, R.n_bin) == (1, 0, 1)
+    hi, lo = 1.0 + 1e6 + 2.0, -1.0 + 1e6 * (1.0 - delta) - 2.0
+    assert hi <= R.support([1.0]) <= hi + 1e-6
+    assert -lo <= R.support([-1.0]) <= -lo + 1e-6

@@ -1,12 +1,13 @@
 """A randomized soundness campaign for hybrid zonotopes: run with ``pytest -m slow``.
 
 Random chains of operations (union, linear map, Minkowski sum, generalised intersection,
-Cartesian product and projection, half-space cut) on random constrained and hybrid
-zonotopes, with points sampled from the operands carried through each operation by the
-operation's own definition (the image, the sum, the pair; a cut keeps the points it
-keeps). At the end every carried point must be in the set (``contains``), below every
-certified support value (finished or stopped at a node limit) and inside the certified
-interval hull: the set operations lose no point and the queries' bounds are outer.
+Cartesian product and projection, half-space cut, redundancy removal) on random
+constrained and hybrid zonotopes, with points sampled from the operands carried through
+each operation by the operation's own definition (the image, the sum, the pair; a cut
+keeps the points it keeps). At the end every carried point must be in the set
+(``contains``), below every certified support value (finished or stopped at a node
+limit) and inside the certified interval hull: the set operations lose no point and the
+queries' bounds are outer.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ def chain(rng):
     n = int(rng.integers(1, 4))
     H, P = operand(rng, n)
     for _ in range(int(rng.integers(2, 5))):
-        op = rng.choice(["union", "map", "sum", "intersect", "product", "cut"])
+        op = rng.choice(["union", "map", "sum", "intersect", "product", "cut", "reduce"])
         if op == "union":
             H2, P2 = operand(rng, H.dim)
             H, P = H | H2, np.vstack([P, P2])
@@ -60,6 +61,8 @@ def chain(rng):
             H = H.cartesian(H2)
             P = np.hstack([P, P2[rng.integers(len(P2), size=len(P))]])
             H, P = H.project(np.arange(H.dim)[::-1]), P[:, ::-1]
+        elif op == "reduce":
+            H = H.remove_redundancy()
         else:
             a = rng.normal(size=H.dim)
             beta = float(np.median(P @ a))

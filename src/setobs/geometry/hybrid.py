@@ -100,11 +100,13 @@ from ..exceptions import (
     SolverWarning,
     UnboundedSetError,
 )
-from ..tolerances import BINARY_TOL, FEASIBILITY_TOL, UNBOUNDED_RADIUS
+from ..tolerances import BINARY_TOL, FEASIBILITY_TOL, UNBOUNDED_RADIUS, ZERO_TOL
 from ._bounds import cat_err, map_err
 from .box import Box
 from .operations import empty_set
 from .operations import from_vertices as cz_from_vertices
+from .reduction import reduce_exact_among
+from .reduction import remove_redundancy as cz_remove_redundancy
 from .zonotope import (
     ConstrainedZonotope,
     factor_polytope,
@@ -609,6 +611,91 @@ class HybridZonotope:
         for row, val in zip(H_a, k_a, strict=True):
             out = out.intersect_halfspace(row, float(val))
         return out
+
+    def remove_redundancy(self, tol: float = ZERO_TOL) -> HybridZonotope:
+        """The same set with fewer factors and constraints (nothing approximated).
+
+        Each step is decided by certified LP bounds on the convex relaxation; where a
+        bound does not decide, the factor or row stays.
+
+        1. **Fixed binary factors.** For each binary factor in a constraint, certified
+           bounds ``[l_j, u_j]`` of it over the relaxation's factor polytope (two LPs).
+           ``u_j < 1`` says no point of the relaxation, so none of the set, has
+           ``xb_j = 1``: every leaf has ``xb_j = -1``, and the factor is fixed there
+           (moved into the centre and the right-hand side, the rounding bounded, as at a
+           node of the branch and bound); ``l_j > -1`` likewise. Repeated while a factor
+           is fixed (the relaxation shrinks). A set whose relaxation is certified empty,
+           or with a factor that can be neither, is empty.
+        2. **Implied bounds of continuous factors**, eliminated with a constraint row
+           (:func:`~setobs.geometry.reduce_exact`, steps 1-2, on the continuous factors
+           only): a bound the relaxation's constraints imply is implied in every leaf
+           (a leaf's factor set is the relaxation's with the binaries fixed), and the
+           substitution of an eliminated factor is exact for every assignment of the
+           binaries. Binary factors are never eliminated. A continuous factor whose
+           certified range is a point (to :data:`~setobs.tolerances.PINNED_FACTOR_RTOL`
+           of its bound: a fixed binary's copies in a union) is replaced by that point,
+           the range's half-width carried outward in ``c_err`` and ``b_err``.
+        3. **Unused parts**: factors with zero columns in both ``G`` and ``A`` (binary
+           ones too: their value changes nothing), ``h_j = 0``, zero rows.
+        4. **Dependent rows** of ``[A | b]`` (:func:`~setobs.geometry.remove_redundancy`,
+           relative rank tolerance ``tol``; a row that is a combination of the others
+           holds for every assignment of the binaries).
+
+        Parameters
+        ----------
+        tol : float
+            Relative rank tolerance of step 4.
+
+        Returns
+        -------
+        HybridZonotope
+            The same set (up to the rounding of the eliminated matrices, as in every set
+            operation; step 4 as :func:`~setobs.geometry.remove_redundancy`), or
+            :func:`~setobs.geometry.empty_set` when it is certified empty.
+
+        Notes
+        -----
+        Cost: two LPs per binary factor in a constraint per round of step 1, two per
+        bounded continuous factor in a constraint in step 2. Bird et al. (2023) remove
+        redundancy from the structure of a union or of a reachability step; this
+        removal needs no structure, only the relaxation's LPs, so it also finds the
+        binary factors that a cut or an intersection has fixed (for a reachable set, the
+        modes no trajectory can take).
+        """
+        H = self
+        while True:
+            Z, binary = H._Z, H._binary
+            cand = np.flatnonzero(binary & Z.A.any(axis=0)) if Z.n_con else np.zeros(0, int)
+            if not cand.size:
+                break
+            try:
+                fp = factor_polytope(Z)
+                cols, vals = [], []
+                for j in cand:
+                    e = np.zeros(Z.n_gen)
+                    e[j] = 1.0
+                    lo, hi = fp.minimize(e).bound, -fp.minimize(-e).bound
+                    if hi < 1.0 and lo > -1.0:
+                        raise EmptySetError("no assignment of a binary factor is feasible")
+                    if hi < 1.0 or lo > -1.0:
+                        cols.append(j)
+                        vals.append(-1.0 if hi < 1.0 else 1.0)
+            except EmptySetError:
+                return HybridZonotope.from_constrained_zonotope(empty_set(self.dim))
+            if not cols:
+                break
+            c_a = np.array(cols, dtype=np.int64)
+            node, _, _ = H._node(c_a, np.array(vals))
+            H = HybridZonotope.from_relaxation(node, np.delete(binary, c_a))
+        try:
+            Z, pos = reduce_exact_among(H._Z, ~H._binary, pin=True)
+        except EmptySetError:
+            return HybridZonotope.from_constrained_zonotope(empty_set(self.dim))
+        binary = H._binary[pos]
+        R = cz_remove_redundancy(Z, tol)
+        if R.n_gen == Z.n_gen:  # (the factors are all used after step 3: only rows go)
+            Z = R
+        return HybridZonotope.from_relaxation(Z, binary)
 
     # ------------------------------------------------------------------ nodes
     def _node(self, cols: NDArray[np.int64], vals: NDArray[np.float64]

@@ -38,6 +38,7 @@ from ..lp.factor import COMPILED_MAX_ROWS
 from ..tolerances import (
     ELIMINATION_ERR_RTOL,
     ELIMINATION_PIVOT_TOL,
+    PINNED_FACTOR_RTOL,
     REDUNDANT_BOUND_MARGIN,
     ZERO_TOL,
 )
@@ -219,9 +220,10 @@ def reduce_order(Z: ConstrainedZonotope, max_generators: int) -> ConstrainedZono
     return trusted_cz(G, Z.c, A, Z.b, h, Z.unbounded_radius, Z.c_err, Z.b_err)
 
 
-def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_]
+def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_], both: bool = False
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Certified ``[lo_j, hi_j]`` of the factors ``cols`` over the factor polytope."""
+    """Certified ``[lo_j, hi_j]`` of the factors ``cols`` over the factor polytope (``hi_j``
+    left at ``inf`` where ``lo_j`` reaches the bound ``-h_j``, unless ``both``)."""
     fp = factor_polytope(Z)
     lo = np.full(cols.size, -np.inf)
     hi = np.full(cols.size, np.inf)
@@ -233,7 +235,7 @@ def _factor_ranges(Z: ConstrainedZonotope, cols: NDArray[np.int_]
     for t, j in enumerate(cols):
         e[j] = 1.0
         lo[t] = fast[2 * t] if ok[2 * t] else fp.minimize(e).bound
-        if lo[t] > -Z.h[j]:  # otherwise the bound is active: no need for the other side
+        if both or lo[t] > -Z.h[j]:  # (else the bound is active: the other side not needed)
             hi[t] = -fast[2 * t + 1] if ok[2 * t + 1] else -fp.minimize(-e).bound
         e[j] = 0.0
     return lo, hi
@@ -313,34 +315,70 @@ def reduce_exact(Z: ConstrainedZonotope) -> ConstrainedZonotope:
     >>> (R.n_gen, R.n_con)
     (2, 0)
     """
+    return reduce_exact_among(Z, np.ones(Z.n_gen, dtype=bool))[0]
+
+
+def reduce_exact_among(Z: ConstrainedZonotope, eligible: NDArray[np.bool_],
+                       pin: bool = False) -> tuple[ConstrainedZonotope, NDArray[np.int64]]:
+    """:func:`reduce_exact` where only the factors ``eligible`` may lose their bound and be
+    eliminated (the others are kept unless unused), and the positions in ``Z`` of the
+    factors that remain, in their new order (package-internal: a hybrid zonotope's binary
+    factors are never eliminated, and their flags follow the kept positions).
+
+    With ``pin``, an eligible factor that keeps its bound (one end of its range reaches
+    it, so it cannot be eliminated) and whose certified range ``[lo_j, hi_j]`` has a
+    half-width ``r_j`` of at most :data:`PINNED_FACTOR_RTOL` ``h_j`` is *pinned*: replaced
+    by the range's centre ``m_j`` (moved into ``c`` and ``b``), ``|G_j| r_j`` and
+    ``|A_j| r_j`` and the rounding added to ``c_err`` and ``b_err``, so the set it
+    stands for still contains ``Z`` (a constraint that forces a factor to one value, as
+    a union's selector does to a dropped operand's copies, is certified to within the
+    LP's accuracy, never exactly)."""
     G, c, A, b, h = Z.G.copy(), Z.c.copy(), Z.A.copy(), Z.b.copy(), Z.h.copy()
     cerr, berr = Z.c_err.copy(), Z.b_err.copy()
     # 1. implied bounds (certified): such factors become free to eliminate; their
     # bounds h stay (exact either way, and bounded factors keep the LPs well posed)
-    free = np.isinf(h)
+    free = np.isinf(h) & eligible
     if A.shape[0]:
-        cand = np.flatnonzero(np.isfinite(h) & (h > 0) & A.any(axis=0))
+        cand = np.flatnonzero(np.isfinite(h) & (h > 0) & A.any(axis=0) & eligible)
         if cand.size:
-            lo, hi = _factor_ranges(Z, cand)
+            lo, hi = _factor_ranges(Z, cand, both=pin)
             free[cand] = (lo > -h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN)) & \
                 (hi < h[cand] * (1.0 - REDUNDANT_BOUND_MARGIN))
+            if pin:
+                m, r = box_center_radius(np.maximum(lo, -h[cand]), np.minimum(hi, h[cand]))
+                sel = (r <= PINNED_FACTOR_RTOL * h[cand]) & ~free[cand]
+                P, mP, rP = cand[sel], m[sel], r[sel]
+                if P.size:
+                    g = gamma(P.size + 2) * (1.0 + gamma(P.size + 3))
+                    GP, AP = G[:, P], A[:, P]
+                    cerr = cerr + np.abs(GP) @ rP + g * (np.abs(c) + np.abs(GP) @ np.abs(mP))
+                    berr = berr + np.abs(AP) @ rP + g * (np.abs(b) + np.abs(AP) @ np.abs(mP))
+                    c = c + GP @ mP
+                    b = b - AP @ mP
+                    G[:, P] = 0.0
+                    A[:, P] = 0.0
+                    h[P] = 0.0
+                    free[P] = False
         elif Z.is_empty():  # no LP was needed; still decide emptiness
             raise EmptySetError("the set is empty")
     # 2. eliminate free factors with constraint rows, while the tracked rounding
     # of c and b stays within its budget; 3. drop the unused parts
     return _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, free,
-                               _budgets(G, c, A, b, h, cerr, berr))
+                               _budgets(G, c, A, b, h, cerr, berr), tracked=True)
 
 
-def _eliminate_and_trim(Z: ConstrainedZonotope, G, c, A, b, h, cerr, berr, free, budgets
-                        ) -> ConstrainedZonotope:
+def _eliminate_and_trim(Z: ConstrainedZonotope, G, c, A, b, h, cerr, berr, free, budgets,
+                        tracked: bool = False):
     """:func:`_eliminate_free` on the factors ``free``, then drop the exactly zero rows and
     the unused factors (``h = 0``, or zero columns in ``G`` and ``A``): the set ``Z``'s
-    data after those exact steps, as a set."""
-    G, c, A, b, h, cerr, berr, _ = _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets)
+    data after those exact steps, as a set (and, ``tracked``, the kept factors' positions
+    in ``Z``)."""
+    G, c, A, b, h, cerr, berr, _, pos = _eliminate_free(G, c, A, b, h, cerr, berr, free,
+                                                        budgets)
     A, b, berr = _drop_zero_rows(A, b, berr)
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
-    return trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius, cerr, berr)
+    out = trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius, cerr, berr)
+    return (out, pos[keep]) if tracked else out
 
 
 def _drop_zero_rows(A, b, berr):
@@ -376,11 +414,13 @@ def _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets, max_steps: int | N
     :data:`ELIMINATION_PIVOT_TOL` of its row), carrying the rounding of ``c``
     and ``b`` (and the uncertainty of the pivot row) into ``cerr`` and
     ``berr``; it stops before that rounding exceeds ``budgets``. Returns the
-    new arrays and the number of steps taken.
+    new arrays, the number of steps taken and the remaining factors' positions
+    in the given ones.
     """
     c_budget, b_budget = budgets
     g2 = 2.0 * gamma(4)
     steps = 0
+    pos = np.arange(G.shape[1])
     while A.shape[0] and (max_steps is None or steps < max_steps):
         unb = np.flatnonzero(free)
         if not unb.size:
@@ -412,9 +452,9 @@ def _eliminate_free(G, c, A, b, h, cerr, berr, free, budgets, max_steps: int | N
         A = A - np.outer(col, ai)
         keep_c = np.arange(G.shape[1]) != j
         G, A, h, free = G[:, keep_c], A[keep_r][:, keep_c], h[keep_c], free[keep_c]
-        b, berr = b[keep_r], berr[keep_r]
+        b, berr, pos = b[keep_r], berr[keep_r], pos[keep_c]
         steps += 1
-    return G, c, A, b, h, cerr, berr, steps
+    return G, c, A, b, h, cerr, berr, steps, pos
 
 
 def relaxed_overshoots(Z: ConstrainedZonotope, cand: ArrayLike) -> NDArray[np.float64]:
@@ -888,8 +928,8 @@ def _drop_one(G, c, A, b, h, cerr, berr, j: int, budgets: tuple[float, float]):
     hj[j] = np.inf
     free = np.zeros(h.size, dtype=bool)
     free[j] = True
-    G, c, A, b, h, cerr, berr, steps = _eliminate_free(G, c, A, b, hj, cerr, berr, free,
-                                                       budgets, max_steps=1)
+    G, c, A, b, h, cerr, berr, steps, _ = _eliminate_free(G, c, A, b, hj, cerr, berr, free,
+                                                          budgets, max_steps=1)
     if not steps:
         return None
     A, b, berr = _drop_zero_rows(A, b, berr)
