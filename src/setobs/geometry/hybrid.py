@@ -89,6 +89,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._lazy import lazy_module
+from .._rounding import UNIT_ROUNDOFF, gamma, round_up
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
     ArgumentError,
@@ -100,7 +102,15 @@ from ..exceptions import (
     SolverWarning,
     UnboundedSetError,
 )
-from ..tolerances import BINARY_TOL, FEASIBILITY_TOL, UNBOUNDED_RADIUS, ZERO_TOL
+from ..lp import highs
+from ..lp.fastlp import FixedStructureLP
+from ..tolerances import (
+    BINARY_TOL,
+    FEASIBILITY_TOL,
+    RELAXED_EXACT_GAP,
+    UNBOUNDED_RADIUS,
+    ZERO_TOL,
+)
 from ._bounds import cat_err, map_err
 from .box import Box
 from .operations import empty_set
@@ -119,12 +129,20 @@ from .zonotope import (
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
+sparse = lazy_module("scipy.sparse")
+_certificate = lazy_module("setobs.lp.certificate")
+_simplex = lazy_module("setobs.lp._simplex")
+
 __all__ = ["NODE_LIMIT", "BranchAndBoundResult", "HybridEmptiness", "HybridZonotope",
            "pwa_reachable_sets"]
 
 #: Default number of nodes (LPs) a branch-and-bound query may evaluate before it stops
 #: with its certified outer answer and status ``"node_limit"``.
 NODE_LIMIT = 20000
+
+#: Most constraint rows for which the branch and bound solves its nodes by the compiled
+#: dual simplex (one warm state per search); above, one HiGHS model per search.
+NODE_COMPILED_MAX_ROWS = 128
 
 
 @dataclasses.dataclass(frozen=True)
@@ -1051,6 +1069,142 @@ def _branch_factor(xi_free, free_root) -> tuple[int, float]:
     return int(free_root[t]), 1.0 if xi_free[t] >= 0.0 else -1.0
 
 
+class _NodeLP:
+    """The support LPs of a search's nodes in direction ``d``, on one warm model.
+
+    A node that fixes the binary factors ``cols`` to ``vals`` is the relaxation's factor
+    set with those factors' bounds set to zero and their columns moved into the centre
+    and the right-hand side (``c + G_cols vals``, ``b - A_cols vals``, the rounding
+    bounded by :func:`~setobs.geometry._bounds.map_err`, as :meth:`HybridZonotope._node`
+    does): the constraint matrix and the objective stay the same at every node, only
+    ``b`` and the bounds change. So one model serves the whole search: the compiled dual
+    simplex of :class:`~setobs.lp.fastlp.FixedStructureLP` (up to
+    :data:`NODE_COMPILED_MAX_ROWS` rows; a basis that was optimal stays dual feasible for
+    any ``b`` and bounds, so a node costs a few pivots from the last one), or above that
+    one HiGHS model whose column and row bounds change, started from the parent's basis.
+
+    Each bound is certified like the core's (the one certificate over the node's data,
+    with the rounding of ``G^T d`` and of the node's ``b`` covered); a node the model
+    does not decide (not optimal, a loose certificate) returns ``None``, and the search
+    evaluates it on its own constrained zonotope through the core's retry ladder. A node
+    the compiled model finds infeasible is certified empty by the compiled phase-1 test
+    of :meth:`~setobs.lp.factor.FactorPolytope.emptiness` (the same verdict at the same
+    tolerance), else handed to the ladder too."""
+
+    def __init__(self, H: HybridZonotope, d: NDArray[np.float64], tol: float) -> None:
+        Z = H._Z
+        self.Z, self.tol = Z, tol
+        n, m = Z.dim, Z.n_con
+        self.bins = np.flatnonzero(H._binary)
+        self.w = np.ascontiguousarray(-(Z.G.T @ d))
+        self.w_err = 2.0 * gamma(n + 1) * (np.abs(Z.G).T @ np.abs(d))
+        self.d, self.absd = d, np.abs(d)
+        self.cerr0 = _err(Z.c_err)
+        self.berr0 = _err(Z.b_err)
+        self.compiled = m <= NODE_COMPILED_MAX_ROWS
+        if self.compiled:
+            self.A = np.ascontiguousarray(Z.A)
+            self.lp = FixedStructureLP.bounded(self.A, self.w[None, :])
+            self.state = self.lp.new_state()
+            self.ok = self.lp.usable
+            self.hext = np.concatenate([Z.h, np.zeros(m)])
+        else:
+            self.As = sparse.csc_array(Z.A)
+            self.hs = highs.new_model()
+            wmax = float(np.abs(self.w).max(initial=0.0))
+            self.scale = float(np.ldexp(1.0, np.frexp(wmax)[1])) if wmax > 0.0 else 1.0
+            self.ok = highs.pass_csc(self.hs, m, self.w / self.scale, -Z.h, Z.h, Z.b, Z.b,
+                                     self.As.indptr, self.As.indices, self.As.data)
+            self.csc = (self.As.indptr.astype(np.int64), self.As.indices.astype(np.int64),
+                        self.As.data)
+
+    def _data(self, cols, vals):
+        """The node's ``c``, ``c_err``, ``b``, ``b_err`` and bounds ``h``."""
+        Z = self.Z
+        if cols.size == 0:
+            return Z.c, Z.c_err, Z.b, Z.b_err, Z.h
+        n, m = Z.dim, Z.n_con
+        Mc = np.hstack([np.eye(n), Z.G[:, cols]])
+        vc = np.concatenate([Z.c, vals])
+        cerr = map_err(Mc, vc, cat_err(self.cerr0, n, None, cols.size))
+        Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
+        vb = np.concatenate([Z.b, vals])
+        berr = map_err(Mb, vb, cat_err(self.berr0, m, None, cols.size))
+        h = Z.h.copy()
+        h[cols] = 0.0
+        return Mc @ vc, cerr, Mb @ vb, berr, h
+
+    def _value(self, bound: float, h, c, cerr) -> float:
+        """The certified support value from a certified ``min w^T xi`` over the node (``w``
+        exact): the rounding of ``w`` (``w_err^T h``) and of ``d^T c`` added outward."""
+        n = self.Z.dim
+        werr = float(self.w_err @ h) * (1.0 + gamma(h.size + 1))
+        dc = float(self.d @ c)
+        err = 2.0 * gamma(n + 1) * float(self.absd @ np.abs(c)) + \
+            float(self.absd @ cerr) * (1.0 + gamma(n + 1))
+        sv = -bound + werr + dc
+        return round_up(sv + err + UNIT_ROUNDOFF * abs(sv))
+
+    def solve(self, cols: NDArray[np.int64], vals: NDArray[np.float64], basis: Any):
+        """``(value, xi, x, basis)``: the node's certified support value, its LP point
+        (relaxation order, the fixed factors at zero), that point in the set's space and
+        the basis for its children; ``"empty"`` when certified
+        empty; ``None`` when not decided here."""
+        c, cerr, b, berr, h = self._data(cols, vals)
+        if self.compiled:
+            return self._solve_compiled(c, cerr, b, berr, h)
+        return self._solve_highs(c, cerr, b, berr, h, basis)
+
+    def _solve_compiled(self, c, cerr, b, berr, h):
+        lp, st = self.lp, self.state
+        m, n = self.Z.n_con, self.Z.n_gen
+        self.hext[:n] = h
+        bounds, ok = lp.minimize_all(b, self.hext, st, b_err=berr)
+        if not ok[0]:
+            code, lower_inf, _, _ = _simplex.emptiness(
+                self.A, b, h, berr, self.Z.unbounded_radius, 50 * (m + n))
+            if code == _simplex.OPTIMAL and lower_inf > self.tol:
+                return "empty"
+            return None
+        # the point of the final basis (working copy R A S: x_N at its bounds, then
+        # x_B = B^-1 (R b - N x_N)), for the branching and the closing test only
+        hB = self.hext / lp.S_B
+        xw = np.where(st.upper[0], hB, -hB)
+        basis = st.bases[0]
+        xw[basis] = 0.0
+        rhs = lp.R * b - lp.Ared @ xw
+        xw[basis] = st.binv[0].T @ rhs
+        xi = (lp.S_B * xw)[:n]
+        return self._value(float(bounds[0]), h, c, cerr), xi, self.Z.G @ xi + c, None
+
+    def _solve_highs(self, c, cerr, b, berr, h, basis):
+        hs = self.hs
+        bins = self.bins
+        hs.changeColsBounds(bins.size, bins.astype(np.int32), -h[bins], h[bins])
+        m = self.Z.n_con
+        hs.changeRowsBounds(m, np.arange(m, dtype=np.int32), b, b)
+        if basis is not None and not highs.set_basis(hs, basis):
+            return None
+        if highs.solve(hs) != "optimal":
+            return None
+        obj = float(hs.getInfo().objective_function_value) * self.scale
+        y = np.asarray(hs.getSolution().row_dual, dtype=np.float64) * self.scale
+        bound = self._certify(b, berr, h, y)
+        tol = RELAXED_EXACT_GAP * (1.0 + abs(obj))
+        if not (np.isfinite(bound) and obj - bound <= tol):
+            y2 = highs.basis_duals(hs, self.As, self.w)
+            if y2 is not None:
+                bound = max(bound, self._certify(b, berr, h, y2))
+            if not (np.isfinite(bound) and obj - bound <= tol):
+                return None
+        xi = np.asarray(hs.getSolution().col_value, dtype=np.float64)
+        return self._value(bound, h, c, cerr), xi, self.Z.G @ xi + c, hs.getBasis()
+
+    def _certify(self, b, berr, h, y) -> float:
+        return _certificate.certified_lower_bound(self.w, self.As, b, -h, h, y, b_err=berr,
+                                                  csc=self.csc)[0]
+
+
 def _evaluate(H: HybridZonotope, cols, vals, d):
     """A node's certified support value, its LP maximiser (``None`` if none), the free
     binary factors (relaxation order and node order); ``None`` if certified empty."""
@@ -1076,17 +1230,31 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
     best = -np.inf  # the largest certified bound of a closed node
     attained, leaf = -np.inf, None
     nodes = 0
-    open_: list = []  # (-bound, count, cols, vals, xi_free, free_root): a heap or a stack
+    open_: list = []  # (-bound, count, cols, vals, xi_free, free_root, basis): heap/stack
     count = 0
 
-    def visit(cols, vals) -> None:
+    Z = H._Z
+    lp = _NodeLP(H, d, FEASIBILITY_TOL) if Z.n_con and not Z.has_unbounded_factors else None
+
+    def visit(cols, vals, basis) -> None:
         nonlocal best, attained, leaf, nodes, count
         nodes += 1
-        ev = _evaluate(H, cols, vals, d)
-        if ev is None:
+        got = lp.solve(cols, vals, basis) if lp is not None and lp.ok else None
+        if isinstance(got, str):  # (certified empty)
             return
-        s, x, xi, free_root, free = ev
-        xi_free = None if xi is None else xi[free]
+        if got is not None:
+            s, xi, x, basis = got
+            mask = H._binary.copy()
+            mask[cols] = False
+            free_root = np.flatnonzero(mask)
+            xi_free = xi[free_root]
+        else:
+            ev = _evaluate(H, cols, vals, d)
+            if ev is None:
+                return
+            s, x, xi, free_root, free = ev
+            xi_free = None if xi is None else xi[free]
+            basis = None
         if free_root.size == 0 or (xi_free is not None and _integral(xi_free)):
             best = max(best, s)
             if x is not None and float(d @ x) > attained:
@@ -1097,17 +1265,17 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
         if s <= best:
             return
         count += 1
-        item = (-s, count, cols, vals, xi_free, free_root)
+        item = (-s, count, cols, vals, xi_free, free_root, basis)
         if search == "best":
             heapq.heappush(open_, item)
         else:
             open_.append(item)
 
-    visit(np.zeros(0, np.int64), np.zeros(0))
+    visit(np.zeros(0, np.int64), np.zeros(0), None)
     status = "optimal"
     while open_:
         item = heapq.heappop(open_) if search == "best" else open_.pop()
-        neg, _, cols, vals, xi_free, free_root = item
+        neg, _, cols, vals, xi_free, free_root, basis = item
         if -neg <= best:
             if search == "best":
                 open_.clear()
@@ -1120,7 +1288,7 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
             break
         j, near = _branch_factor(xi_free, free_root)
         for v in (-near, near):  # (depth-first: the nearer child is on top)
-            visit(np.append(cols, j), np.append(vals, v))
+            visit(np.append(cols, j), np.append(vals, v), basis)
     left = [-item[0] for item in open_ if -item[0] > best]
     value = max([best, *left])
     if value == -np.inf:
