@@ -141,7 +141,9 @@ __all__ = ["NODE_LIMIT", "BranchAndBoundResult", "HybridEmptiness", "HybridZonot
 NODE_LIMIT = 20000
 
 #: Most constraint rows for which the branch and bound solves its nodes by the compiled
-#: dual simplex (one warm state per search); above, one HiGHS model per search.
+#: dual simplex (one warm state per search); above, one HiGHS model per search. (Development
+#: runs, interval hulls of the benchmark's unions: the compiled nodes 1.8x faster at 57
+#: rows, even at 113, HiGHS's 2.3x faster at 177 and 9x at 449.)
 NODE_COMPILED_MAX_ROWS = 128
 
 
