@@ -30,6 +30,6 @@ def test_notebook_runs(path, executed_notebooks):
     assert any(c.get("outputs") for c in nb.cells if c.cell_type == "code")
 
 
-def test_there_are_nine_notebooks():
+def test_there_are_ten_notebooks():
     assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07", "08",
-                                               "09"]
+                                               "09", "10"]
