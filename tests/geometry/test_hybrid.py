@@ -479,3 +479,23 @@ def test_both_node_engines_equal_enumeration(rows, monkeypatch):
                 assert got.attained <= got.value
                 early = H.support_bounds(d, node_limit=2, search=search)
                 assert early.value >= want - REL * scale(H)
+
+
+def test_a_union_keeps_its_operands_rounding_bounds():
+    """Operands that carry centre and right-hand-side uncertainty (``c_err``, ``b_err``,
+    made large here so that they show): the union's supports must reach each operand's
+    certified support, which widens by them (the operands' own queries are the oracle)."""
+    from setobs.geometry.zonotope import trusted_cz
+
+    rng = np.random.default_rng(12)
+    G, A = rng.normal(size=(2, 4)), rng.normal(size=(1, 4))
+    b = A @ rng.uniform(-0.5, 0.5, 4)
+    Z1 = trusted_cz(G, np.zeros(2), A, b, np.ones(4), cerr=np.array([0.3, 0.0]))
+    Z2 = trusted_cz(G, np.array([5.0, 0.0]), A, b, np.ones(4), berr=np.array([0.2]))
+    U = HybridZonotope.from_union([Z1, Z2])
+    for d in rng.normal(size=(8, 2)):
+        want = max(Z1.support(d), Z2.support(d))
+        got = U.support(d)
+        assert got >= want - 1e-12 * (1.0 + abs(want)), (d, got, want)
+        # (outer by at most the other operand's uncertainty)
+        assert got <= want + 0.3 * np.abs(d).sum() + 1e-9

@@ -69,11 +69,14 @@ operand's rows ``A_c xt + A_b bt - ((A_b 1 + b)/2) beta_i = (b - A_b 1)/2`` and 
 are the operand itself (``bt = b``); with ``lam_i = 0`` every copy is zero and the rows
 read ``0 = 0``. For constrained-zonotope operands the relaxation is the convex hull of the
 union (the formulation is sharp), so the search's bounds are as tight as they can be at
-the root. Operands' rounding bounds ``c_err``, ``b_err`` are first turned into bounded
-factors (the certified set they stand for), so that the construction itself is exact but
-for the sums ``G_b 1``, ``A_b 1`` and the union's centre (the centre's and right-hand
-sides' rounding bounded; the rounding of generator and constraint entries is not tracked,
-as in :class:`~setobs.ConstrainedZonotope`). An operand with an unbounded factor is
+the root. The operands' rounding bounds are carried, not turned into factors: the
+selected operand's centre error is at most the largest of the operands' ``c_err``
+(elementwise; one selector is 1, the others 0), which the union's ``c_err`` takes on, and
+operand ``i``'s rows, scaled by ``lam_i in [0, 1]``, keep its ``b_err``; with the rounding
+of the sums ``G_b 1``, ``A_b 1`` and of the union's centre bounded, the union contains the
+operands' certified sets, and exceeds their union by at most those rounding bounds (the
+rounding of generator and constraint entries is not tracked, as in
+:class:`~setobs.ConstrainedZonotope`). An operand with an unbounded factor is
 refused: a copy of an unbounded factor cannot be forced to zero.
 """
 
@@ -90,7 +93,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._lazy import lazy_module
-from .._rounding import UNIT_ROUNDOFF, gamma, round_up
+from .._rounding import UNIT_ROUNDOFF, gamma, round_down, round_up
 from .._validation import as_matrix, as_vector, readonly
 from ..exceptions import (
     ArgumentError,
@@ -581,9 +584,15 @@ class HybridZonotope:
     def intersect_halfspace(self, a: ArrayLike, beta: float) -> HybridZonotope:
         """``{z in H : a^T z <= beta}`` (exact).
 
-        As :func:`~setobs.geometry.intersect_halfspace`, with the lower end of the slack's
-        interval a certified lower bound of ``a^T z`` over the relaxation (valid for the
-        set, which the relaxation contains).
+        As :func:`~setobs.geometry.intersect_halfspace`: the generalised intersection with
+        the interval ``[low, beta]`` under ``a^T``, ``low`` a certified lower bound of
+        ``a^T z`` on the set, so that the lower end cuts nothing. Here ``low`` is the
+        relaxation's zonotope bound ``a^T c - sum_j |a^T G_j| h_j`` (its rounding outward;
+        no LP: any valid lower bound gives the same set), and an LP on the relaxation only
+        where that bound is infinite (an unbounded factor). The set is returned unchanged
+        when the same kind of bound shows it inside the half-space, and the empty set when
+        it shows it outside; otherwise the cut adds one factor and one row even where it
+        cuts nothing (a tighter test would cost two LPs per cut).
 
         Parameters
         ----------
@@ -600,9 +609,12 @@ class HybridZonotope:
         av = as_vector("a", a, size=self.dim)
         if not np.isfinite(beta):
             raise InvalidValueError(f"beta must be finite, got {beta}")
+        low, high = _zonotope_range(self._Z, av)
         try:
-            low = -support_unwarned(self._Z, -av)
-            high = support_unwarned(self._Z, av)
+            if not np.isfinite(low):
+                low = -support_unwarned(self._Z, -av)
+            if not np.isfinite(high) and low <= beta:
+                high = support_unwarned(self._Z, av)
         except EmptySetError:
             return self
         if not np.isfinite(low):
@@ -947,6 +959,26 @@ class HybridZonotope:
 
 
 # ---------------------------------------------------------------------- helpers
+def _zonotope_range(Z: ConstrainedZonotope, a: NDArray[np.float64]) -> tuple[float, float]:
+    """Certified ``[low, high]`` containing ``a^T z`` on ``Z`` from its zonotope alone
+    (``a^T c -+ sum_j |a^T G_j| h_j``, the constraints ignored, every rounding and
+    ``c_err`` outward; infinite where an unbounded factor meets ``a``)."""
+    n, ng = Z.dim, Z.n_gen
+    w = np.abs(Z.G.T @ a)
+    with np.errstate(invalid="ignore"):  # (0 * inf: a factor that a does not see)
+        terms = np.where(w > 0.0, w * Z.h, 0.0)
+    rad = float(terms.sum())
+    mid = float(a @ Z.c)
+    absa = np.abs(a)
+    hfin = np.where(np.isfinite(Z.h), Z.h, 0.0)
+    err = gamma(n + 1) * (float(absa @ np.abs(Z.c)) + float((np.abs(Z.G).T @ absa) @ hfin)) \
+        + gamma(ng + 1) * rad + float(absa @ Z.c_err) * (1.0 + gamma(n + 1))
+    err *= 1.0 + gamma(4)
+    if not np.isfinite(rad):
+        return -np.inf, np.inf
+    return round_down(mid - rad - err), round_up(mid + rad + err)
+
+
 def _check_limits(node_limit: Any, time_limit: Any) -> None:
     if not (isinstance(node_limit, int | np.integer) and node_limit >= 1):
         raise InvalidValueError(f"node_limit must be a positive integer, got {node_limit!r}")
@@ -967,33 +999,17 @@ def _as_hybrid(S: Any, what: str) -> HybridZonotope:
     raise ArgumentError(f"{what} expects hybrid or constrained zonotopes, got {type(S).__name__}")
 
 
-def _absorbed(H: HybridZonotope) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
-    """``(G, c, A, b, h, binary)`` of ``H``'s relaxation with its centre's and right-hand
-    side's rounding bounds as bounded continuous factors (the certified set they stand
-    for: ``c + e + G xi`` with ``|e| <= c_err``, ``A xi = b + f`` with ``|f| <= b_err``)."""
-    Z = H.relaxation
-    G, A, h, binary = Z.G, Z.A, Z.h, H.binary
-    ce, be = Z.c_err, Z.b_err
-    ic, ib = np.flatnonzero(ce), np.flatnonzero(be)
-    if ic.size or ib.size:
-        n, m = Z.dim, Z.n_con
-        Gx = np.zeros((n, ic.size + ib.size))
-        Gx[ic, np.arange(ic.size)] = ce[ic]
-        Ax = np.zeros((m, ic.size + ib.size))
-        Ax[ib, ic.size + np.arange(ib.size)] = -be[ib]
-        G, A = np.hstack([G, Gx]), np.hstack([A, Ax])
-        h = np.concatenate([h, np.ones(Gx.shape[1])])
-        binary = np.concatenate([binary, np.zeros(Gx.shape[1], bool)])
-    return G, Z.c, A, Z.b, h, binary
-
-
 def _union(ops: list[HybridZonotope]) -> HybridZonotope:
     """The disjunctive construction of the module docstring for two or more operands."""
     N = len(ops)
     n = ops[0].dim
-    parts = [_absorbed(H) for H in ops]
+    parts = [(Z.G, Z.c, Z.A, Z.b, Z.h, H.binary) for H in ops for Z in (H.relaxation,)]
     n_fac = N + sum(2 * bn.size for *_, bn in parts)
     n_row = 1 + sum(A.shape[0] + bn.size for _, _, A, _, _, bn in parts)
+    # The operands' rounding bounds: the selected operand's centre error is at most the
+    # largest of theirs (one selector is 1), and operand i's rows carry b_err_i scaled by
+    # lam_i in [0, 1], so at most b_err_i.
+    cerr_ops = np.max([H.relaxation.c_err for H in ops], axis=0)
     G = np.zeros((n, n_fac))
     A = np.zeros((n_row, n_fac))
     b = np.zeros(n_row)
@@ -1033,6 +1049,8 @@ def _union(ops: list[HybridZonotope]) -> HybridZonotope:
         b[ra] = T @ one
         if T.shape[1] > 1 and m:
             berr[ra] = map_err(T, one, None)
+        if m:
+            berr[ra] += ops[i].relaxation.b_err * (1.0 + gamma(3))
         r += m
         # |xt_j| <= h_j lam_i: s1 + s2 - beta_i = -1
         rb = r + np.arange(nc)
@@ -1052,6 +1070,9 @@ def _union(ops: list[HybridZonotope]) -> HybridZonotope:
     one = np.ones(T.shape[1])
     c = T @ one
     cerr = map_err(T, one, None)
+    if cerr_ops.any():
+        cerr = cerr_ops * (1.0 + gamma(3)) if cerr is None else \
+            (cerr + cerr_ops) * (1.0 + gamma(3))
     Z = owned_cz(G, c, A, b, h, min(H.relaxation.unbounded_radius for H in ops),
                    None if cerr is None else _err(cerr), _err(berr), op="union")
     return HybridZonotope.from_relaxation(Z, binary)
