@@ -136,8 +136,8 @@ sparse = lazy_module("scipy.sparse")
 _certificate = lazy_module("setobs.lp.certificate")
 _simplex = lazy_module("setobs.lp._simplex")
 
-__all__ = ["NODE_LIMIT", "BranchAndBoundResult", "HybridEmptiness", "HybridZonotope",
-           "pwa_reachable_sets"]
+__all__ = ["NODE_COMPILED_MAX_ROWS", "NODE_LIMIT", "BranchAndBoundResult", "HybridEmptiness",
+           "HybridZonotope", "pwa_reachable_sets"]
 
 #: Default number of nodes (LPs) a branch-and-bound query may evaluate before it stops
 #: with its certified outer answer and status ``"node_limit"``.
