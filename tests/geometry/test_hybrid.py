@@ -458,9 +458,11 @@ def test_a_pinned_factor_keeps_its_range_outward():
 
 @pytest.mark.parametrize("rows", [0, 10_000])
 def test_both_node_engines_equal_enumeration(rows, monkeypatch):
-    """The searches' nodes on one warm model: HiGHS's (forced here by a row limit of 0)
-    and the compiled dual simplex's (limit above every set's rows) agree with the leaves,
-    on a union with infeasible assignments after a cut and on random sets."""
+    """The searches' nodes on one warm model: HiGHS's (forced here by a row limit of 0;
+    emptiness then on each node's own constrained zonotope) and the compiled dual
+    simplex's (limit above every set's rows) agree with the leaves, on random sets cut so
+    that some assignments are infeasible: support values, early stops, emptiness and
+    containment."""
     import setobs.geometry.hybrid as hybrid_module
 
     monkeypatch.setattr(hybrid_module, "NODE_COMPILED_MAX_ROWS", rows)
@@ -479,6 +481,18 @@ def test_both_node_engines_equal_enumeration(rows, monkeypatch):
                 assert got.attained <= got.value
                 early = H.support_bounds(d, node_limit=2, search=search)
                 assert early.value >= want - REL * scale(H)
+        # emptiness and containment on the same nodes, against the leaves
+        live = [Z for _, Z in leaves(H) if not Z.is_empty()]
+        assert H.emptiness().empty == (not live)
+        pts = [Z.sample(2, rng=rng) for Z in live[:3]] + [rng.normal(scale=3.0, size=(4, 3))]
+        for x in np.vstack(pts):
+            assert H.contains(x) == any(Z.contains(x) for Z in live)
+    # a set every node of which is empty (the cut misses every leaf's box)
+    sets = [CZ.from_box([3.0 * i - 1, -1.0], [3.0 * i + 1, 1.0]) for i in range(3)]
+    E = HybridZonotope.from_union(sets).intersect_halfspace([1.0, 0.0], 1.8)
+    E = E.intersect_halfspace([-1.0, 0.0], -1.5)
+    rep = E.emptiness()
+    assert rep.empty and rep.status == "empty"
 
 
 def test_a_union_keeps_its_operands_rounding_bounds():

@@ -1157,6 +1157,10 @@ class _NodeLP:
         h[cols] = 0.0
         return Mc @ vc, cerr, Mb @ vb, berr, h
 
+    def node_centre(self, cols, vals) -> NDArray[np.float64]:
+        """The node's centre ``c + G_cols vals``."""
+        return self.Z.c + self.Z.G[:, cols] @ vals if cols.size else self.Z.c
+
     def _value(self, bound: float, h, c, cerr) -> float:
         """The certified support value from a certified ``min w^T xi`` over the node (``w``
         exact): the rounding of ``w`` (``w_err^T h``) and of ``d^T c`` added outward."""
@@ -1179,26 +1183,63 @@ class _NodeLP:
         return self._solve_highs(c, cerr, b, berr, h, basis)
 
     def _solve_compiled(self, c, cerr, b, berr, h):
-        lp, st = self.lp, self.state
-        m, n = self.Z.n_con, self.Z.n_gen
-        self.hext[:n] = h
-        bounds, ok = lp.minimize_all(b, self.hext, st, b_err=berr)
+        bounds, ok = self.lp.minimize_all(b, self._hext(h), self.state, b_err=berr)
         if not ok[0]:
-            code, lower_inf, _, _ = _simplex.emptiness(
-                self.A, b, h, berr, self.Z.unbounded_radius, 50 * (m + n))
-            if code == _simplex.OPTIMAL and lower_inf > self.tol:
-                return "empty"
-            return None
-        # the point of the final basis (working copy R A S: x_N at its bounds, then
-        # x_B = B^-1 (R b - N x_N)), for the branching and the closing test only
+            verdict = self._phase1(b, berr, h)
+            return "empty" if verdict is not None and verdict[0] else None
+        xi = self._point(b)
+        return self._value(float(bounds[0]), h, c, cerr), xi, self.Z.G @ xi + c, None
+
+    def _hext(self, h):
+        self.hext[:h.size] = h
+        return self.hext
+
+    def _point(self, b) -> NDArray[np.float64]:
+        """The point of the compiled state's final basis (working copy ``R A S``: ``x_N`` at
+        its bounds, then ``x_B = B^-1 (R b - N x_N)``; the fixed factors at zero)."""
+        lp, st = self.lp, self.state
         hB = self.hext / lp.S_B
         xw = np.where(st.upper[0], hB, -hB)
         basis = st.bases[0]
         xw[basis] = 0.0
         rhs = lp.R * b - lp.Ared @ xw
         xw[basis] = st.binv[0].T @ rhs
-        xi = (lp.S_B * xw)[:n]
-        return self._value(float(bounds[0]), h, c, cerr), xi, self.Z.G @ xi + c, None
+        return (lp.S_B * xw)[:self.Z.n_gen]
+
+    def _phase1(self, b, berr, h):
+        """The compiled phase-1 test of :meth:`~setobs.lp.factor.FactorPolytope.emptiness`
+        on the node (its fixed columns zero, as in the node's own constrained zonotope):
+        ``(True, None)`` certified empty at ``tol``, ``(False, xi)`` a point within it,
+        ``None`` undecided."""
+        A = self.A
+        if (h == 0.0).any():
+            A = np.where(h > 0.0, A, 0.0)
+        m, n = A.shape
+        code, lower_inf, found, xi = _simplex.emptiness(
+            np.ascontiguousarray(A), b, h, berr, self.Z.unbounded_radius, 50 * (m + n))
+        if code != _simplex.OPTIMAL:
+            return None
+        if lower_inf > self.tol:
+            return True, None
+        return (False, xi) if found <= self.tol else None
+
+    def feasibility(self, cols: NDArray[np.int64], vals: NDArray[np.float64]):
+        """A node's emptiness at ``tol``, as the node's constrained zonotope's
+        :meth:`~setobs.lp.factor.FactorPolytope.emptiness` decides it: ``(True, None)``
+        certified empty, ``(False, xi)`` with a point within ``tol`` of its rows (the warm
+        dual simplex's basic point when that is within ``tol``, else the phase-1 test's),
+        ``None`` undecided (compiled engine only)."""
+        _, _, b, berr, h = self._data(cols, vals)
+        _, ok = self.lp.minimize_all(b, self._hext(h), self.state, b_err=berr)
+        if ok[0]:
+            xi = np.clip(self._point(b), -h, h)
+            live = h > 0.0
+            scale = np.maximum(np.abs(b), np.abs(self.A[:, live]).max(axis=1, initial=0.0))
+            mant, ex = np.frexp(scale)  # (the smallest power of two >= scale, as phase 1)
+            scale = np.where(scale > 0.0, np.ldexp(1.0, np.where(mant == 0.5, ex - 1, ex)), 1.0)
+            if float((np.abs(self.A @ xi - b) / scale).max(initial=0.0)) <= self.tol:
+                return False, xi
+        return self._phase1(b, berr, h)
 
     def _solve_highs(self, c, cerr, b, berr, h, basis):
         hs = self.hs
@@ -1325,6 +1366,38 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
 def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
                ) -> HybridEmptiness:
     t0 = time.perf_counter()
+    Z = H._Z
+    lp = None
+    if Z.n_con and not Z.has_unbounded_factors and Z.n_con <= NODE_COMPILED_MAX_ROWS:
+        lp = _NodeLP(H, np.zeros(Z.dim), tol)
+        if not lp.ok:
+            lp = None
+
+    def verdict(cols, vals):
+        """``(empty, x, xi_free, free_root)``: the node certified empty, or a point of it
+        within ``tol`` and its free binaries' values there (``None`` without a point)."""
+        got = lp.feasibility(cols, vals) if lp is not None else None
+        if got is not None:
+            mask = H._binary.copy()
+            mask[cols] = False
+            free_root = np.flatnonzero(mask)
+            empty, xi = got
+            if empty:
+                return True, None, None, free_root
+            return False, Z.G @ xi + lp.node_centre(cols, vals), xi[free_root], free_root
+        Zn, free, free_root = H._node(cols, vals)
+        if Zn.n_con == 0:
+            xi = np.zeros(Zn.n_gen)
+            xi[free] = 1.0
+            return False, Zn.G @ xi + Zn.c, xi[free], free_root
+        rep = factor_polytope(Zn).emptiness(tol)
+        if rep.empty:
+            return True, None, None, free_root
+        xi = rep.witness
+        if xi is None:
+            return False, None, None, free_root
+        return False, Zn.G @ xi + Zn.c, xi[free], free_root
+
     stack = [(np.zeros(0, np.int64), np.zeros(0))]
     nodes = 0
     while stack:
@@ -1333,32 +1406,21 @@ def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
             return HybridEmptiness(False, "undecided", None, None, nodes, tol)
         cols, vals = stack.pop()
         nodes += 1
-        Zn, free, free_root = H._node(cols, vals)
-        if Zn.n_con == 0:
-            xi = np.zeros(Zn.n_gen)
-            xi[free] = 1.0
-            return HybridEmptiness(False, "nonempty", Zn.G @ xi + Zn.c,
-                                   H._leaf_values(cols, vals, free_root, xi[free]), nodes, tol)
-        rep = factor_polytope(Zn).emptiness(tol)
-        if rep.empty:
+        empty, x, xi_free, free_root = verdict(cols, vals)
+        if empty:
             continue
-        xi = rep.witness
-        if free.size == 0:
-            w = None if xi is None else Zn.G @ xi + Zn.c
-            return HybridEmptiness(False, "nonempty", w,
+        if free_root.size == 0:
+            return HybridEmptiness(False, "nonempty", x,
                                    H._leaf_values(cols, vals, free_root, np.zeros(0)),
                                    nodes, tol)
-        xi_free = None if xi is None else xi[free]
         if xi_free is not None and _integral(xi_free):
-            # the phase-1 point is a leaf's: try that leaf directly
+            # the point is a leaf's: try that leaf directly
             signs = np.where(xi_free >= 0.0, 1.0, -1.0)
-            Zl, _, _ = H._node(np.concatenate([cols, free_root]),
-                               np.concatenate([vals, signs]))
             nodes += 1
-            lrep = factor_polytope(Zl).emptiness(tol) if Zl.n_con else None
-            if lrep is None or not lrep.empty:
-                w = Zl.c if lrep is None or lrep.witness is None else Zl.G @ lrep.witness + Zl.c
-                return HybridEmptiness(False, "nonempty", w,
+            lcols, lvals = np.concatenate([cols, free_root]), np.concatenate([vals, signs])
+            lempty, lx, _, _ = verdict(lcols, lvals)
+            if not lempty:
+                return HybridEmptiness(False, "nonempty", lx,
                                        H._leaf_values(cols, vals, free_root, signs), nodes, tol)
         j, near = _branch_factor(xi_free, free_root)
         for v in (-near, near):  # the nearer child on top
