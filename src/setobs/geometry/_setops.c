@@ -230,6 +230,26 @@ static PyObject *guarded(PyObject *o) {
     Py_RETURN_NONE;
 }
 
+/* guarded() for a set whose arrays outside `mask` (bits in data_ok's order: G 1, c 2, A 4,
+   b 8, h 16, cerr 32, berr 64) are its operands' own arrays or exact copies of their
+   entries beside zeros, which passed the guard when those sets were built: only the
+   computed ones are scanned (a linear map of a set with a large A no longer reads A). */
+enum { K_G = 1, K_C = 2, K_A = 4, K_B = 8, K_H = 16, K_CERR = 32, K_BERR = 64 };
+
+static PyObject *guarded_new(PyObject *o, int mask) {
+    if (o == NULL) return o;
+    PyObject *e[7] = {SLOT(o, S_G), SLOT(o, S_C), SLOT(o, S_A), SLOT(o, S_B), SLOT(o, S_H),
+                      SLOT(o, S_CERR), SLOT(o, S_BERR)};
+    for (int k = 0; k < 7; k++) {
+        if (!(mask & (1 << k)) || (k >= 5 && e[k] == Py_None)) continue;
+        if (first_bad(e[k], k == 4) != -1) {
+            Py_DECREF(o);
+            Py_RETURN_NONE;
+        }
+    }
+    return o;
+}
+
 static int all_zero(const double *x, npy_intp n) {
     for (npy_intp i = 0; i < n; i++)
         if (x[i] != 0.0) return 0;
@@ -365,8 +385,9 @@ static PyObject *minkowski_sum(PyObject *mod, PyObject *const *args, Py_ssize_t 
     FAIL_IF(cerr == NULL);
     berr = cat_err(&s.vberr, &t.vberr);
     FAIL_IF(berr == NULL);
-    return guarded(make(freeze(G), freeze(c), freeze(A), freeze(b), freeze(h),
-                        min_radius(&s, &t), cerr, berr));
+    /* (G, A, b, h: the operands' entries copied beside zeros; berr: theirs concatenated) */
+    return guarded_new(make(freeze(G), freeze(c), freeze(A), freeze(b), freeze(h),
+                            min_radius(&s, &t), cerr, berr), K_C | K_CERR);
 fail:
     Py_XDECREF(G);
     Py_XDECREF(c);
@@ -439,7 +460,7 @@ static PyObject *linear_map(PyObject *mod, PyObject *const *args, Py_ssize_t nar
         Py_DECREF(out);
         return NULL;
     }
-    return guarded(out);
+    return guarded_new(out, K_G | K_C | K_CERR); /* (A, b, h, berr: the operand's own) */
 fail:
     Py_XDECREF(G);
     Py_XDECREF(c);
@@ -523,8 +544,27 @@ static PyObject *intersect(PyObject *mod, PyObject *const *args, Py_ssize_t narg
     FAIL_IF(berr == NULL);
     Py_DECREF(e);
     e = NULL;
-    return guarded(make(freeze(G), new_ref(s.c), freeze(A), freeze(b), freeze(h),
-                        min_radius(&s, &t), new_ref(s.cerr), berr));
+    /* (only the new rows R G_Z of A are computed; the rest of A, G and h are the operands'
+       entries copied beside zeros, and c, cerr the first operand's own) */
+    if (!identity) {
+        int bad = 0;
+        for (npy_intp i = m12; i < nc && !bad; i++)
+            for (npy_intp j = 0; j < g1; j++)
+                if (!(fabs(ad[i * ng + j]) <= max_mag)) {
+                    bad = 1;
+                    break;
+                }
+        if (bad) {
+            Py_DECREF(G);
+            Py_DECREF(A);
+            Py_DECREF(b);
+            Py_DECREF(h);
+            Py_DECREF(berr);
+            Py_RETURN_NONE;
+        }
+    }
+    return guarded_new(make(freeze(G), new_ref(s.c), freeze(A), freeze(b), freeze(h),
+                            min_radius(&s, &t), new_ref(s.cerr), berr), K_B | K_BERR);
 fail:
     Py_XDECREF(G);
     Py_XDECREF(A);
