@@ -1028,21 +1028,22 @@ def _union(ops: list[HybridZonotope]) -> HybridZonotope:
         s2 = s1 + nc
         bt = f + 2 * nc + np.arange(nb)  # the copies of the binary factors
         tb = bt + nb
+        S1, BT = slice(f, f + nc), slice(f + 2 * nc, f + 2 * nc + nb)  # (the same, as slices)
         f += 2 * (nc + nb)
         binary[bt] = True
         P = Gi[:, C] * hi[C]  # (G diag(h), and A diag(h): the copies' scaled columns)
         Q = Ai[:, C] * hi[C]
         GB, AB = Gi[:, B], Ai[:, B]
         # the point: -P s1 + G_B bt + ((c - G_B 1 + P 1)/2) beta_i + (c + G_B 1 - P 1)/2
-        G[:, s1] = -P
-        G[:, bt] = GB
+        G[:, S1] = -P
+        G[:, BT] = GB
         G[:, i] = 0.5 * (ci - GB.sum(axis=1) + P.sum(axis=1))
         c_terms.append(np.column_stack([0.5 * ci, 0.5 * GB, -0.5 * P]))
         # the operand's rows: -Q s1 + A_B bt + ((Q 1 - A_B 1 - b)/2) beta_i
         #                     = (b - A_B 1 + Q 1)/2
-        ra = r + np.arange(m)
-        A[np.ix_(ra, s1)] = -Q
-        A[np.ix_(ra, bt)] = AB
+        ra = slice(r, r + m)
+        A[ra, S1] = -Q
+        A[ra, BT] = AB
         A[ra, i] = 0.5 * (Q.sum(axis=1) - AB.sum(axis=1) - bi)
         T = np.column_stack([0.5 * bi, -0.5 * AB, 0.5 * Q])
         one = np.ones(T.shape[1])
