@@ -61,19 +61,27 @@ def scale(H):
     return 1.0 + np.abs(H.c).max() + np.abs(H.Gc).sum() + np.abs(H.Gb).sum()
 
 
+def searches_equal_enumeration(H, d, early_limit=None):
+    """Both searches' support values in direction ``d`` equal the enumerated leaves' (and
+    an early stop at ``early_limit`` nodes lies above them)."""
+    want = enumerated_support(H, d)
+    for search in ("best", "depth"):
+        got = H.support_bounds(d, search=search)
+        assert got.status == "optimal"
+        assert abs(got.value - want) <= REL * scale(H), (search, got, want)
+        assert got.attained <= got.value
+        if early_limit is not None:
+            early = H.support_bounds(d, node_limit=early_limit, search=search)
+            assert early.value >= want - REL * scale(H)
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_support_and_hull_equal_enumeration(seed):
     rng = np.random.default_rng(seed)
     H, _ = random_hybrid(rng, n=3, ng=5, nb=4, nc=2)
     s = scale(H)
     for _ in range(4):
-        d = rng.normal(size=3)
-        want = enumerated_support(H, d)
-        for search in ("best", "depth"):
-            got = H.support_bounds(d, search=search)
-            assert got.status == "optimal"
-            assert abs(got.value - want) <= REL * s, (search, got, want)
-            assert got.attained <= got.value
+        searches_equal_enumeration(H, rng.normal(size=3))
     box = H.interval_hull()
     for i in range(3):
         e = np.eye(3)[i]
@@ -472,15 +480,7 @@ def test_both_node_engines_equal_enumeration(rows, monkeypatch):
         d0 = rng.normal(size=3)
         H = H.intersect_halfspace(d0, 0.5 * (H.support(d0) - H.support(-d0)))
         for _ in range(3):
-            d = rng.normal(size=3)
-            want = enumerated_support(H, d)
-            for search in ("best", "depth"):
-                got = H.support_bounds(d, search=search)
-                assert got.status == "optimal"
-                assert abs(got.value - want) <= REL * scale(H), (search, got, want)
-                assert got.attained <= got.value
-                early = H.support_bounds(d, node_limit=2, search=search)
-                assert early.value >= want - REL * scale(H)
+            searches_equal_enumeration(H, rng.normal(size=3), early_limit=2)
         # emptiness and containment on the same nodes, against the leaves
         live = [Z for _, Z in leaves(H) if not Z.is_empty()]
         assert H.emptiness().empty == (not live)
