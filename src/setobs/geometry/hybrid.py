@@ -1177,8 +1177,9 @@ class _NodeLP:
         dc = float(self.d @ c)
         err = 2.0 * gamma(n + 1) * float(self.absd @ np.abs(c)) + \
             float(self.absd @ cerr) * (1.0 + gamma(n + 1))
-        sv = -bound + werr + dc
-        return round_up(sv + err + UNIT_ROUNDOFF * abs(sv))
+        s1 = -bound + werr
+        sv = s1 + dc  # (two roundings, each at most u times its result)
+        return round_up(sv + err + 2.0 * UNIT_ROUNDOFF * (abs(s1) + abs(sv)))
 
     def solve(self, cols: NDArray[np.int64], vals: NDArray[np.float64], basis: Any):
         """``(value, xi, x, basis)``: the node's certified support value, its LP point
