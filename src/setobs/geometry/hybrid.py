@@ -106,6 +106,8 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..lp import highs
+from ..lp.factor import FactorPolytope
+from ..lp.factor._scaling import row_scale
 from ..lp.fastlp import FixedStructureLP
 from ..tolerances import (
     BINARY_TOL,
@@ -736,25 +738,22 @@ class HybridZonotope:
         a constrained zonotope, and the free binary factors' positions in it and in the
         relaxation (the same factors, in the same order)."""
         Z = self._Z
-        free = self._binary.copy()
-        free[cols] = False
+        free = self._free_mask(cols)
         free_root = np.flatnonzero(free)
         if cols.size == 0:
             return Z, free_root, free_root
         keep = np.ones(Z.n_gen, bool)
         keep[cols] = False
-        n, m = Z.dim, Z.n_con
-        Mc = np.hstack([np.eye(n), Z.G[:, cols]])
-        vc = np.concatenate([Z.c, vals])
-        c = Mc @ vc
-        cerr = map_err(Mc, vc, cat_err(_err(Z.c_err), n, None, cols.size))
-        Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
-        vb = np.concatenate([Z.b, vals])
-        b = Mb @ vb
-        berr = map_err(Mb, vb, cat_err(_err(Z.b_err), m, None, cols.size)) if m else None
+        c, cerr, b, berr = _fixed(Z, cols, vals)
         node = trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, Z.h[keep], Z.unbounded_radius,
                           cerr, berr, op="fixing binary factors")
         return node, np.flatnonzero(free[keep]), free_root
+
+    def _free_mask(self, cols: NDArray[np.int64]) -> NDArray[np.bool_]:
+        """The binary factors (relaxation order) that a node fixing ``cols`` leaves free."""
+        free = self._binary.copy()
+        free[cols] = False
+        return free
 
     def _leaf_values(self, cols, vals, free_root, xi_free) -> NDArray[np.float64]:
         """The binary factors (relaxation order) of the leaf that fixes ``cols`` to
@@ -991,6 +990,20 @@ def _err(e: NDArray[np.float64]) -> NDArray[np.float64] | None:
     return e if np.count_nonzero(e) else None
 
 
+def _fixed(Z: ConstrainedZonotope, cols: NDArray[np.int64], vals: NDArray[np.float64]):
+    """``(c, c_err, b, b_err)`` of ``Z`` with its factors ``cols`` fixed to ``vals`` (their
+    columns moved into the centre and the right-hand side, the rounding bounded; an error
+    ``None`` is exact): the data of a node of the branch and bound."""
+    n, m = Z.dim, Z.n_con
+    Mc = np.hstack([np.eye(n), Z.G[:, cols]])
+    vc = np.concatenate([Z.c, vals])
+    cerr = map_err(Mc, vc, cat_err(_err(Z.c_err), n, None, cols.size))
+    Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
+    vb = np.concatenate([Z.b, vals])
+    berr = map_err(Mb, vb, cat_err(_err(Z.b_err), m, None, cols.size)) if m else None
+    return Mc @ vc, cerr, Mb @ vb, berr
+
+
 def _as_hybrid(S: Any, what: str) -> HybridZonotope:
     if isinstance(S, HybridZonotope):
         return S
@@ -1003,13 +1016,13 @@ def _union(ops: list[HybridZonotope]) -> HybridZonotope:
     """The disjunctive construction of the module docstring for two or more operands."""
     N = len(ops)
     n = ops[0].dim
-    parts = [(Z.G, Z.c, Z.A, Z.b, Z.h, H.binary) for H in ops for Z in (H.relaxation,)]
+    parts = [(H._Z.G, H._Z.c, H._Z.A, H._Z.b, H._Z.h, H._binary) for H in ops]
     n_fac = N + sum(2 * bn.size for *_, bn in parts)
     n_row = 1 + sum(A.shape[0] + bn.size for _, _, A, _, _, bn in parts)
     # The operands' rounding bounds: the selected operand's centre error is at most the
     # largest of theirs (one selector is 1), and operand i's rows carry b_err_i scaled by
     # lam_i in [0, 1], so at most b_err_i.
-    cerr_ops = np.max([H.relaxation.c_err for H in ops], axis=0)
+    cerr_ops = np.max([H._Z.c_err for H in ops], axis=0)
     G = np.zeros((n, n_fac))
     A = np.zeros((n_row, n_fac))
     b = np.zeros(n_row)
@@ -1051,7 +1064,7 @@ def _union(ops: list[HybridZonotope]) -> HybridZonotope:
         if T.shape[1] > 1 and m:
             berr[ra] = map_err(T, one, None)
         if m:
-            berr[ra] += ops[i].relaxation.b_err * (1.0 + gamma(3))
+            berr[ra] += ops[i]._Z.b_err * (1.0 + gamma(3))
         r += m
         # |xt_j| <= h_j lam_i: s1 + s2 - beta_i = -1
         rb = r + np.arange(nc)
@@ -1124,8 +1137,6 @@ class _NodeLP:
         self.w = np.ascontiguousarray(-(Z.G.T @ d))
         self.w_err = 2.0 * gamma(n + 1) * (np.abs(Z.G).T @ np.abs(d))
         self.d, self.absd = d, np.abs(d)
-        self.cerr0 = _err(Z.c_err)
-        self.berr0 = _err(Z.b_err)
         self.compiled = m <= NODE_COMPILED_MAX_ROWS
         if self.compiled:
             self.A = np.ascontiguousarray(Z.A)
@@ -1142,8 +1153,7 @@ class _NodeLP:
         Z = self.Z
         self.As = sparse.csc_array(Z.A)
         self.hs = highs.new_model()
-        wmax = float(np.abs(self.w).max(initial=0.0))
-        self.scale = float(np.ldexp(1.0, np.frexp(wmax)[1])) if wmax > 0.0 else 1.0
+        self.scale = FactorPolytope.objective_scale(self.w)
         self.csc = (self.As.indptr.astype(np.int64), self.As.indices.astype(np.int64),
                     self.As.data)
         return highs.pass_csc(self.hs, Z.n_con, self.w / self.scale, -Z.h, Z.h, Z.b, Z.b,
@@ -1154,16 +1164,11 @@ class _NodeLP:
         Z = self.Z
         if cols.size == 0:
             return Z.c, Z.c_err, Z.b, Z.b_err, Z.h
-        n, m = Z.dim, Z.n_con
-        Mc = np.hstack([np.eye(n), Z.G[:, cols]])
-        vc = np.concatenate([Z.c, vals])
-        cerr = map_err(Mc, vc, cat_err(self.cerr0, n, None, cols.size))
-        Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
-        vb = np.concatenate([Z.b, vals])
-        berr = map_err(Mb, vb, cat_err(self.berr0, m, None, cols.size))
+        c, cerr, b, berr = _fixed(Z, cols, vals)
         h = Z.h.copy()
         h[cols] = 0.0
-        return Mc @ vc, cerr, Mb @ vb, berr, h
+        return (c, np.zeros(Z.dim) if cerr is None else cerr, b,
+                np.zeros(Z.n_con) if berr is None else berr, h)
 
     def node_centre(self, cols, vals) -> NDArray[np.float64]:
         """The node's centre ``c + G_cols vals``."""
@@ -1201,9 +1206,7 @@ class _NodeLP:
     def _solve_compiled(self, c, cerr, b, berr, h):
         bounds, ok = self.lp.minimize_all(b, self._hext(h), self.state, b_err=berr)
         if not ok[0]:
-            if self.state.codes[0] == _simplex.INFEASIBLE and self._farkas(b, berr, h):
-                return "empty"
-            verdict = self._phase1(b, berr, h)
+            verdict = self._unsolved(b, berr, h)
             return "empty" if verdict is not None and verdict[0] else None
         xi = self._point(b)
         return self._value(float(bounds[0]), h, c, cerr), xi, self.Z.G @ xi + c, None
@@ -1212,26 +1215,31 @@ class _NodeLP:
         self.hext[:h.size] = h
         return self.hext
 
-    def _point(self, b) -> NDArray[np.float64]:
-        """The point of the compiled state's final basis (working copy ``R A S``: ``x_N`` at
-        its bounds, then ``x_B = B^-1 (R b - N x_N)``; the fixed factors at zero)."""
+    def _basic(self, b):
+        """The compiled state's final basic solution in the working copy ``R A S`` (``x_N``
+        at its bounds, then ``x_B = B^-1 (R b - N x_N)``), the working bounds and the
+        basis: ``(x, h / S, basis)``."""
         lp, st = self.lp, self.state
         hB = self.hext / lp.S_B
         xw = np.where(st.upper[0], hB, -hB)
         basis = st.bases[0]
         xw[basis] = 0.0
-        rhs = lp.R * b - lp.Ared @ xw
-        xw[basis] = st.binv[0].T @ rhs
-        return (lp.S_B * xw)[:self.Z.n_gen]
+        xw[basis] = st.binv[0].T @ (lp.R * b - lp.Ared @ xw)
+        return xw, hB, basis
+
+    def _point(self, b) -> NDArray[np.float64]:
+        """The point of the compiled state's final basis (the fixed factors at zero)."""
+        return (self.lp.S_B * self._basic(b)[0])[:self.Z.n_gen]
 
     def _rows(self, b, h):
         """The node's rows (fixed columns zero) scaled as the phase-1 test scales them:
         by the smallest power of two at least ``max(max_j |A_ij|, |b_i|)``."""
-        A = np.where(h > 0.0, self.A, 0.0) if (h == 0.0).any() else self.A
-        scale = np.maximum(np.abs(b), np.abs(A).max(axis=1, initial=0.0))
-        mant, ex = np.frexp(scale)
-        scale = np.where(scale > 0.0, np.ldexp(1.0, np.where(mant == 0.5, ex - 1, ex)), 1.0)
-        return A, scale
+        A = self._live(h)
+        return A, row_scale(A, b, None)
+
+    def _live(self, h):
+        """The constraint matrix with the node's fixed columns (``h_j = 0``) zero."""
+        return np.where(h > 0.0, self.A, 0.0) if (h == 0.0).any() else self.A
 
     def _farkas(self, b, berr, h) -> bool:
         """Whether the basis at which the dual simplex stopped infeasible certifies the node
@@ -1245,12 +1253,8 @@ class _NodeLP:
         reachable set at horizon 12, each saving a phase-1 LP of about a millisecond:
         the hull 10 % faster, development runs.)"""
         lp, st = self.lp, self.state
-        hB = self.hext / lp.S_B
-        xw = np.where(st.upper[0], hB, -hB)
-        basis = st.bases[0]
-        xw[basis] = 0.0
-        xB = st.binv[0].T @ (lp.R * b - lp.Ared @ xw)
-        hb = hB[basis]
+        xw, hB, basis = self._basic(b)
+        xB, hb = xw[basis], hB[basis]
         rows = np.flatnonzero(np.maximum(xB - hb, -hb - xB) > 0.0)
         if not rows.size:
             return False
@@ -1278,7 +1282,7 @@ class _NodeLP:
         on the node (its fixed columns zero, as in the node's own constrained zonotope):
         ``(True, None)`` certified empty at ``tol``, ``(False, xi)`` a point within it,
         ``None`` undecided."""
-        A = np.where(h > 0.0, self.A, 0.0) if (h == 0.0).any() else self.A
+        A = self._live(h)
         m, n = A.shape
         code, lower_inf, found, xi = _simplex.emptiness(
             np.ascontiguousarray(A), b, h, berr, self.Z.unbounded_radius, 50 * (m + n))
@@ -1301,7 +1305,13 @@ class _NodeLP:
             A, scale = self._rows(b, h)
             if float((np.abs(A @ xi - b) / scale).max(initial=0.0)) <= self.tol:
                 return False, xi
-        elif self.state.codes[0] == _simplex.INFEASIBLE and self._farkas(b, berr, h):
+        return self._unsolved(b, berr, h)
+
+    def _unsolved(self, b, berr, h):
+        """The emptiness verdict of a node the warm simplex did not solve (as
+        :meth:`_phase1`'s): the Farkas certificate of its last basis where it stopped
+        infeasible, else the phase-1 test."""
+        if self.state.codes[0] == _simplex.INFEASIBLE and self._farkas(b, berr, h):
             return True, None
         return self._phase1(b, berr, h)
 
@@ -1372,9 +1382,7 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
             return
         if got is not None:
             s, xi, x, basis = got
-            mask = H._binary.copy()
-            mask[cols] = False
-            free_root = np.flatnonzero(mask)
+            free_root = np.flatnonzero(H._free_mask(cols))
             xi_free = xi[free_root]
         else:
             ev = _evaluate(H, cols, vals, d)
@@ -1442,9 +1450,7 @@ def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
         within ``tol`` and its free binaries' values there (``None`` without a point)."""
         got = lp.feasibility(cols, vals) if lp is not None else None
         if got is not None:
-            mask = H._binary.copy()
-            mask[cols] = False
-            free_root = np.flatnonzero(mask)
+            free_root = np.flatnonzero(H._free_mask(cols))
             empty, xi = got
             if empty:
                 return True, None, None, free_root

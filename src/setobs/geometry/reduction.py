@@ -364,21 +364,20 @@ def reduce_exact_among(Z: ConstrainedZonotope, eligible: NDArray[np.bool_],
     # 2. eliminate free factors with constraint rows, while the tracked rounding
     # of c and b stays within its budget; 3. drop the unused parts
     return _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, free,
-                               _budgets(G, c, A, b, h, cerr, berr), tracked=True)
+                               _budgets(G, c, A, b, h, cerr, berr))
 
 
-def _eliminate_and_trim(Z: ConstrainedZonotope, G, c, A, b, h, cerr, berr, free, budgets,
-                        tracked: bool = False):
+def _eliminate_and_trim(Z: ConstrainedZonotope, G, c, A, b, h, cerr, berr, free, budgets
+                        ) -> tuple[ConstrainedZonotope, NDArray[np.int64]]:
     """:func:`_eliminate_free` on the factors ``free``, then drop the exactly zero rows and
     the unused factors (``h = 0``, or zero columns in ``G`` and ``A``): the set ``Z``'s
-    data after those exact steps, as a set (and, ``tracked``, the kept factors' positions
-    in ``Z``)."""
+    data after those exact steps, as a set, and the kept factors' positions in ``Z``."""
     G, c, A, b, h, cerr, berr, _, pos = _eliminate_free(G, c, A, b, h, cerr, berr, free,
                                                         budgets)
     A, b, berr = _drop_zero_rows(A, b, berr)
     keep = (h > 0) & (G.any(axis=0) | A.any(axis=0))
     out = trusted_cz(G[:, keep], c, A[:, keep], b, h[keep], Z.unbounded_radius, cerr, berr)
-    return (out, pos[keep]) if tracked else out
+    return out, pos[keep]
 
 
 def _drop_zero_rows(A, b, berr):
@@ -720,7 +719,7 @@ def _eliminate_fast(Z: ConstrainedZonotope, max_constraints: int,
     # exact first: factors already unbounded go with a row each (no LP needed)
     G, c, A, b, h, cerr, berr = Z.G, Z.c, Z.A, Z.b, Z.h, Z.c_err, Z.b_err
     budgets = _budgets(G, c, A, b, h, cerr, berr)
-    Z = _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, np.isinf(h), budgets)
+    Z = _eliminate_and_trim(Z, G, c, A, b, h, cerr, berr, np.isinf(h), budgets)[0]
     while Z.n_con > max_constraints:
         h = Z.h
         bounded = np.isfinite(h) & (h > 0) & Z.A.any(axis=0)
