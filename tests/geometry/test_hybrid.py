@@ -37,6 +37,18 @@ def random_hybrid(rng, n=2, ng=4, nb=3, nc=2, spread=3.0):
     return HybridZonotope(Gc, Gb, rng.normal(size=n), Ac, Ab, b), (Gc, Gb, Ac, Ab, b)
 
 
+@pytest.fixture(params=["compiled", "numpy"])
+def set_ops(request, monkeypatch):
+    """The hybrid set operations' construction: the compiled one (the default) or the
+    NumPy one (the reference and the fallback); a test that takes this fixture checks
+    both against its oracle."""
+    if request.param == "numpy":
+        import setobs.geometry.hybrid as hybrid_module
+
+        monkeypatch.setattr(hybrid_module, "compiled_ops", None)
+    return request.param
+
+
 def leaves(H):
     """Every assignment's constrained zonotope, built from the public data."""
     out = []
@@ -150,7 +162,7 @@ def test_emptiness_and_containment_equal_enumeration(seed):
         assert H.contains(x) == want
 
 
-def test_union_is_the_operands_and_its_relaxation_their_convex_hull():
+def test_union_is_the_operands_and_its_relaxation_their_convex_hull(set_ops):
     rng = np.random.default_rng(3)
     ops = [CZ(rng.normal(size=(2, 3)), 4.0 * rng.normal(size=2),
               rng.normal(size=(1, 3)), rng.uniform(-0.3, 0.3, 1)) for _ in range(5)]
@@ -187,7 +199,7 @@ def test_leaves_of_a_union_of_polygons_have_the_polygons_vertices():
         assert len(matches) == 1
 
 
-def test_union_of_hybrid_zonotopes_enumerates_to_all_their_leaves():
+def test_union_of_hybrid_zonotopes_enumerates_to_all_their_leaves(set_ops):
     rng = np.random.default_rng(5)
     H1, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
     H2, _ = random_hybrid(rng, n=2, ng=2, nb=3, nc=2)
@@ -200,7 +212,7 @@ def test_union_of_hybrid_zonotopes_enumerates_to_all_their_leaves():
         assert abs(U.support(d) - want) <= REL * s
 
 
-def test_operations_agree_with_enumeration_of_the_operands():
+def test_operations_agree_with_enumeration_of_the_operands(set_ops):
     rng = np.random.default_rng(6)
     H1, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
     H2, _ = random_hybrid(rng, n=2, ng=3, nb=2, nc=1)
@@ -226,7 +238,7 @@ def test_operations_agree_with_enumeration_of_the_operands():
         assert abs(cut.support(d2) - max(Z.support(d2) for Z in live)) <= REL * s
 
 
-def test_random_chains_never_lose_a_sampled_point():
+def test_random_chains_never_lose_a_sampled_point(set_ops):
     rng = np.random.default_rng(7)
     for trial in range(4):
         ops = [CZ(rng.normal(size=(2, 3)), 3.0 * rng.normal(size=2)) for _ in range(3)]
@@ -247,7 +259,7 @@ def test_random_chains_never_lose_a_sampled_point():
             assert np.all(box.lo <= box.hi)
 
 
-def test_halfspace_and_polytope_cuts_equal_enumeration():
+def test_halfspace_and_polytope_cuts_equal_enumeration(set_ops):
     rng = np.random.default_rng(8)
     polys = [rng.normal(size=(6, 2)) + np.array([4.0 * k, 0.0]) for k in range(3)]
     U = HybridZonotope.from_vertices(polys)
@@ -303,7 +315,7 @@ def test_bad_input_and_conventions():
     assert abs(Hu.support([0.0, 1.0]) - 1.0) < 1e-9
 
 
-def test_pwa_reachable_sets_equal_the_union_over_mode_sequences():
+def test_pwa_reachable_sets_equal_the_union_over_mode_sequences(set_ops):
     """The reachable sets of a two-mode piecewise-affine system (a set that straddles the
     switching line) against the sets of every mode sequence, propagated one by one."""
     from setobs.geometry import pwa_reachable_sets
@@ -350,7 +362,7 @@ def test_pwa_reachable_sets_equal_the_union_over_mode_sequences():
         pwa_reachable_sets(modes, X0, -1)
 
 
-def test_projection_equals_the_leaves_projections():
+def test_projection_equals_the_leaves_projections(set_ops):
     rng = np.random.default_rng(10)
     H, _ = random_hybrid(rng, n=3, ng=4, nb=3, nc=2)
     Hp = H.project([2, 0])
@@ -495,7 +507,7 @@ def test_both_node_engines_equal_enumeration(rows, monkeypatch):
     assert rep.empty and rep.status == "empty"
 
 
-def test_a_union_keeps_its_operands_rounding_bounds():
+def test_a_union_keeps_its_operands_rounding_bounds(set_ops):
     """Operands that carry centre and right-hand-side uncertainty (``c_err``, ``b_err``,
     made large here so that they show): the union's supports must reach each operand's
     certified support, which widens by them (the operands' own queries are the oracle)."""
@@ -513,3 +525,50 @@ def test_a_union_keeps_its_operands_rounding_bounds():
         assert got >= want - 1e-12 * (1.0 + abs(want)), (d, got, want)
         # (outer by at most the other operand's uncertainty)
         assert got <= want + 0.3 * np.abs(d).sum() + 1e-9
+
+
+def test_the_compiled_and_numpy_constructions_build_the_same_sets(monkeypatch):
+    """The compiled union, Minkowski sum and generalised intersection against the NumPy
+    construction (the reference) on operands of every kind (constrained zonotopes with and
+    without rows, hybrid ones with binaries, rounding bounds on centres and right-hand
+    sides): the same relaxation entry for entry (to the order of the sums), the same
+    binary flags, rounding bounds within a few units of each other and both nonnegative."""
+    import setobs.geometry.hybrid as hybrid_module
+    from setobs.geometry.zonotope import trusted_cz
+
+    rng = np.random.default_rng(31)
+    H1, _ = random_hybrid(rng, n=3, ng=4, nb=2, nc=2)
+    H2, _ = random_hybrid(rng, n=3, ng=2, nb=1, nc=1)
+    G, A = rng.normal(size=(3, 4)), rng.normal(size=(2, 4))
+    Z1 = trusted_cz(G, rng.normal(size=3), A, A @ rng.uniform(-0.5, 0.5, 4), np.ones(4),
+                    cerr=np.array([1e-9, 0.0, 2e-9]), berr=np.array([0.0, 3e-9]))
+    Z2 = CZ(rng.normal(size=(3, 2)), rng.normal(size=3))
+    M = rng.normal(size=(3, 3))
+
+    def build():
+        U = HybridZonotope.from_union([H1, Z1, Z2, H2])
+        return [U, U + Z1, U + H2, U & Z1, H1.intersect(H2, M), (M @ U).intersect(Z2, M)]
+
+    compiled = build()
+    monkeypatch.setattr(hybrid_module, "compiled_ops", None)
+    reference = build()
+    for X, Y in zip(compiled, reference, strict=True):
+        RX, RY = X.relaxation, Y.relaxation
+        assert np.array_equal(X.binary, Y.binary)
+        for a, b in ((RX.G, RY.G), (RX.c, RY.c), (RX.A, RY.A), (RX.b, RY.b), (RX.h, RY.h)):
+            assert a.shape == b.shape
+            assert np.allclose(a, b, rtol=1e-13, atol=1e-13 * (1.0 + np.abs(b).max(initial=0)))
+        for a, b in ((RX.c_err, RY.c_err), (RX.b_err, RY.b_err)):
+            assert (a >= 0).all() and (b >= 0).all()
+            assert np.allclose(a, b, rtol=1e-6, atol=1e-30)
+
+
+def test_a_union_whose_data_would_overflow_is_refused():
+    """The union scales a copy's generator by its factor's bound (``-h_j G_j``): data of
+    1e100 each give 1e200, above MAX_MAGNITUDE, which the data guard refuses (with the
+    compiled construction too: it hands over to the NumPy one, which raises)."""
+    from setobs.exceptions import MagnitudeError
+
+    big = CZ(1e100 * np.eye(2), np.zeros(2), h=[1e100, 1e100])
+    with pytest.raises(MagnitudeError, match="union"):
+        HybridZonotope.from_union([big, CZ.from_box([0.0, 0.0], [1.0, 1.0])])

@@ -14,6 +14,10 @@
  * non-finite data, or data above MAX_MAGNITUDE, is ever built here (check_data is the
  * same guard for the sets the Python code builds).
  *
+ * The hybrid zonotopes' union, Minkowski sum and generalised intersection
+ * (hybrid_union, hybrid_combine) return the arrays of hybrid.py's construction, which
+ * wraps them: the same entries up to the order of the sums, the same rounding bounds.
+ *
  * Why C: these operations are array bookkeeping on small arrays, where NumPy's per-call
  * cost (about 1 us a call, a dozen calls an operation) made them 2-6x slower than
  * ZonoOpt's C++. Floating-point contraction is switched off in the build
@@ -575,6 +579,500 @@ fail:
     return NULL;
 }
 
+
+/* ------------------------------------------------------------------ hybrid union */
+/* One operand of hybrid_union: a ConstrainedZonotope (dense A, no binary factor) or a
+   HybridZonotope (its zonotope part _P, a ConstrainedZonotope without rows; its rows _R
+   as coordinate triplets i, j, v with b, berr; its flags _binary). */
+typedef struct {
+    Set s;            /* the CZ, or the hybrid's zonotope part (G, c, cerr, h, r) */
+    int dense;        /* 1: rows from s.mA */
+    Vec vi, vj, vv;   /* the triplets (hybrid), i and j int64 */
+    Vec vb, vberr;    /* the right-hand side and its bound (berr p NULL: exact) */
+    const char *bin;  /* the binary flags (NULL: none), stride bin_s */
+    npy_intp bin_s, m, f, nnz;
+    PyObject *refs[8];
+} Op;
+
+static PyObject *s_P, *s_R, *s_binary, *s_i, *s_j, *s_v, *s_b, *s_berr;
+
+static int int_view(PyObject *o, Vec *v) {
+    if (!PyArray_Check(o)) return 0;
+    PyArrayObject *a = (PyArrayObject *)o;
+    if (PyArray_TYPE(a) != NPY_INT64 || PyArray_NDIM(a) != 1 || !PyArray_ISNOTSWAPPED(a) ||
+        !PyArray_ISALIGNED(a))
+        return 0;
+    v->p = PyArray_BYTES(a);
+    v->n = PyArray_DIM(a, 0);
+    v->s = PyArray_STRIDE(a, 0);
+    return 1;
+}
+
+#define IAT(v, k) (*(const npy_int64 *)((v).p + (k) * (v).s))
+
+/* Read an operand; 0 if the fast path does not apply (refs taken are in op->refs). */
+static int read_op(PyObject *o, PyObject *hz_type, Op *op) {
+    memset(op->refs, 0, sizeof(op->refs));
+    op->bin = NULL;
+    if (cz_type != NULL && Py_TYPE(o) == cz_type) {
+        if (!read_set(o, &op->s)) return 0;
+        op->dense = 1;
+        op->m = op->s.nc;
+        op->f = op->s.ng;
+        op->vb = op->s.vb;
+        op->vberr = op->s.vberr;
+        op->nnz = op->m * op->f;
+        return 1;
+    }
+    if ((PyObject *)Py_TYPE(o) != hz_type) return 0;
+    PyObject *P = op->refs[0] = PyObject_GetAttr(o, s_P);
+    PyObject *R = op->refs[1] = P ? PyObject_GetAttr(o, s_R) : NULL;
+    PyObject *B = op->refs[2] = R ? PyObject_GetAttr(o, s_binary) : NULL;
+    PyObject *Ti = op->refs[3] = B ? PyObject_GetAttr(R, s_i) : NULL;
+    PyObject *Tj = op->refs[4] = Ti ? PyObject_GetAttr(R, s_j) : NULL;
+    PyObject *Tv = op->refs[5] = Tj ? PyObject_GetAttr(R, s_v) : NULL;
+    PyObject *b = op->refs[6] = Tv ? PyObject_GetAttr(R, s_b) : NULL;
+    PyObject *e = op->refs[7] = b ? PyObject_GetAttr(R, s_berr) : NULL;
+    if (e == NULL) {
+        PyErr_Clear();
+        return 0;
+    }
+    if (!read_set(P, &op->s) || op->s.nc != 0 || !int_view(Ti, &op->vi) ||
+        !int_view(Tj, &op->vj) || !vec_view(Tv, &op->vv) || !vec_view(b, &op->vb))
+        return 0;
+    op->dense = 0;
+    op->m = op->vb.n;
+    op->f = op->s.ng;
+    op->nnz = op->vv.n;
+    if (op->vi.n != op->nnz || op->vj.n != op->nnz || !err_view(e, op->m, &op->vberr))
+        return 0;
+    for (npy_intp k = 0; k < op->nnz; k++) {
+        npy_int64 i = IAT(op->vi, k), j = IAT(op->vj, k);
+        if (i < 0 || i >= op->m || j < 0 || j >= op->f) return 0;
+    }
+    if (!PyArray_Check(B)) return 0;
+    PyArrayObject *ba = (PyArrayObject *)B;
+    if (PyArray_TYPE(ba) != NPY_BOOL || PyArray_NDIM(ba) != 1 || PyArray_DIM(ba, 0) != op->f)
+        return 0;
+    op->bin = PyArray_BYTES(ba);
+    op->bin_s = PyArray_STRIDE(ba, 0);
+    return 1;
+}
+
+static void release_ops(Op *ops, Py_ssize_t n) {
+    for (Py_ssize_t t = 0; t < n; t++)
+        for (int k = 0; k < 8; k++) Py_XDECREF(ops[t].refs[k]);
+}
+
+static PyArrayObject *new_ivec(npy_intp n) {
+    npy_intp d[1] = {n};
+    return (PyArrayObject *)PyArray_SimpleNew(1, d, NPY_INT64);
+}
+
+static int finite_within(const double *x, npy_intp n) {
+    for (npy_intp k = 0; k < n; k++)
+        if (!(fabs(x[k]) <= max_mag)) return 0;
+    return 1;
+}
+
+/* hybrid_union(ops, HybridZonotope): the data of the union of the operands (two or more, of one dimension,
+   every factor bounded) by the disjunctive construction of hybrid.py's _union, the same
+   arrays up to the order of the sums: (P, i, j, v, b, berr, binary), P the zonotope part
+   (a ConstrainedZonotope without rows), the rows as triplets; None if the fast path does
+   not apply (an operand of another type, other dimensions, an unbounded factor) or a
+   result entry would not pass the data guard: the NumPy code then runs, and raises the
+   user-facing errors. */
+static PyObject *hybrid_union(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 2 || !PyList_Check(args[0]) || !PyType_Check(args[1])) {
+        PyErr_SetString(PyExc_TypeError, "hybrid_union(list of operands, HybridZonotope)");
+        return NULL;
+    }
+    PyObject *lst = args[0];
+    Py_ssize_t N = PyList_GET_SIZE(lst);
+    if (N < 2) Py_RETURN_NONE;
+    Op *ops = (Op *)PyMem_Calloc((size_t)N, sizeof(Op));
+    if (ops == NULL) return PyErr_NoMemory();
+    PyObject *result = NULL;
+    PyArrayObject *G = NULL, *c = NULL, *ce = NULL, *Ti = NULL, *Tj = NULL, *Tv = NULL,
+                  *b = NULL, *be = NULL, *bin = NULL, *A0 = NULL, *b0 = NULL, *h = NULL;
+    npy_intp *F = NULL, *R0 = NULL, *nc = NULL;
+    Py_ssize_t nread = 0;
+    int ok = 1;
+    npy_intp n = -1, sumf = 0, rows = 1, nnz = 0;
+    for (Py_ssize_t t = 0; t < N && ok; t++) {
+        ok = read_op(PyList_GET_ITEM(lst, t), args[1], &ops[t]);
+        nread = t + 1;
+        if (!ok) break;
+        Op *op = &ops[t];
+        if (n < 0) n = op->s.n;
+        if (op->s.n != n) ok = 0;
+        for (npy_intp j = 0; j < op->f && ok; j++)
+            if (!isfinite(VAT(op->s.vh, j))) ok = 0;
+        sumf += op->f;
+        rows += op->m + op->f;
+        nnz += op->nnz + op->m + 3 * op->f;
+    }
+    if (!ok) goto fallback;
+    nnz += N;
+    npy_intp nf = N + 2 * sumf;
+    F = PyMem_Malloc(sizeof(npy_intp) * (size_t)N);
+    R0 = PyMem_Malloc(sizeof(npy_intp) * (size_t)N);
+    nc = PyMem_Malloc(sizeof(npy_intp) * (size_t)N);
+    if (!F || !R0 || !nc) {
+        PyErr_NoMemory();
+        goto error;
+    }
+    npy_intp d2[2] = {n, nf};
+    if (!(G = (PyArrayObject *)PyArray_ZEROS(2, d2, NPY_DOUBLE, 0)) || !(c = new_vec(n)) ||
+        !(ce = new_vec(n)) || !(Ti = new_ivec(nnz)) || !(Tj = new_ivec(nnz)) ||
+        !(Tv = new_vec(nnz)) || !(b = new_vec(rows)) || !(be = new_vec(rows)) ||
+        !(h = new_vec(nf)) || !(A0 = new_mat(0, nf, 1)) || !(b0 = new_vec(0)))
+        goto error;
+    {
+        npy_intp db[1] = {nf};
+        bin = (PyArrayObject *)PyArray_ZEROS(1, db, NPY_BOOL, 0);
+        if (bin == NULL) goto error;
+    }
+    double *gd = DATA(G), *cd = DATA(c), *ced = DATA(ce), *vd = DATA(Tv), *bd = DATA(b),
+           *bed = DATA(be), *hd = DATA(h);
+    npy_int64 *id = (npy_int64 *)PyArray_DATA(Ti), *jd = (npy_int64 *)PyArray_DATA(Tj);
+    npy_bool *bind_ = (npy_bool *)PyArray_DATA(bin);
+    double *csum = PyMem_Calloc((size_t)(3 * n + 1), sizeof(double));
+    if (csum == NULL) {
+        PyErr_NoMemory();
+        goto error;
+    }
+    double *cabs = csum + n, *cops = cabs + n;
+    for (npy_intp k = 0; k < nf; k++) hd[k] = 1.0;
+    for (npy_intp k = 0; k < N; k++) bind_[k] = 1;
+    npy_intp fstart = 0, r0 = 0, e = 0, ktot = N + sumf;
+    int have_cops = 0;
+    for (Py_ssize_t t = 0; t < N; t++) {
+        Op *op = &ops[t];
+        F[t] = N + 2 * fstart;
+        R0[t] = r0;
+        npy_intp nct = 0;
+        for (npy_intp j = 0; j < op->f; j++)
+            nct += !(op->bin && *(const npy_bool *)(op->bin + j * op->bin_s));
+        nc[t] = nct;
+        fstart += op->f;
+        r0 += op->m + op->f;
+    }
+    /* per operand: the copies' columns (col1 at k, col2 = col1 + shift), G, c, the rows */
+    npy_intp *col1 = PyMem_Malloc(sizeof(npy_intp) * (size_t)(2 * (sumf + 1)));
+    if (col1 == NULL) {
+        PyMem_Free(csum);
+        PyErr_NoMemory();
+        goto error;
+    }
+    npy_intp *col2 = col1 + sumf + 1;
+    double *scale = PyMem_Malloc(sizeof(double) * (size_t)(sumf + 1));
+    double *rsum = PyMem_Malloc(sizeof(double) * (size_t)(2 * (rows + 1)));
+    if (scale == NULL || rsum == NULL) {
+        PyMem_Free(csum);
+        PyMem_Free(col1);
+        PyMem_Free(scale);
+        PyMem_Free(rsum);
+        PyErr_NoMemory();
+        goto error;
+    }
+    double *rabs = rsum + rows + 1;
+    fstart = 0;
+    for (Py_ssize_t t = 0; t < N; t++) {
+        Op *op = &ops[t];
+        npy_intp nct = nc[t], nbt = op->f - nct, rc = 0, rb = 0;
+        npy_intp *c1 = col1 + fstart, *c2 = col2 + fstart;
+        double *sc = scale + fstart;
+        for (npy_intp j = 0; j < op->f; j++) {
+            int isb = op->bin && *(const npy_bool *)(op->bin + j * op->bin_s);
+            npy_intp pos = isb ? nct + rb : rc;
+            c1[j] = F[t] + pos + (isb ? nct : 0);
+            c2[j] = c1[j] + (isb ? nbt : nct);
+            sc[j] = isb ? 1.0 : -VAT(op->s.vh, j);
+            if (isb) {
+                bind_[c1[j]] = 1;
+                rb++;
+            } else {
+                rc++;
+            }
+            /* the copy's row: s1 + s2 - beta_t = -1 or bt + t - beta_t = -1 */
+            npy_intp row = R0[t] + op->m + pos;
+            id[e] = row; jd[e] = c1[j]; vd[e++] = 1.0;
+            id[e] = row; jd[e] = c2[j]; vd[e++] = 1.0;
+            id[e] = row; jd[e] = t; vd[e++] = -1.0;
+            bd[row] = -1.0;
+            bed[row] = 0.0;
+        }
+        /* G: the copies' columns, the selector's column ((c - G_B 1 + P 1)/2) */
+        for (npy_intp r = 0; r < n; r++) {
+            double S = 0.0;
+            for (npy_intp j = 0; j < op->f; j++) {
+                double g = AT(op->s.mG, r, j) * sc[j];
+                gd[r * nf + c1[j]] = g;
+                S += g;
+                csum[r] += g;
+                cabs[r] += fabs(g);
+            }
+            double cr = VAT(op->s.vc, r);
+            gd[r * nf + t] = 0.5 * (cr - S);
+            csum[r] += cr;
+            cabs[r] += fabs(cr);
+            if (op->s.vcerr.p) {
+                double x = VAT(op->s.vcerr, r);
+                if (x > cops[r]) cops[r] = x;
+                have_cops |= x != 0.0;
+            }
+        }
+        /* the operand's rows: scaled entries, the selector's entry, b, b_err */
+        for (npy_intp i = 0; i < op->m; i++) rsum[i] = rabs[i] = 0.0;
+        if (op->dense) {
+            for (npy_intp i = 0; i < op->m; i++)
+                for (npy_intp j = 0; j < op->f; j++) {
+                    double a = AT(op->s.mA, i, j);
+                    if (a == 0.0) continue;
+                    double x = a * sc[j];
+                    if (x == 0.0) continue;
+                    id[e] = R0[t] + i; jd[e] = c1[j]; vd[e++] = x;
+                    rsum[i] += x;
+                    rabs[i] += fabs(x);
+                }
+        } else {
+            for (npy_intp k = 0; k < op->nnz; k++) {
+                npy_int64 i = IAT(op->vi, k), j = IAT(op->vj, k);
+                double x = VAT(op->vv, k) * sc[j];
+                if (x == 0.0) continue;
+                id[e] = R0[t] + i; jd[e] = c1[j]; vd[e++] = x;
+                rsum[i] += x;
+                rabs[i] += fabs(x);
+            }
+        }
+        double kr = 1.0 + (double)op->f;
+        double gk = gamma_k(kr + 1.0), widen = 1.0 + gamma_k(kr + 2.0), w3 = 1.0 + gamma_k(3.0);
+        for (npy_intp i = 0; i < op->m; i++) {
+            double bi = VAT(op->vb, i), sel = -0.5 * (rsum[i] + bi);
+            if (sel != 0.0) {
+                id[e] = R0[t] + i; jd[e] = t; vd[e++] = sel;
+            }
+            bd[R0[t] + i] = 0.5 * (bi - rsum[i]);
+            double x = gk * (0.5 * (fabs(bi) + rabs[i])) * widen;
+            if (op->vberr.p) x += VAT(op->vberr, i) * w3;
+            bed[R0[t] + i] = x;
+        }
+        fstart += op->f;
+    }
+    /* sum beta_t = 2 - N */
+    for (Py_ssize_t t = 0; t < N; t++) {
+        id[e] = rows - 1; jd[e] = t; vd[e++] = 1.0;
+    }
+    bd[rows - 1] = 2.0 - (double)N;
+    bed[rows - 1] = 0.0;
+    {
+        double gk = gamma_k((double)ktot + 1.0), widen = 1.0 + gamma_k((double)ktot + 2.0),
+               w3 = 1.0 + gamma_k(3.0);
+        for (npy_intp r = 0; r < n; r++) {
+            cd[r] = 0.5 * csum[r];
+            ced[r] = gk * (0.5 * cabs[r]) * widen;
+            if (have_cops) ced[r] = (ced[r] + cops[r]) * w3;
+        }
+    }
+    PyMem_Free(csum);
+    PyMem_Free(col1);
+    PyMem_Free(scale);
+    PyMem_Free(rsum);
+    /* the data guard on what was computed (G, c, c_err, v, b, b_err) */
+    if (!finite_within(gd, n * nf) || !finite_within(cd, n) || !finite_within(ced, n) ||
+        !finite_within(vd, e) || !finite_within(bd, rows) || !finite_within(bed, rows))
+        goto fallback;
+    {
+        /* (the unused tail of the triplets: entries that were zero) */
+        PyArray_Dims nd = {&e, 1};
+        PyObject *t1 = PyArray_Resize(Ti, &nd, 0, NPY_CORDER);
+        PyObject *t2 = t1 ? PyArray_Resize(Tj, &nd, 0, NPY_CORDER) : NULL;
+        PyObject *t3 = t2 ? PyArray_Resize(Tv, &nd, 0, NPY_CORDER) : NULL;
+        Py_XDECREF(t1);
+        Py_XDECREF(t2);
+        Py_XDECREF(t3);
+        if (t3 == NULL) goto error;
+    }
+    double rmin = PyFloat_AS_DOUBLE(ops[0].s.r);
+    PyObject *r = ops[0].s.r;
+    for (Py_ssize_t t = 1; t < N; t++)
+        if (PyFloat_AS_DOUBLE(ops[t].s.r) < rmin) {
+            rmin = PyFloat_AS_DOUBLE(ops[t].s.r);
+            r = ops[t].s.r;
+        }
+    PyObject *P = make(freeze(G), freeze(c), freeze(A0), freeze(b0), freeze(h), new_ref(r),
+                       freeze_err((PyObject *)ce), new_ref(Py_None));
+    G = c = ce = A0 = b0 = h = NULL;
+    if (P == NULL) goto error;
+    PyObject *berr = freeze_err((PyObject *)be);
+    be = NULL;
+    if (berr == NULL) {
+        Py_DECREF(P);
+        goto error;
+    }
+    result = Py_BuildValue("(NNNNNNN)", P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv,
+                           freeze(b), berr, freeze(bin));
+    Ti = Tj = Tv = b = bin = NULL;
+    goto done;
+fallback:
+    result = new_ref(Py_None);
+    goto done;
+error:
+    result = NULL;
+done:
+    release_ops(ops, nread);
+    PyMem_Free(ops);
+    PyMem_Free(F);
+    PyMem_Free(R0);
+    PyMem_Free(nc);
+    Py_XDECREF(G);
+    Py_XDECREF(c);
+    Py_XDECREF(ce);
+    Py_XDECREF(Ti);
+    Py_XDECREF(Tj);
+    Py_XDECREF(Tv);
+    Py_XDECREF(b);
+    Py_XDECREF(be);
+    Py_XDECREF(bin);
+    Py_XDECREF(A0);
+    Py_XDECREF(b0);
+    Py_XDECREF(h);
+    return result;
+}
+
+
+/* Append the triplets of a dense matrix's nonzero entries (rows + r0, columns + c0). */
+static void put_dense_triplets(const Mat *A, npy_intp r0, npy_intp c0, npy_int64 *id,
+                               npy_int64 *jd, double *vd, npy_intp *e) {
+    for (npy_intp i = 0; i < A->r; i++)
+        for (npy_intp j = 0; j < A->c; j++) {
+            double x = AT(*A, i, j);
+            if (x == 0.0) continue;
+            id[*e] = r0 + i;
+            jd[*e] = c0 + j;
+            vd[(*e)++] = x;
+        }
+}
+
+/* hybrid_combine(kind, H, W, R, HybridZonotope): the data (P, i, j, v, b, berr, binary) of
+   H + W (kind 0, R None) or of {z in H : R z in W} (kind 1, R None for the identity), H a
+   hybrid zonotope and W a hybrid or constrained zonotope: the zonotope parts combined by
+   minkowski_sum or intersect above (for a constrained zonotope W, W itself, whose rows
+   come out of it beside zero columns), the rows stacked block-diagonally, the new ones
+   last. None if the fast path does not apply (the NumPy code then runs). */
+static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 5 || !PyLong_Check(args[0]) || !PyType_Check(args[4])) {
+        PyErr_SetString(PyExc_TypeError, "hybrid_combine(kind, H, W, R, HybridZonotope)");
+        return NULL;
+    }
+    long kind = PyLong_AsLong(args[0]);
+    if (kind != 0 && kind != 1) Py_RETURN_NONE;
+    Op a, w;
+    int ra = read_op(args[1], args[4], &a), rw = ra ? read_op(args[2], args[4], &w) : 0;
+    PyObject *result = NULL, *S = NULL;
+    PyArrayObject *Ti = NULL, *Tj = NULL, *Tv = NULL, *b = NULL, *be = NULL, *bin = NULL,
+                  *A0 = NULL, *b0 = NULL;
+    if (!ra || !rw || a.dense) goto fallback;
+    PyObject *pair[3] = {a.refs[0], w.dense ? args[2] : w.refs[0], args[3]};
+    S = kind == 0 ? minkowski_sum(mod, pair, 2) : intersect(mod, pair, 3);
+    if (S == NULL) goto error;
+    Set s;
+    if (S == Py_None || !read_set(S, &s)) goto fallback;
+    npy_intp mw = w.dense ? 0 : w.m, m = a.m + mw + s.nc, f = a.f + w.f;
+    npy_intp nnz = a.nnz + (w.dense ? 0 : w.nnz) + s.nc * s.ng;
+    if (s.ng != f) goto fallback;
+    if (!(Ti = new_ivec(nnz)) || !(Tj = new_ivec(nnz)) || !(Tv = new_vec(nnz)) ||
+        !(b = new_vec(m)) || !(be = new_vec(m)) || !(A0 = new_mat(0, f, 1)) ||
+        !(b0 = new_vec(0)))
+        goto error;
+    {
+        npy_intp db[1] = {f};
+        if (!(bin = (PyArrayObject *)PyArray_ZEROS(1, db, NPY_BOOL, 0))) goto error;
+    }
+    npy_int64 *id = (npy_int64 *)PyArray_DATA(Ti), *jd = (npy_int64 *)PyArray_DATA(Tj);
+    double *vd = DATA(Tv), *bd = DATA(b), *bed = DATA(be);
+    npy_intp e = 0;
+    for (npy_intp k = 0; k < a.nnz; k++) {
+        id[e] = IAT(a.vi, k);
+        jd[e] = IAT(a.vj, k);
+        vd[e++] = VAT(a.vv, k);
+    }
+    if (!w.dense)
+        for (npy_intp k = 0; k < w.nnz; k++) {
+            id[e] = IAT(w.vi, k) + a.m;
+            jd[e] = IAT(w.vj, k) + a.f;
+            vd[e++] = VAT(w.vv, k);
+        }
+    put_dense_triplets(&s.mA, a.m + mw, 0, id, jd, vd, &e);
+    int exact = a.vberr.p == NULL && (w.dense || w.vberr.p == NULL) && s.vberr.p == NULL;
+    for (npy_intp i = 0; i < a.m; i++) {
+        bd[i] = VAT(a.vb, i);
+        bed[i] = a.vberr.p ? VAT(a.vberr, i) : 0.0;
+    }
+    for (npy_intp i = 0; i < mw; i++) {
+        bd[a.m + i] = VAT(w.vb, i);
+        bed[a.m + i] = w.vberr.p ? VAT(w.vberr, i) : 0.0;
+    }
+    for (npy_intp i = 0; i < s.nc; i++) {
+        bd[a.m + mw + i] = VAT(s.vb, i);
+        bed[a.m + mw + i] = s.vberr.p ? VAT(s.vberr, i) : 0.0;
+    }
+    npy_bool *bn = (npy_bool *)PyArray_DATA(bin);
+    for (npy_intp j = 0; j < a.f; j++) bn[j] = *(const npy_bool *)(a.bin + j * a.bin_s);
+    if (w.bin)
+        for (npy_intp j = 0; j < w.f; j++)
+            bn[a.f + j] = *(const npy_bool *)(w.bin + j * w.bin_s);
+    {
+        PyArray_Dims nd = {&e, 1};
+        PyObject *t1 = PyArray_Resize(Ti, &nd, 0, NPY_CORDER);
+        PyObject *t2 = t1 ? PyArray_Resize(Tj, &nd, 0, NPY_CORDER) : NULL;
+        PyObject *t3 = t2 ? PyArray_Resize(Tv, &nd, 0, NPY_CORDER) : NULL;
+        Py_XDECREF(t1);
+        Py_XDECREF(t2);
+        Py_XDECREF(t3);
+        if (t3 == NULL) goto error;
+    }
+    PyObject *P = make(new_ref(s.G), new_ref(s.c), freeze(A0), freeze(b0), new_ref(s.h),
+                       new_ref(s.r), new_ref(s.cerr), new_ref(Py_None));
+    A0 = b0 = NULL;
+    if (P == NULL) goto error;
+    PyObject *berr;
+    if (exact) {
+        Py_DECREF(be);
+        berr = new_ref(Py_None);
+    } else {
+        berr = freeze_err((PyObject *)be);
+    }
+    be = NULL;
+    if (berr == NULL) {
+        Py_DECREF(P);
+        goto error;
+    }
+    result = Py_BuildValue("(NNNNNNN)", P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv,
+                           freeze(b), berr, freeze(bin));
+    Ti = Tj = Tv = b = bin = NULL;
+    goto done;
+fallback:
+    result = new_ref(Py_None);
+    goto done;
+error:
+    result = NULL;
+done:
+    release_ops(&a, 1);
+    if (ra) release_ops(&w, 1); /* (read_op ran on w: its refs are set or NULL) */
+    Py_XDECREF(S);
+    Py_XDECREF(Ti);
+    Py_XDECREF(Tj);
+    Py_XDECREF(Tv);
+    Py_XDECREF(b);
+    Py_XDECREF(be);
+    Py_XDECREF(bin);
+    Py_XDECREF(A0);
+    Py_XDECREF(b0);
+    return result;
+}
+
 /* ------------------------------------------------------------------ binding */
 /* bind(cls, MAX_MAGNITUDE): the offsets of the slots this module writes, after checking
    that they are exactly the class's object slots. A slot the class has and this module
@@ -648,6 +1146,12 @@ static PyMethodDef methods[] = {
     {"intersect", (PyCFunction)(void (*)(void))intersect, METH_FASTCALL,
      "{z in Z : R z in W} (Scott et al. 2016, eq. (13)); None if the fast path does not "
      "apply."},
+    {"hybrid_union", (PyCFunction)(void (*)(void))hybrid_union, METH_FASTCALL,
+     "The data of a union of constrained or hybrid zonotopes (hybrid.py's _union); None "
+     "if the fast path does not apply."},
+    {"hybrid_combine", (PyCFunction)(void (*)(void))hybrid_combine, METH_FASTCALL,
+     "The data of a hybrid zonotope's Minkowski sum or generalised intersection with a "
+     "hybrid or constrained zonotope; None if the fast path does not apply."},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef moduledef = {PyModuleDef_HEAD_INIT, "_setops",
@@ -658,5 +1162,11 @@ PyMODINIT_FUNC PyInit__setops(void) {
     import_array();
     lp_key = PyUnicode_InternFromString("lp");
     if (lp_key == NULL) return NULL;
+    if (!(s_P = PyUnicode_InternFromString("_P")) || !(s_R = PyUnicode_InternFromString("_R")) ||
+        !(s_binary = PyUnicode_InternFromString("_binary")) ||
+        !(s_i = PyUnicode_InternFromString("i")) || !(s_j = PyUnicode_InternFromString("j")) ||
+        !(s_v = PyUnicode_InternFromString("v")) || !(s_b = PyUnicode_InternFromString("b")) ||
+        !(s_berr = PyUnicode_InternFromString("berr")))
+        return NULL;
     return PyModule_Create(&moduledef);
 }

@@ -12,13 +12,22 @@ with a size that grows linearly where a list of polytopes grows exponentially.
 
 Representation
 --------------
-A :class:`HybridZonotope` holds its *convex relaxation* (the binary factors relaxed to
-``[-1, 1]``), an extended :class:`~setobs.ConstrainedZonotope`, and which of its factors
-are binary. The set operations are the relaxation's exact operations (Scott et al. 2016,
-Sec. 3; Bird et al. 2023, Propositions 1-3: linear map, Minkowski sum, generalised
-intersection and Cartesian product act on the factors as for a constrained zonotope), the
-binary flags following their factors; the rounding bounds of centres and right-hand sides
-(``c_err``, ``b_err``) are carried as for constrained zonotopes.
+A :class:`HybridZonotope` is its *convex relaxation* (the binary factors relaxed to
+``[-1, 1]``), an extended constrained zonotope, and which of its factors are binary. It
+stores the relaxation in two parts: the *zonotope part* (``G``, ``c``, ``c_err``, ``h``: a
+:class:`~setobs.ConstrainedZonotope` without rows) and the *rows* ``A xi = b`` (``b_err``)
+with ``A`` sparse, as coordinate triplets; the dense relaxation
+(:attr:`HybridZonotope.relaxation`) and the compressed-column ``A`` that HiGHS takes are
+built once, when a query asks. The set operations are the relaxation's exact operations
+(Scott et al. 2016, Sec. 3; Bird et al. 2023, Propositions 1-3: linear map, Minkowski
+sum, generalised intersection and Cartesian product act on the factors as for a
+constrained zonotope): the zonotope parts combine by the constrained zonotope's own
+operations (the generalised intersection's new rows ``[R G, -G_W]``, ``c_W - R c`` come
+out of the zonotope parts' intersection), the rows stack block-diagonally, the binary
+flags follow their factors, and the rounding bounds of centres and right-hand sides
+(``c_err``, ``b_err``) are carried as for constrained zonotopes. The union, the Minkowski
+sum and the generalised intersection have a compiled construction (``_setops.c``) of the
+same arrays; the NumPy code here is its reference and its fallback.
 
 Certified queries (branch and bound)
 ------------------------------------
@@ -117,13 +126,15 @@ from ..tolerances import (
     ZERO_TOL,
 )
 from ._bounds import cat_err, map_err
-from .box import Box
+from ._guard import check_set_data
+from .box import Box, box_center_radius
 from .operations import empty_set
 from .operations import from_vertices as cz_from_vertices
 from .reduction import reduce_exact_among
 from .reduction import remove_redundancy as cz_remove_redundancy
 from .zonotope import (
     ConstrainedZonotope,
+    compiled_ops,
     factor_polytope,
     owned_cz,
     support_point_factors,
@@ -224,6 +235,81 @@ def _rebuild(Z: ConstrainedZonotope, binary: NDArray[np.bool_]) -> HybridZonotop
     return HybridZonotope.from_relaxation(Z, binary)
 
 
+def _zonotope_part(G, c, cerr, h, unbounded_radius: float, op: str) -> ConstrainedZonotope:
+    """The constrained zonotope without rows that holds a hybrid zonotope's ``G``, ``c``,
+    ``c_err`` and ``h`` (its exact operations are the hybrid's on those arrays)."""
+    return owned_cz(G, c, np.zeros((0, G.shape[1])), np.zeros(0), h, unbounded_radius,
+                    None if cerr is None else _err(cerr), None, op=op)
+
+
+class _Rows:
+    """A hybrid zonotope's constraint rows ``A xi = b`` (``b_err`` their rounding bound),
+    ``A`` stored sparse as coordinate triplets (``m x nf``, no zero entries, no repeated
+    position), its dense and compressed-column forms built once, when a query asks.
+
+    The set operations only place blocks (a Minkowski sum's or Cartesian product's
+    block-diagonal ``A``, an intersection's new rows, a union's copies), so they cost the
+    size of the data, not ``m x nf``; sets that share rows (a linear map, a projection)
+    share this object and its cached forms."""
+
+    __slots__ = ("_csc", "_dense", "b", "berr", "i", "j", "m", "nf", "v")
+
+    def __init__(self, i, j, v, m: int, nf: int, b, berr, dense=None) -> None:
+        self.i, self.j, self.v, self.m, self.nf = i, j, v, m, nf
+        self.b = readonly(b)
+        self.berr = None if berr is None else readonly(berr)
+        self._dense, self._csc = dense, None
+
+    @staticmethod
+    def frozen(i, j, v, nf: int, b, berr) -> _Rows:
+        """The rows of a compiled operation's fresh read-only arrays, taken as they are."""
+        self = object.__new__(_Rows)
+        self.i, self.j, self.v, self.m, self.nf = i, j, v, b.size, nf
+        self.b, self.berr, self._dense, self._csc = b, berr, None, None
+        return self
+
+    @staticmethod
+    def from_dense(A, b, berr) -> _Rows:
+        """The rows of a dense ``A`` (kept as the dense form)."""
+        i, j = np.nonzero(A)
+        return _Rows(i, j, A[i, j], A.shape[0], A.shape[1], b, berr, A)
+
+    @property
+    def b_err(self) -> NDArray[np.float64]:
+        return self.berr if self.berr is not None else np.zeros(self.m)
+
+    def dense(self) -> NDArray[np.float64]:
+        """``A`` as a dense read-only array."""
+        if self._dense is None:
+            flat = np.bincount(self.i * self.nf + self.j, weights=self.v,
+                               minlength=self.m * self.nf)
+            self._dense = readonly(flat.reshape(self.m, self.nf))
+        return self._dense
+
+    def csc(self):
+        """``A`` as a SciPy compressed-column array (sorted indices)."""
+        if self._csc is None:
+            self._csc = sparse.csc_array((self.v, (self.i, self.j)), shape=(self.m, self.nf))
+            self._csc.sort_indices()
+        return self._csc
+
+    def block_diag(self, other: _Rows) -> _Rows:
+        """``[[A, 0], [0, A_other]]`` with the right-hand sides stacked."""
+        return _Rows(np.concatenate([self.i, other.i + self.m]),
+                     np.concatenate([self.j, other.j + self.nf]),
+                     np.concatenate([self.v, other.v]), self.m + other.m,
+                     self.nf + other.nf, np.concatenate([self.b, other.b]),
+                     cat_err(self.berr, self.m, other.berr, other.m))
+
+    def stacked(self, A, b, berr) -> _Rows:
+        """These rows with the dense rows ``A x = b`` (``b_err`` ``berr``) below."""
+        i, j = np.nonzero(A)
+        return _Rows(np.concatenate([self.i, i + self.m]), np.concatenate([self.j, j]),
+                     np.concatenate([self.v, A[i, j]]), self.m + A.shape[0], self.nf,
+                     np.concatenate([self.b, b]),
+                     cat_err(self.berr, self.m, berr, A.shape[0]))
+
+
 class HybridZonotope:
     r"""Hybrid zonotope ``{Gc xc + Gb xb + c : Ac xc + Ab xb = b, |xc| <= h, xb in {-1,1}^nb}``.
 
@@ -275,8 +361,9 @@ class HybridZonotope:
     True
     """
 
-    __slots__ = ("_Z", "_binary", "_cache")
-    _Z: ConstrainedZonotope
+    __slots__ = ("_P", "_R", "_binary", "_cache")
+    _P: ConstrainedZonotope
+    _R: _Rows
     _binary: NDArray[np.bool_]
     _cache: dict
     __array_ufunc__ = None  # so that ndarray @ H calls H.__rmatmul__
@@ -316,9 +403,35 @@ class HybridZonotope:
         self._set(Z, np.concatenate([np.zeros(ng, bool), np.ones(nb, bool)]))
 
     def _set(self, Z: ConstrainedZonotope, binary: NDArray[np.bool_]) -> None:
-        object.__setattr__(self, "_Z", Z)
-        object.__setattr__(self, "_binary", readonly(np.array(binary, dtype=bool)))
+        self._put(_zonotope_part(Z.G, Z.c, Z.c_err, Z.h, Z.unbounded_radius, "a hybrid zonotope"),
+                  _Rows.from_dense(Z.A, Z.b, _err(Z.b_err)),
+                  readonly(np.array(binary, dtype=bool)))
+        self._cache["Z"] = Z
+
+    def _put(self, P: ConstrainedZonotope, R: _Rows, binary: NDArray[np.bool_]) -> None:
+        object.__setattr__(self, "_P", P)
+        object.__setattr__(self, "_R", R)
+        object.__setattr__(self, "_binary", binary)
         object.__setattr__(self, "_cache", {})
+
+    @staticmethod
+    def _make(P: ConstrainedZonotope, R: _Rows, binary: NDArray[np.bool_]) -> HybridZonotope:
+        """The hybrid zonotope of a zonotope part ``P``, rows ``R`` and binary flags (a
+        read-only array), the caller's data taken as they are."""
+        self = object.__new__(HybridZonotope)
+        self._put(P, R, binary)
+        return self
+
+    @property
+    def _Z(self) -> ConstrainedZonotope:
+        """The convex relaxation as a dense constrained zonotope (built once, when asked)."""
+        Z = self._cache.get("Z")
+        if Z is None:
+            P, R = self._P, self._R
+            Z = owned_cz(P.G, P.c, R.dense(), R.b, P.h, P.unbounded_radius,
+                         _err(P.c_err), R.berr, op="the relaxation of a hybrid zonotope")
+            self._cache["Z"] = Z
+        return Z
 
     @classmethod
     def from_relaxation(cls, Z: ConstrainedZonotope, binary: ArrayLike) -> HybridZonotope:
@@ -375,18 +488,26 @@ class HybridZonotope:
         DimensionError
             On operands of different dimensions.
         """
-        ops = [_as_hybrid(S, "from_union") for S in sets]
+        ops = list(sets)
+        if len(ops) > 1 and compiled_ops is not None:
+            out = compiled_ops.hybrid_union(ops, HybridZonotope)
+            if out is not None:  # (else the checks below, then the NumPy construction)
+                return _from_data(out)
         if not ops:
             raise ArgumentError("from_union needs at least one set")
+        for i, S in enumerate(ops):
+            if not isinstance(S, HybridZonotope | ConstrainedZonotope):
+                raise ArgumentError(f"from_union expects hybrid or constrained zonotopes, "
+                                    f"got {type(S).__name__} (operand {i})")
         n = ops[0].dim
-        for i, H in enumerate(ops):
-            if H.dim != n:
-                raise DimensionError(f"union: operand {i} has dimension {H.dim}, operand 0 {n}")
-            if np.isinf(H._Z.h).any():
+        for i, S in enumerate(ops):
+            if S.dim != n:
+                raise DimensionError(f"union: operand {i} has dimension {S.dim}, operand 0 {n}")
+            if np.isinf(S._P.h if isinstance(S, HybridZonotope) else S.h).any():
                 raise ArgumentError(f"union: operand {i} has an unbounded factor (h = inf), "
                                     f"which the disjunctive construction cannot switch off")
         if len(ops) == 1:
-            return ops[0]
+            return _as_hybrid(ops[0], "from_union")
         return _union(ops)
 
     @classmethod
@@ -422,12 +543,12 @@ class HybridZonotope:
     @property
     def Gc(self) -> NDArray[np.float64]:
         """Continuous generators, shape ``(n, n_cont)``."""
-        return readonly(self._Z.G[:, ~self._binary])
+        return readonly(self._P.G[:, ~self._binary])
 
     @property
     def Gb(self) -> NDArray[np.float64]:
         """Binary generators, shape ``(n, n_bin)``."""
-        return readonly(self._Z.G[:, self._binary])
+        return readonly(self._P.G[:, self._binary])
 
     @property
     def Ac(self) -> NDArray[np.float64]:
@@ -442,22 +563,22 @@ class HybridZonotope:
     @property
     def c(self) -> NDArray[np.float64]:
         """Centre, shape ``(n,)``."""
-        return self._Z.c
+        return self._P.c
 
     @property
     def b(self) -> NDArray[np.float64]:
         """Constraint right-hand side, shape ``(n_con,)``."""
-        return self._Z.b
+        return self._R.b
 
     @property
     def h(self) -> NDArray[np.float64]:
         """Bounds of the continuous factors, shape ``(n_cont,)``."""
-        return readonly(self._Z.h[~self._binary])
+        return readonly(self._P.h[~self._binary])
 
     @property
     def dim(self) -> int:
         """Dimension ``n`` of the ambient space."""
-        return self._Z.dim
+        return self._P.dim
 
     @property
     def n_cont(self) -> int:
@@ -472,7 +593,7 @@ class HybridZonotope:
     @property
     def n_con(self) -> int:
         """Number of equality constraints."""
-        return self._Z.n_con
+        return self._R.m
 
     def __repr__(self) -> str:
         return (f"HybridZonotope(dim={self.dim}, n_cont={self.n_cont}, n_bin={self.n_bin}, "
@@ -487,7 +608,7 @@ class HybridZonotope:
         M : array_like, shape (m, n)
             The matrix.
         """
-        return HybridZonotope.from_relaxation(self._Z.linear_map(M), self._binary)
+        return HybridZonotope._make(self._P.linear_map(M), self._R, self._binary)
 
     __rmatmul__ = linear_map
 
@@ -505,12 +626,19 @@ class HybridZonotope:
             The summand.
         """
         if isinstance(other, HybridZonotope | ConstrainedZonotope):
+            if compiled_ops is not None:
+                out = compiled_ops.hybrid_combine(0, self, other, None, HybridZonotope)
+                if out is not None:
+                    return _from_data(out)
             o = _as_hybrid(other, "minkowski_sum")
-            return HybridZonotope.from_relaxation(self._Z + o._Z,
-                                                  np.concatenate([self._binary, o._binary]))
-        return HybridZonotope.from_relaxation(self._Z + as_vector("vector", other,
-                                                                  size=self.dim),
-                                              self._binary)
+            return HybridZonotope._make(self._P + o._P, self._R.block_diag(o._R),
+                                        self._joined(o))
+        return HybridZonotope._make(self._P + as_vector("vector", other, size=self.dim),
+                                    self._R, self._binary)
+
+    def _joined(self, o: HybridZonotope) -> NDArray[np.bool_]:
+        """The binary flags of the factors of ``self`` then ``o``."""
+        return readonly(np.concatenate([self._binary, o._binary]))
 
     def __add__(self, other: Any) -> HybridZonotope:
         if isinstance(other, HybridZonotope | ConstrainedZonotope) or np.ndim(other) == 1:
@@ -531,9 +659,17 @@ class HybridZonotope:
         R : array_like, shape (m, n), optional
             The map (default the identity).
         """
+        if compiled_ops is not None:
+            out = compiled_ops.hybrid_combine(1, self, other, R, HybridZonotope)
+            if out is not None:
+                return _from_data(out)
         o = _as_hybrid(other, "intersect")
-        return HybridZonotope.from_relaxation(self._Z.intersect(o._Z, R),
-                                              np.concatenate([self._binary, o._binary]))
+        J = self._P.intersect(o._P, R)  # (without rows of their own: only the new rows)
+        P = _zonotope_part(J.G, J.c, J.c_err, J.h, J.unbounded_radius,
+                           "generalised intersection")
+        return HybridZonotope._make(P, self._R.block_diag(o._R).stacked(J.A, J.b,
+                                                                         _err(J.b_err)),
+                                    self._joined(o))
 
     def __and__(self, other: Any) -> HybridZonotope:
         """``H & W``: :meth:`intersect` (exact)."""
@@ -552,8 +688,8 @@ class HybridZonotope:
             The second factor.
         """
         o = _as_hybrid(other, "cartesian")
-        return HybridZonotope.from_relaxation(self._Z.cartesian(o._Z),
-                                              np.concatenate([self._binary, o._binary]))
+        return HybridZonotope._make(self._P.cartesian(o._P), self._R.block_diag(o._R),
+                                    self._joined(o))
 
     def union(self, *others: HybridZonotope | ConstrainedZonotope) -> HybridZonotope:
         """``self cup others`` (:meth:`from_union`).
@@ -581,7 +717,7 @@ class HybridZonotope:
         dims : sequence of int
             Coordinates kept, in this order.
         """
-        return HybridZonotope.from_relaxation(self._Z.project(dims), self._binary)
+        return HybridZonotope._make(self._P.project(dims), self._R, self._binary)
 
     def intersect_halfspace(self, a: ArrayLike, beta: float) -> HybridZonotope:
         """``{z in H : a^T z <= beta}`` (exact).
@@ -611,7 +747,7 @@ class HybridZonotope:
         av = as_vector("a", a, size=self.dim)
         if not np.isfinite(beta):
             raise InvalidValueError(f"beta must be finite, got {beta}")
-        low, high = _zonotope_range(self._Z, av)
+        low, high = _zonotope_range(self._P, av)
         try:
             if not np.isfinite(low):
                 low = -support_unwarned(self._Z, -av)
@@ -626,8 +762,12 @@ class HybridZonotope:
             return self
         if low > beta:
             return HybridZonotope.from_constrained_zonotope(empty_set(self.dim))
-        # (the interval [low, beta]: its lower end cuts nothing, a^T z >= low on the set)
-        return self.intersect(ConstrainedZonotope.from_box([low], [beta]), av[None, :])
+        # (the interval [low, beta]: its lower end cuts nothing, a^T z >= low on the set;
+        # built as from_box builds it, the bounds being valid already)
+        mid, rad = box_center_radius(np.array([low]), np.array([beta]))
+        interval = owned_cz(np.ones((1, 1)), mid, np.zeros((0, 1)), np.zeros(0), rad,
+                            op="a half-space cut")
+        return self.intersect(interval, av[None, :])
 
     def intersect_polytope(self, H: ArrayLike, k: ArrayLike) -> HybridZonotope:
         """``{z in self : H z <= k}``, one half-space at a time (exact).
@@ -744,7 +884,7 @@ class HybridZonotope:
             return Z, free_root, free_root
         keep = np.ones(Z.n_gen, bool)
         keep[cols] = False
-        c, cerr, b, berr = _fixed(Z, cols, vals)
+        c, cerr, b, berr = _fixed(Z, Z.A, Z.b, _err(Z.b_err), cols, vals)
         node = trusted_cz(Z.G[:, keep], c, Z.A[:, keep], b, Z.h[keep], Z.unbounded_radius,
                           cerr, berr, op="fixing binary factors")
         return node, np.flatnonzero(free[keep]), free_root
@@ -990,18 +1130,36 @@ def _err(e: NDArray[np.float64]) -> NDArray[np.float64] | None:
     return e if np.count_nonzero(e) else None
 
 
-def _fixed(Z: ConstrainedZonotope, cols: NDArray[np.int64], vals: NDArray[np.float64]):
-    """``(c, c_err, b, b_err)`` of ``Z`` with its factors ``cols`` fixed to ``vals`` (their
-    columns moved into the centre and the right-hand side, the rounding bounded; an error
-    ``None`` is exact): the data of a node of the branch and bound."""
-    n, m = Z.dim, Z.n_con
-    Mc = np.hstack([np.eye(n), Z.G[:, cols]])
-    vc = np.concatenate([Z.c, vals])
-    cerr = map_err(Mc, vc, cat_err(_err(Z.c_err), n, None, cols.size))
-    Mb = np.hstack([np.eye(m), -Z.A[:, cols]])
-    vb = np.concatenate([Z.b, vals])
-    berr = map_err(Mb, vb, cat_err(_err(Z.b_err), m, None, cols.size)) if m else None
-    return Mc @ vc, cerr, Mb @ vb, berr
+def _fixed(P: ConstrainedZonotope, A, b, berr, cols: NDArray[np.int64],
+           vals: NDArray[np.float64]):
+    """``(c, c_err, b, b_err)`` of the set with generators ``P.G``, centre ``P.c`` and rows
+    ``A xi = b`` (``A`` dense or SciPy sparse, ``b_err`` ``berr``) with its factors
+    ``cols`` fixed to ``vals`` (their columns moved into the centre and the right-hand
+    side, the rounding bounded; an error ``None`` is exact): the data of a node of the
+    branch and bound."""
+    n = P.dim
+    Mc = np.hstack([np.eye(n), P.G[:, cols]])
+    vc = np.concatenate([P.c, vals])
+    cerr = map_err(Mc, vc, cat_err(_err(P.c_err), n, None, cols.size))
+    if not b.size:
+        return Mc @ vc, cerr, b, None
+    Acols = A[:, cols]
+    # b - A_cols vals: per row a sum of cols.size + 1 terms (map_err's bound for
+    # [I, -A_cols] [b; vals], the identity's one term per row)
+    k = cols.size + 1
+    bn = b - Acols @ vals
+    e = abs(Acols) @ (gamma(k + 1) * np.abs(vals)) + gamma(k + 1) * np.abs(b)
+    if berr is not None:
+        e += berr
+    e *= 1.0 + gamma(k + 2)
+    return Mc @ vc, cerr, bn, _err(e)
+
+
+def _from_data(out: tuple) -> HybridZonotope:
+    """The hybrid zonotope of a compiled operation's ``(P, i, j, v, b, b_err, binary)``
+    (fresh read-only arrays: taken as they are)."""
+    P, i, j, v, b, berr, binary = out
+    return HybridZonotope._make(P, _Rows.frozen(i, j, v, P.n_gen, b, berr), binary)
 
 
 def _as_hybrid(S: Any, what: str) -> HybridZonotope:
@@ -1012,84 +1170,93 @@ def _as_hybrid(S: Any, what: str) -> HybridZonotope:
     raise ArgumentError(f"{what} expects hybrid or constrained zonotopes, got {type(S).__name__}")
 
 
-def _union(ops: list[HybridZonotope]) -> HybridZonotope:
-    """The disjunctive construction of the module docstring for two or more operands."""
+def _union(ops: list[HybridZonotope | ConstrainedZonotope]) -> HybridZonotope:
+    """The disjunctive construction of the module docstring for two or more operands,
+    written for all operands at once (their factors and rows concatenated; operand ``i``'s
+    factors ``j`` get the copies ``s1, s2`` (continuous) or ``bt, t`` (binary), its rows
+    follow one another: its own rows, one row per continuous factor, one per binary one;
+    the last row is ``sum beta_i = 2 - N``)."""
+    ops = [_as_hybrid(S, "from_union") for S in ops]
     N = len(ops)
     n = ops[0].dim
-    parts = [(H._Z.G, H._Z.c, H._Z.A, H._Z.b, H._Z.h, H._binary) for H in ops]
-    n_fac = N + sum(2 * bn.size for *_, bn in parts)
-    n_row = 1 + sum(A.shape[0] + bn.size for _, _, A, _, _, bn in parts)
+    Ps, Rs = [H._P for H in ops], [H._R for H in ops]
+    f = np.array([P.n_gen for P in Ps], dtype=np.int64)
+    m = np.array([R.m for R in Rs], dtype=np.int64)
+    BN = np.concatenate([H._binary for H in ops])
+    cont = ~BN
+    opid = np.repeat(np.arange(N), f)  # each operand factor's operand
+    start = np.concatenate([[0], np.cumsum(f)[:-1]])  # its first factor among them all
+    F = N + 2 * start  # its first factor in the union (after the N selectors)
+    R0 = np.concatenate([[0], np.cumsum(m + f)[:-1]])  # its first row in the union
+    n_fac, n_row = N + 2 * int(f.sum()), 1 + int((m + f).sum())
+    nc = np.bincount(opid, weights=cont, minlength=N).astype(np.int64)
+    nb = f - nc
+    cc, cb = np.cumsum(cont), np.cumsum(BN)
+    rank = np.where(BN, cb - 1 - np.concatenate([[0], cb])[start][opid],
+                    cc - 1 - np.concatenate([[0], cc])[start][opid])
+    pos = np.where(BN, nc[opid] + rank, rank)  # among its operand's (continuous first)
+    col1 = F[opid] + pos + np.where(BN, nc[opid], 0)  # s1 or bt
+    col2 = col1 + np.where(BN, nb[opid], nc[opid])  # s2 or t
+    # the copies' columns: -h_j G_j (continuous, xt = h ((beta_i - 1)/2 - s1)) or G_j
+    scale = np.where(BN, 1.0, -np.concatenate([P.h for P in Ps]))
+    Gs = np.hstack([P.G for P in Ps]) * scale
+    S = np.zeros((n, N))  # per operand: G_B 1 - P 1 (P = G_C diag(h_C))
+    has = f > 0
+    if has.any():
+        S[:, has] = np.add.reduceat(Gs, start[has], axis=1)
+    Cm = np.column_stack([P.c for P in Ps])
+    G = np.zeros((n, n_fac))
+    G[:, col1] = Gs
+    G[:, :N] = 0.5 * (Cm - S)  # the point: ... + ((c - G_B 1 + P 1)/2) beta_i
+    # c = sum_i (c_i + G_B 1 - P 1)/2, one sum of N + sum f_i terms
+    c = 0.5 * (Cm.sum(axis=1) + Gs.sum(axis=1))
+    k = N + int(f.sum())
+    cerr = gamma(k + 1) * (0.5 * (np.abs(Cm).sum(axis=1) + np.abs(Gs).sum(axis=1))) \
+        * (1.0 + gamma(k + 2))
     # The operands' rounding bounds: the selected operand's centre error is at most the
     # largest of theirs (one selector is 1), and operand i's rows carry b_err_i scaled by
     # lam_i in [0, 1], so at most b_err_i.
-    cerr_ops = np.max([H._Z.c_err for H in ops], axis=0)
-    G = np.zeros((n, n_fac))
-    A = np.zeros((n_row, n_fac))
-    b = np.zeros(n_row)
+    cerr_ops = np.max([P.c_err for P in Ps], axis=0)
+    if cerr_ops.any():
+        cerr = (cerr + cerr_ops) * (1.0 + gamma(3))
+    # the operands' rows: their scaled entries, then
+    #   ((Q 1 - A_B 1 - b)/2) beta_i = (b - A_B 1 + Q 1)/2   (Q = A_C diag(h_C))
+    nnz = np.array([R.v.size for R in Rs], dtype=np.int64)
+    eop = np.repeat(np.arange(N), nnz)
+    jg = np.concatenate([R.j for R in Rs]) + start[eop]
+    ri = np.concatenate([R.i for R in Rs]) + R0[eop]
+    rv = np.concatenate([R.v for R in Rs]) * scale[jg]
+    rowop = np.repeat(np.arange(N), m)
+    orow = R0[rowop] + (np.arange(int(m.sum())) - np.concatenate([[0], np.cumsum(m)[:-1]])[rowop])
+    rowsum = np.bincount(ri, weights=rv, minlength=n_row)[orow]
+    absrow = np.bincount(ri, weights=np.abs(rv), minlength=n_row)[orow]
+    b_all = np.concatenate([R.b for R in Rs])
+    b = np.full(n_row, -1.0)  # (the rows |xt_j| <= h_j lam_i and (1 + bt_j)/2 <= lam_i)
+    b[-1] = 2.0 - N  # sum beta_i = 2 - N
+    b[orow] = 0.5 * (b_all - rowsum)
+    kr = 1 + f[rowop]  # (terms per row: b_i and the operand's entries)
     berr = np.zeros(n_row)
+    berr[orow] = gamma(kr + 1) * (0.5 * (np.abs(b_all) + absrow)) * (1.0 + gamma(kr + 2))
+    for i, R in enumerate(Rs):
+        if R.berr is not None:
+            berr[R0[i]:R0[i] + R.m] += R.berr * (1.0 + gamma(3))
+    # the copies' rows: s1 + s2 - beta_i = -1 (continuous), bt - beta_i + t = -1 (binary)
+    crow = R0[opid] + m[opid] + pos
+    ones = np.ones(col1.size)
+    i_all = np.concatenate([ri, orow, crow, crow, crow, np.full(N, n_row - 1)])
+    j_all = np.concatenate([col1[jg], rowop, col1, col2, opid, np.arange(N)])
+    v_all = np.concatenate([rv, -0.5 * (rowsum + b_all), ones, ones, -ones, np.ones(N)])
+    keep = v_all != 0.0
+    if not keep.all():
+        i_all, j_all, v_all = i_all[keep], j_all[keep], v_all[keep]
     h = np.ones(n_fac)
     binary = np.zeros(n_fac, bool)
     binary[:N] = True  # the selectors beta_i
-    A[n_row - 1, :N] = 1.0  # sum beta_i = 2 - N
-    b[n_row - 1] = 2.0 - N
-    c_terms = []
-    f, r = N, 0  # next factor, next row
-    for i, (Gi, ci, Ai, bi, hi, bn) in enumerate(parts):
-        C, B = np.flatnonzero(~bn), np.flatnonzero(bn)
-        nc, nb, m = C.size, B.size, Ai.shape[0]
-        s1 = f + np.arange(nc)  # xt = h ((beta_i - 1)/2 - s1): the copies, substituted
-        s2 = s1 + nc
-        bt = f + 2 * nc + np.arange(nb)  # the copies of the binary factors
-        tb = bt + nb
-        S1, BT = slice(f, f + nc), slice(f + 2 * nc, f + 2 * nc + nb)  # (the same, as slices)
-        f += 2 * (nc + nb)
-        binary[bt] = True
-        P = Gi[:, C] * hi[C]  # (G diag(h), and A diag(h): the copies' scaled columns)
-        Q = Ai[:, C] * hi[C]
-        GB, AB = Gi[:, B], Ai[:, B]
-        # the point: -P s1 + G_B bt + ((c - G_B 1 + P 1)/2) beta_i + (c + G_B 1 - P 1)/2
-        G[:, S1] = -P
-        G[:, BT] = GB
-        G[:, i] = 0.5 * (ci - GB.sum(axis=1) + P.sum(axis=1))
-        c_terms.append(np.column_stack([0.5 * ci, 0.5 * GB, -0.5 * P]))
-        # the operand's rows: -Q s1 + A_B bt + ((Q 1 - A_B 1 - b)/2) beta_i
-        #                     = (b - A_B 1 + Q 1)/2
-        ra = slice(r, r + m)
-        A[ra, S1] = -Q
-        A[ra, BT] = AB
-        A[ra, i] = 0.5 * (Q.sum(axis=1) - AB.sum(axis=1) - bi)
-        T = np.column_stack([0.5 * bi, -0.5 * AB, 0.5 * Q])
-        one = np.ones(T.shape[1])
-        b[ra] = T @ one
-        if T.shape[1] > 1 and m:
-            berr[ra] = map_err(T, one, None)
-        if m:
-            berr[ra] += ops[i]._Z.b_err * (1.0 + gamma(3))
-        r += m
-        # |xt_j| <= h_j lam_i: s1 + s2 - beta_i = -1
-        rb = r + np.arange(nc)
-        A[rb, s1] = 1.0
-        A[rb, s2] = 1.0
-        A[rb, i] = -1.0
-        b[rb] = -1.0
-        r += nc
-        # (1 + bt_j)/2 <= lam_i: bt_j - beta_i + t_j = -1
-        rc = r + np.arange(nb)
-        A[rc, bt] = 1.0
-        A[rc, i] = -1.0
-        A[rc, tb] = 1.0
-        b[rc] = -1.0
-        r += nb
-    T = np.hstack(c_terms)
-    one = np.ones(T.shape[1])
-    c = T @ one
-    cerr = map_err(T, one, None)
-    if cerr_ops.any():
-        cerr = cerr_ops * (1.0 + gamma(3)) if cerr is None else \
-            (cerr + cerr_ops) * (1.0 + gamma(3))
-    Z = owned_cz(G, c, A, b, h, min(H.relaxation.unbounded_radius for H in ops),
-                   None if cerr is None else _err(cerr), _err(berr), op="union")
-    return HybridZonotope.from_relaxation(Z, binary)
+    binary[col1[BN]] = True  # the copies of the binary factors
+    rows = _Rows(i_all, j_all, v_all, n_row, n_fac, b, _err(berr))
+    check_set_data("union", G, c, v_all, b, h, cerr, rows.berr, compiled_ops)
+    Pu = _zonotope_part(G, c, cerr, h, min(Pi.unbounded_radius for Pi in Ps), "union")
+    return HybridZonotope._make(Pu, rows, readonly(binary))
 
 
 def _integral(xi: NDArray[np.float64]) -> bool:
@@ -1130,16 +1297,17 @@ class _NodeLP:
     the ladder."""
 
     def __init__(self, H: HybridZonotope, d: NDArray[np.float64], tol: float) -> None:
-        Z = H._Z
-        self.Z, self.tol = Z, tol
-        n, m = Z.dim, Z.n_con
+        # (Z: the zonotope part, G, c, c_err and h; rows: A xi = b, dense or sparse)
+        Z, R = H._P, H._R
+        self.Z, self.rows, self.tol = Z, R, tol
+        n, m = Z.dim, R.m
         self.bins = np.flatnonzero(H._binary)
         self.w = np.ascontiguousarray(-(Z.G.T @ d))
         self.w_err = 2.0 * gamma(n + 1) * (np.abs(Z.G).T @ np.abs(d))
         self.d, self.absd = d, np.abs(d)
         self.compiled = m <= NODE_COMPILED_MAX_ROWS
         if self.compiled:
-            self.A = np.ascontiguousarray(Z.A)
+            self.A = np.ascontiguousarray(R.dense())
             self.lp = FixedStructureLP.bounded(self.A, self.w[None, :])
             self.state = self.lp.new_state()
             self.ok = self.lp.usable
@@ -1150,25 +1318,26 @@ class _NodeLP:
 
     def _build_highs(self) -> bool:
         """The HiGHS model of the nodes (the relaxation's data; bounds change per node)."""
-        Z = self.Z
-        self.As = sparse.csc_array(Z.A)
+        Z, R = self.Z, self.rows
+        self.As = R.csc()
         self.hs = highs.new_model()
         self.scale = FactorPolytope.objective_scale(self.w)
         self.csc = (self.As.indptr.astype(np.int64), self.As.indices.astype(np.int64),
                     self.As.data)
-        return highs.pass_csc(self.hs, Z.n_con, self.w / self.scale, -Z.h, Z.h, Z.b, Z.b,
+        return highs.pass_csc(self.hs, R.m, self.w / self.scale, -Z.h, Z.h, R.b, R.b,
                               self.As.indptr, self.As.indices, self.As.data)
 
     def _data(self, cols, vals):
         """The node's ``c``, ``c_err``, ``b``, ``b_err`` and bounds ``h``."""
-        Z = self.Z
+        Z, R = self.Z, self.rows
         if cols.size == 0:
-            return Z.c, Z.c_err, Z.b, Z.b_err, Z.h
-        c, cerr, b, berr = _fixed(Z, cols, vals)
+            return Z.c, Z.c_err, R.b, R.b_err, Z.h
+        c, cerr, b, berr = _fixed(Z, self.A if self.compiled else self.As, R.b, R.berr,
+                                  cols, vals)
         h = Z.h.copy()
         h[cols] = 0.0
         return (c, np.zeros(Z.dim) if cerr is None else cerr, b,
-                np.zeros(Z.n_con) if berr is None else berr, h)
+                np.zeros(R.m) if berr is None else berr, h)
 
     def node_centre(self, cols, vals) -> NDArray[np.float64]:
         """The node's centre ``c + G_cols vals``."""
@@ -1319,7 +1488,7 @@ class _NodeLP:
         hs = self.hs
         bins = self.bins
         hs.changeColsBounds(bins.size, bins.astype(np.int32), -h[bins], h[bins])
-        m = self.Z.n_con
+        m = self.rows.m
         hs.changeRowsBounds(m, np.arange(m, dtype=np.int32), b, b)
         if basis is not None and not highs.set_basis(hs, basis):
             return None
@@ -1371,8 +1540,8 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
     open_: list = []  # (-bound, count, cols, vals, xi_free, free_root, basis): heap/stack
     count = 0
 
-    Z = H._Z
-    lp = _NodeLP(H, d, FEASIBILITY_TOL) if Z.n_con and not Z.has_unbounded_factors else None
+    lp = (_NodeLP(H, d, FEASIBILITY_TOL) if H.n_con and not H._P.has_unbounded_factors
+          else None)
 
     def visit(cols, vals, basis) -> None:
         nonlocal best, attained, leaf, nodes, count
@@ -1438,9 +1607,9 @@ def _maximize(H: HybridZonotope, d, node_limit: int, time_limit, search: str
 def _emptiness(H: HybridZonotope, tol: float, node_limit: int, time_limit
                ) -> HybridEmptiness:
     t0 = time.perf_counter()
-    Z = H._Z
+    Z = H._P  # (G and c)
     lp = None
-    if Z.n_con and not Z.has_unbounded_factors and Z.n_con <= NODE_COMPILED_MAX_ROWS:
+    if H.n_con and not Z.has_unbounded_factors and H.n_con <= NODE_COMPILED_MAX_ROWS:
         lp = _NodeLP(H, np.zeros(Z.dim), tol)
         if not lp.ok:
             lp = None
