@@ -553,12 +553,12 @@ class HybridZonotope:
     @property
     def Ac(self) -> NDArray[np.float64]:
         """Constraint matrix of the continuous factors, shape ``(n_con, n_cont)``."""
-        return readonly(self._Z.A[:, ~self._binary])
+        return readonly(self._R.dense()[:, ~self._binary])
 
     @property
     def Ab(self) -> NDArray[np.float64]:
         """Constraint matrix of the binary factors, shape ``(n_con, n_bin)``."""
-        return readonly(self._Z.A[:, self._binary])
+        return readonly(self._R.dense()[:, self._binary])
 
     @property
     def c(self) -> NDArray[np.float64]:
@@ -898,7 +898,7 @@ class HybridZonotope:
     def _leaf_values(self, cols, vals, free_root, xi_free) -> NDArray[np.float64]:
         """The binary factors (relaxation order) of the leaf that fixes ``cols`` to
         ``vals`` and the free ones to the signs of ``xi_free``."""
-        out = np.zeros(self._Z.n_gen)
+        out = np.zeros(self._P.n_gen)
         out[cols] = vals
         out[free_root] = np.where(xi_free >= 0.0, 1.0, -1.0)
         return out[self._binary]
@@ -1373,12 +1373,19 @@ class _NodeLP:
         return self._solve_highs(c, cerr, b, berr, h, None)
 
     def _solve_compiled(self, c, cerr, b, berr, h):
-        bounds, ok = self.lp.minimize_all(b, self._hext(h), self.state, b_err=berr)
+        bounds, ok = self._minimize(b, h, berr)
         if not ok[0]:
             verdict = self._unsolved(b, berr, h)
             return "empty" if verdict is not None and verdict[0] else None
         xi = self._point(b)
         return self._value(float(bounds[0]), h, c, cerr), xi, self.Z.G @ xi + c, None
+
+    def _minimize(self, b, h, berr):
+        """The warm state's certified ``min w^T xi`` over the node (the unchecked entry of
+        :class:`~setobs.lp.fastlp.FixedStructureLP`: the node's data are float arrays of the
+        structure's shapes with no unbounded factor, by construction)."""
+        return self.lp.minimize_all_unchecked(np.ascontiguousarray(b), self._hext(h),
+                                              self.state, b_err=berr)
 
     def _hext(self, h):
         self.hext[:h.size] = h
@@ -1468,7 +1475,7 @@ class _NodeLP:
         dual simplex's basic point when that is within ``tol``, else the phase-1 test's),
         ``None`` undecided (compiled engine only)."""
         _, _, b, berr, h = self._data(cols, vals)
-        _, ok = self.lp.minimize_all(b, self._hext(h), self.state, b_err=berr)
+        _, ok = self._minimize(b, h, berr)
         if ok[0]:
             xi = np.clip(self._point(b), -h, h)
             A, scale = self._rows(b, h)
