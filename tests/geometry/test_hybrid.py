@@ -572,3 +572,59 @@ def test_a_union_whose_data_would_overflow_is_refused():
     big = CZ(1e100 * np.eye(2), np.zeros(2), h=[1e100, 1e100])
     with pytest.raises(MagnitudeError, match="union"):
         HybridZonotope.from_union([big, CZ.from_box([0.0, 0.0], [1.0, 1.0])])
+
+
+def test_the_compiled_hybrid_operations_leak_no_reference_or_memory():
+    """The compiled union, sum and intersection read their operands' arrays by slot and
+    build new objects: the operands' arrays keep their reference counts, and thousands of
+    rounds keep no memory."""
+    import sys
+    import tracemalloc
+
+    from setobs.geometry.zonotope import trusted_cz
+
+    rng = np.random.default_rng(41)
+    H, _ = random_hybrid(rng, n=3, ng=3, nb=2, nc=2)
+    G, A = rng.normal(size=(3, 3)), rng.normal(size=(1, 3))
+    Z = trusted_cz(G, rng.normal(size=3), A, A @ rng.uniform(-0.5, 0.5, 3), np.ones(3),
+                   cerr=np.full(3, 1e-9), berr=np.array([1e-9]))
+    R = rng.normal(size=(3, 3))
+    shared = [H.c, H.b, H.binary, Z.G, Z.c, Z.A, Z.b, Z.c_err, Z.b_err, R]
+    before = [sys.getrefcount(x) for x in shared]
+
+    def run(k):
+        for _ in range(k):
+            U = HybridZonotope.from_union([H, Z, H])
+            U + Z
+            U + H
+            U.intersect(Z, R)
+            H & U.project([0, 1, 2])
+
+    run(10)
+    tracemalloc.start()
+    run(100)
+    first, _ = tracemalloc.get_traced_memory()
+    run(1000)
+    second, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert [sys.getrefcount(x) for x in shared] == before
+    assert second - first < 20_000
+
+
+def test_a_hybrid_class_layout_the_extension_does_not_write_is_refused():
+    """The compiled hybrid operations write HybridZonotope's and its rows' slots by offset:
+    a class with another slot is refused at binding, and the binding in force stays."""
+    import setobs.geometry.hybrid as hybrid_module
+
+    ops = hybrid_module.compiled_ops
+    if ops is None:
+        pytest.skip("no compiled extension")
+    names = HybridZonotope.__slots__
+    extra = type("WithExtra", (), {"__slots__": (*names, "_extra")})
+    with pytest.raises(TypeError, match="slot _extra"):
+        ops.bind_hybrid(extra, extra)
+    # the binding in force is unchanged: a compiled union sets every slot
+    U = HybridZonotope.from_union([CZ.point([0.0]), CZ.point([1.0])])
+    for name in names:
+        getattr(U, name)  # (AttributeError if the extension left a slot unset)
+    assert U.contains([1.0]) and not U.contains([0.5])

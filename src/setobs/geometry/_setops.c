@@ -15,8 +15,9 @@
  * same guard for the sets the Python code builds).
  *
  * The hybrid zonotopes' union, Minkowski sum and generalised intersection
- * (hybrid_union, hybrid_combine) return the arrays of hybrid.py's construction, which
- * wraps them: the same entries up to the order of the sums, the same rounding bounds.
+ * (hybrid_union, hybrid_combine) build the HybridZonotope of hybrid.py's construction
+ * (its slots and its rows' bound by bind_hybrid, as bind does for the constrained
+ * zonotope): the same entries up to the order of the sums, the same rounding bounds.
  *
  * Why C: these operations are array bookkeeping on small arrays, where NumPy's per-call
  * cost (about 1 us a call, a dozen calls an operation) made them 2-6x slower than
@@ -586,15 +587,26 @@ fail:
    as coordinate triplets i, j, v with b, berr; its flags _binary). */
 typedef struct {
     Set s;            /* the CZ, or the hybrid's zonotope part (G, c, cerr, h, r) */
+    PyObject *P;      /* the object s was read from (borrowed) */
     int dense;        /* 1: rows from s.mA */
     Vec vi, vj, vv;   /* the triplets (hybrid), i and j int64 */
     Vec vb, vberr;    /* the right-hand side and its bound (berr p NULL: exact) */
     const char *bin;  /* the binary flags (NULL: none), stride bin_s */
     npy_intp bin_s, m, f, nnz;
-    PyObject *refs[8];
 } Op;
 
-static PyObject *s_P, *s_R, *s_binary, *s_i, *s_j, *s_v, *s_b, *s_berr;
+/* The slots of HybridZonotope and of its rows' class (hybrid.py's _Rows), set by
+   bind_hybrid() as bind() sets the constrained zonotope's. */
+enum { H_P, H_R, H_BINARY, H_CACHE, NHSLOTS };
+static const char *hslot_names[NHSLOTS] = {"_P", "_R", "_binary", "_cache"};
+enum { W_CSC, W_DENSE, W_B, W_BERR, W_I, W_J, W_M, W_NF, W_V, NWSLOTS };
+static const char *wslot_names[NWSLOTS] = {"_csc", "_dense", "b", "berr", "i", "j", "m",
+                                           "nf", "v"};
+static Py_ssize_t hoffsets[NHSLOTS], woffsets[NWSLOTS];
+static PyTypeObject *hz_type = NULL, *rows_type = NULL;
+
+#define HSLOT(o, i) (*(PyObject **)((char *)(o) + hoffsets[i]))
+#define WSLOT(o, i) (*(PyObject **)((char *)(o) + woffsets[i]))
 
 static int int_view(PyObject *o, Vec *v) {
     if (!PyArray_Check(o)) return 0;
@@ -610,12 +622,12 @@ static int int_view(PyObject *o, Vec *v) {
 
 #define IAT(v, k) (*(const npy_int64 *)((v).p + (k) * (v).s))
 
-/* Read an operand; 0 if the fast path does not apply (refs taken are in op->refs). */
-static int read_op(PyObject *o, PyObject *hz_type, Op *op) {
-    memset(op->refs, 0, sizeof(op->refs));
+/* Read an operand (borrowed references only); 0 if the fast path does not apply. */
+static int read_op(PyObject *o, Op *op) {
     op->bin = NULL;
     if (cz_type != NULL && Py_TYPE(o) == cz_type) {
         if (!read_set(o, &op->s)) return 0;
+        op->P = o;
         op->dense = 1;
         op->m = op->s.nc;
         op->f = op->s.ng;
@@ -624,22 +636,16 @@ static int read_op(PyObject *o, PyObject *hz_type, Op *op) {
         op->nnz = op->m * op->f;
         return 1;
     }
-    if ((PyObject *)Py_TYPE(o) != hz_type) return 0;
-    PyObject *P = op->refs[0] = PyObject_GetAttr(o, s_P);
-    PyObject *R = op->refs[1] = P ? PyObject_GetAttr(o, s_R) : NULL;
-    PyObject *B = op->refs[2] = R ? PyObject_GetAttr(o, s_binary) : NULL;
-    PyObject *Ti = op->refs[3] = B ? PyObject_GetAttr(R, s_i) : NULL;
-    PyObject *Tj = op->refs[4] = Ti ? PyObject_GetAttr(R, s_j) : NULL;
-    PyObject *Tv = op->refs[5] = Tj ? PyObject_GetAttr(R, s_v) : NULL;
-    PyObject *b = op->refs[6] = Tv ? PyObject_GetAttr(R, s_b) : NULL;
-    PyObject *e = op->refs[7] = b ? PyObject_GetAttr(R, s_berr) : NULL;
-    if (e == NULL) {
-        PyErr_Clear();
-        return 0;
-    }
+    if (hz_type == NULL || Py_TYPE(o) != hz_type) return 0;
+    PyObject *P = HSLOT(o, H_P), *R = HSLOT(o, H_R), *B = HSLOT(o, H_BINARY);
+    if (!P || !R || !B || Py_TYPE(R) != rows_type) return 0;
+    PyObject *Ti = WSLOT(R, W_I), *Tj = WSLOT(R, W_J), *Tv = WSLOT(R, W_V), *b = WSLOT(R, W_B),
+             *e = WSLOT(R, W_BERR);
+    if (!Ti || !Tj || !Tv || !b || !e) return 0;
     if (!read_set(P, &op->s) || op->s.nc != 0 || !int_view(Ti, &op->vi) ||
         !int_view(Tj, &op->vj) || !vec_view(Tv, &op->vv) || !vec_view(b, &op->vb))
         return 0;
+    op->P = P;
     op->dense = 0;
     op->m = op->vb.n;
     op->f = op->s.ng;
@@ -659,9 +665,39 @@ static int read_op(PyObject *o, PyObject *hz_type, Op *op) {
     return 1;
 }
 
-static void release_ops(Op *ops, Py_ssize_t n) {
-    for (Py_ssize_t t = 0; t < n; t++)
-        for (int k = 0; k < 8; k++) Py_XDECREF(ops[t].refs[k]);
+/* A new HybridZonotope of the zonotope part P, the rows (i, j, v; nf factors; b, berr) and
+   the flags bin; steals every reference (all non-NULL); NULL on a memory error. */
+static PyObject *new_hybrid(PyObject *P, PyObject *Ti, PyObject *Tj, PyObject *Tv,
+                            npy_intp nf, PyObject *b, PyObject *berr, PyObject *bin) {
+    PyObject *R = rows_type->tp_alloc(rows_type, 0);
+    PyObject *H = hz_type->tp_alloc(hz_type, 0);
+    PyObject *cache = PyDict_New();
+    PyObject *m = PyLong_FromSsize_t(PyArray_DIM((PyArrayObject *)b, 0));
+    PyObject *n = PyLong_FromSsize_t(nf);
+    PyObject *own[7] = {P, Ti, Tj, Tv, b, berr, bin};
+    if (!R || !H || !cache || !m || !n) {
+        Py_XDECREF(R);
+        Py_XDECREF(H);
+        Py_XDECREF(cache);
+        Py_XDECREF(m);
+        Py_XDECREF(n);
+        for (int k = 0; k < 7; k++) Py_DECREF(own[k]);
+        return NULL;
+    }
+    WSLOT(R, W_I) = Ti;
+    WSLOT(R, W_J) = Tj;
+    WSLOT(R, W_V) = Tv;
+    WSLOT(R, W_M) = m;
+    WSLOT(R, W_NF) = n;
+    WSLOT(R, W_B) = b;
+    WSLOT(R, W_BERR) = berr;
+    WSLOT(R, W_DENSE) = new_ref(Py_None);
+    WSLOT(R, W_CSC) = new_ref(Py_None);
+    HSLOT(H, H_P) = P;
+    HSLOT(H, H_R) = R;
+    HSLOT(H, H_BINARY) = bin;
+    HSLOT(H, H_CACHE) = cache;
+    return H;
 }
 
 static PyArrayObject *new_ivec(npy_intp n) {
@@ -675,16 +711,15 @@ static int finite_within(const double *x, npy_intp n) {
     return 1;
 }
 
-/* hybrid_union(ops, HybridZonotope): the data of the union of the operands (two or more, of one dimension,
-   every factor bounded) by the disjunctive construction of hybrid.py's _union, the same
-   arrays up to the order of the sums: (P, i, j, v, b, berr, binary), P the zonotope part
-   (a ConstrainedZonotope without rows), the rows as triplets; None if the fast path does
+/* hybrid_union(ops): the union of the operands (two or more, of one dimension, every
+   factor bounded) by the disjunctive construction of hybrid.py's _union, the same arrays
+   up to the order of the sums, as a new HybridZonotope; None if the fast path does
    not apply (an operand of another type, other dimensions, an unbounded factor) or a
    result entry would not pass the data guard: the NumPy code then runs, and raises the
    user-facing errors. */
 static PyObject *hybrid_union(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
-    if (nargs != 2 || !PyList_Check(args[0]) || !PyType_Check(args[1])) {
-        PyErr_SetString(PyExc_TypeError, "hybrid_union(list of operands, HybridZonotope)");
+    if (nargs != 1 || !PyList_Check(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "hybrid_union(list of operands)");
         return NULL;
     }
     PyObject *lst = args[0];
@@ -696,12 +731,10 @@ static PyObject *hybrid_union(PyObject *mod, PyObject *const *args, Py_ssize_t n
     PyArrayObject *G = NULL, *c = NULL, *ce = NULL, *Ti = NULL, *Tj = NULL, *Tv = NULL,
                   *b = NULL, *be = NULL, *bin = NULL, *A0 = NULL, *b0 = NULL, *h = NULL;
     npy_intp *F = NULL, *R0 = NULL, *nc = NULL;
-    Py_ssize_t nread = 0;
     int ok = 1;
     npy_intp n = -1, sumf = 0, rows = 1, nnz = 0;
     for (Py_ssize_t t = 0; t < N && ok; t++) {
-        ok = read_op(PyList_GET_ITEM(lst, t), args[1], &ops[t]);
-        nread = t + 1;
+        ok = read_op(PyList_GET_ITEM(lst, t), &ops[t]);
         if (!ok) break;
         Op *op = &ops[t];
         if (n < 0) n = op->s.n;
@@ -911,8 +944,8 @@ static PyObject *hybrid_union(PyObject *mod, PyObject *const *args, Py_ssize_t n
         Py_DECREF(P);
         goto error;
     }
-    result = Py_BuildValue("(NNNNNNN)", P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv,
-                           freeze(b), berr, freeze(bin));
+    result = new_hybrid(P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv, nf, freeze(b), berr,
+                        freeze(bin));
     Ti = Tj = Tv = b = bin = NULL;
     goto done;
 fallback:
@@ -921,7 +954,6 @@ fallback:
 error:
     result = NULL;
 done:
-    release_ops(ops, nread);
     PyMem_Free(ops);
     PyMem_Free(F);
     PyMem_Free(R0);
@@ -955,33 +987,35 @@ static void put_dense_triplets(const Mat *A, npy_intp r0, npy_intp c0, npy_int64
         }
 }
 
-/* hybrid_combine(kind, H, W, R, HybridZonotope): the data (P, i, j, v, b, berr, binary) of
-   H + W (kind 0, R None) or of {z in H : R z in W} (kind 1, R None for the identity), H a
-   hybrid zonotope and W a hybrid or constrained zonotope: the zonotope parts combined by
+/* hybrid_combine(kind, H, W, R): the HybridZonotope H + W (kind 0, R None) or
+   {z in H : R z in W} (kind 1, R None for the identity), H a hybrid zonotope and W a
+   hybrid or constrained zonotope: the zonotope parts combined by
    minkowski_sum or intersect above (for a constrained zonotope W, W itself, whose rows
    come out of it beside zero columns), the rows stacked block-diagonally, the new ones
    last. None if the fast path does not apply (the NumPy code then runs). */
 static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
-    if (nargs != 5 || !PyLong_Check(args[0]) || !PyType_Check(args[4])) {
-        PyErr_SetString(PyExc_TypeError, "hybrid_combine(kind, H, W, R, HybridZonotope)");
+    if (nargs != 4 || !PyLong_Check(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "hybrid_combine(kind, H, W, R)");
         return NULL;
     }
     long kind = PyLong_AsLong(args[0]);
     if (kind != 0 && kind != 1) Py_RETURN_NONE;
     Op a, w;
-    int ra = read_op(args[1], args[4], &a), rw = ra ? read_op(args[2], args[4], &w) : 0;
+    int ra = read_op(args[1], &a), rw = ra ? read_op(args[2], &w) : 0;
     PyObject *result = NULL, *S = NULL;
     PyArrayObject *Ti = NULL, *Tj = NULL, *Tv = NULL, *b = NULL, *be = NULL, *bin = NULL,
                   *A0 = NULL, *b0 = NULL;
     if (!ra || !rw || a.dense) goto fallback;
-    PyObject *pair[3] = {a.refs[0], w.dense ? args[2] : w.refs[0], args[3]};
+    PyObject *pair[3] = {a.P, w.P, args[3]};
     S = kind == 0 ? minkowski_sum(mod, pair, 2) : intersect(mod, pair, 3);
     if (S == NULL) goto error;
     Set s;
     if (S == Py_None || !read_set(S, &s)) goto fallback;
     npy_intp mw = w.dense ? 0 : w.m, m = a.m + mw + s.nc, f = a.f + w.f;
-    npy_intp nnz = a.nnz + (w.dense ? 0 : w.nnz) + s.nc * s.ng;
     if (s.ng != f) goto fallback;
+    npy_intp nnz = a.nnz + (w.dense ? 0 : w.nnz);
+    for (npy_intp i = 0; i < s.nc; i++)
+        for (npy_intp j = 0; j < s.ng; j++) nnz += AT(s.mA, i, j) != 0.0;
     if (!(Ti = new_ivec(nnz)) || !(Tj = new_ivec(nnz)) || !(Tv = new_vec(nnz)) ||
         !(b = new_vec(m)) || !(be = new_vec(m)) || !(A0 = new_mat(0, f, 1)) ||
         !(b0 = new_vec(0)))
@@ -1023,7 +1057,7 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
     if (w.bin)
         for (npy_intp j = 0; j < w.f; j++)
             bn[a.f + j] = *(const npy_bool *)(w.bin + j * w.bin_s);
-    {
+    if (e != nnz) { /* (not reached: nnz counts the entries written) */
         PyArray_Dims nd = {&e, 1};
         PyObject *t1 = PyArray_Resize(Ti, &nd, 0, NPY_CORDER);
         PyObject *t2 = t1 ? PyArray_Resize(Tj, &nd, 0, NPY_CORDER) : NULL;
@@ -1049,8 +1083,8 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
         Py_DECREF(P);
         goto error;
     }
-    result = Py_BuildValue("(NNNNNNN)", P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv,
-                           freeze(b), berr, freeze(bin));
+    result = new_hybrid(P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv, f, freeze(b), berr,
+                        freeze(bin));
     Ti = Tj = Tv = b = bin = NULL;
     goto done;
 fallback:
@@ -1059,8 +1093,6 @@ fallback:
 error:
     result = NULL;
 done:
-    release_ops(&a, 1);
-    if (ra) release_ops(&w, 1); /* (read_op ran on w: its refs are set or NULL) */
     Py_XDECREF(S);
     Py_XDECREF(Ti);
     Py_XDECREF(Tj);
@@ -1080,6 +1112,61 @@ done:
    a slot added to __slots__ in Python without a rebuild. Such a class is refused
    (TypeError), and the Python side then runs its NumPy code. Nothing is changed unless
    the whole layout matches. */
+/* The offsets of the object slots `names` of class cls, after checking that they are
+   exactly the class's object slots (its own and its bases'; no __dict__); -1 with a
+   TypeError otherwise. */
+static int class_offsets(PyObject *cls, const char *const *names, int n, Py_ssize_t *out) {
+    if (!PyType_Check(cls)) {
+        PyErr_SetString(PyExc_TypeError, "expected a class");
+        return -1;
+    }
+    PyTypeObject *tp = (PyTypeObject *)cls;
+    for (int i = 0; i < n; i++) {
+        PyObject *d = PyObject_GetAttrString(cls, names[i]);
+        if (d == NULL) return -1;
+        if (!Py_IS_TYPE(d, &PyMemberDescr_Type) ||
+            ((PyMemberDescrObject *)d)->d_member->type != T_OBJECT_EX) {
+            Py_DECREF(d);
+            PyErr_Format(PyExc_TypeError, "%s is not an object slot", names[i]);
+            return -1;
+        }
+        out[i] = ((PyMemberDescrObject *)d)->d_member->offset;
+        Py_DECREF(d);
+    }
+    Py_ssize_t n_members = 0;
+    for (PyTypeObject *t = tp; t != NULL && t != &PyBaseObject_Type; t = t->tp_base) {
+        for (PyMemberDef *m = t->tp_members; m != NULL && m->name != NULL; m++) {
+            if (m->type != T_OBJECT_EX) continue;
+            int known = 0;
+            for (int i = 0; i < n; i++) {
+                if (strcmp(m->name, names[i]) == 0) known = 1;
+            }
+            if (!known) {
+                PyErr_Format(PyExc_TypeError,
+                             "the class has a slot %s that the compiled set operations do "
+                             "not write (rebuild the extension after changing __slots__)",
+                             m->name);
+                return -1;
+            }
+            n_members++;
+        }
+    }
+    if (n_members != n || tp->tp_dictoffset != 0) {
+        PyErr_Format(PyExc_TypeError,
+                     "the class's layout (%zd object slots%s) is not the %d the compiled set "
+                     "operations write", n_members,
+                     tp->tp_dictoffset != 0 ? " and a __dict__" : "", n);
+        return -1;
+    }
+    return 0;
+}
+
+/* bind(cls, MAX_MAGNITUDE): the offsets of the slots this module writes, after checking
+   that they are exactly the class's object slots. A slot the class has and this module
+   does not know would be left unset (NULL) in every set built here, silently; so would
+   a slot added to __slots__ in Python without a rebuild. Such a class is refused
+   (TypeError), and the Python side then runs its NumPy code. Nothing is changed unless
+   the whole layout matches. */
 static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
     PyObject *cls = nargs == 2 ? args[0] : NULL;
     if (cls == NULL || !PyType_Check(cls) || !PyFloat_Check(args[1])) {
@@ -1087,55 +1174,38 @@ static PyObject *bind(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
                         "bind(ConstrainedZonotope, MAX_MAGNITUDE) expects the class and a float");
         return NULL;
     }
-    PyTypeObject *tp = (PyTypeObject *)cls;
     Py_ssize_t found[NSLOTS];
-    for (int i = 0; i < NSLOTS; i++) {
-        PyObject *d = PyObject_GetAttrString(cls, slot_names[i]);
-        if (d == NULL) return NULL;
-        if (!Py_IS_TYPE(d, &PyMemberDescr_Type) ||
-            ((PyMemberDescrObject *)d)->d_member->type != T_OBJECT_EX) {
-            Py_DECREF(d);
-            PyErr_Format(PyExc_TypeError, "%s is not an object slot", slot_names[i]);
-            return NULL;
-        }
-        found[i] = ((PyMemberDescrObject *)d)->d_member->offset;
-        Py_DECREF(d);
-    }
-    /* every object slot of the class (its own and its bases') is one of ours */
-    Py_ssize_t n_members = 0;
-    for (PyTypeObject *t = tp; t != NULL && t != &PyBaseObject_Type; t = t->tp_base) {
-        for (PyMemberDef *m = t->tp_members; m != NULL && m->name != NULL; m++) {
-            if (m->type != T_OBJECT_EX) continue;
-            int known = 0;
-            for (int i = 0; i < NSLOTS; i++) {
-                if (strcmp(m->name, slot_names[i]) == 0) known = 1;
-            }
-            if (!known) {
-                PyErr_Format(PyExc_TypeError,
-                             "the class has a slot %s that the compiled set operations do "
-                             "not write (rebuild the extension after changing __slots__)",
-                             m->name);
-                return NULL;
-            }
-            n_members++;
-        }
-    }
-    if (n_members != NSLOTS || tp->tp_dictoffset != 0) {
-        PyErr_Format(PyExc_TypeError,
-                     "the class's layout (%zd object slots%s) is not the %d the compiled set "
-                     "operations write", n_members,
-                     tp->tp_dictoffset != 0 ? " and a __dict__" : "", NSLOTS);
-        return NULL;
-    }
+    if (class_offsets(cls, slot_names, NSLOTS, found) < 0) return NULL;
     max_mag = PyFloat_AS_DOUBLE(args[1]);
     for (int i = 0; i < NSLOTS; i++) offsets[i] = found[i];
     Py_XSETREF(cz_type, (PyTypeObject *)Py_NewRef(cls));
     Py_RETURN_NONE;
 }
 
+/* bind_hybrid(HybridZonotope, rows class): as bind(), for the classes the hybrid
+   operations build (after bind(): they read constrained zonotopes too). */
+static PyObject *bind_hybrid(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 2 || cz_type == NULL) {
+        PyErr_SetString(PyExc_TypeError,
+                        "bind_hybrid(HybridZonotope, rows class) after bind()");
+        return NULL;
+    }
+    Py_ssize_t fh[NHSLOTS], fw[NWSLOTS];
+    if (class_offsets(args[0], hslot_names, NHSLOTS, fh) < 0 ||
+        class_offsets(args[1], wslot_names, NWSLOTS, fw) < 0)
+        return NULL;
+    for (int i = 0; i < NHSLOTS; i++) hoffsets[i] = fh[i];
+    for (int i = 0; i < NWSLOTS; i++) woffsets[i] = fw[i];
+    Py_XSETREF(hz_type, (PyTypeObject *)Py_NewRef(args[0]));
+    Py_XSETREF(rows_type, (PyTypeObject *)Py_NewRef(args[1]));
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"bind", (PyCFunction)(void (*)(void))bind, METH_FASTCALL,
      "Bind the slots of the ConstrainedZonotope class and the largest data magnitude."},
+    {"bind_hybrid", (PyCFunction)(void (*)(void))bind_hybrid, METH_FASTCALL,
+     "Bind the slots of the HybridZonotope class and of its rows' class."},
     {"check_data", (PyCFunction)(void (*)(void))check_data, METH_FASTCALL,
      "None if a set's data are finite and within MAX_MAGNITUDE, else (argument, flat "
      "index, value) of the first bad entry."},
@@ -1147,11 +1217,11 @@ static PyMethodDef methods[] = {
      "{z in Z : R z in W} (Scott et al. 2016, eq. (13)); None if the fast path does not "
      "apply."},
     {"hybrid_union", (PyCFunction)(void (*)(void))hybrid_union, METH_FASTCALL,
-     "The data of a union of constrained or hybrid zonotopes (hybrid.py's _union); None "
-     "if the fast path does not apply."},
+     "The union of constrained or hybrid zonotopes (hybrid.py's _union); None if the fast "
+     "path does not apply."},
     {"hybrid_combine", (PyCFunction)(void (*)(void))hybrid_combine, METH_FASTCALL,
-     "The data of a hybrid zonotope's Minkowski sum or generalised intersection with a "
-     "hybrid or constrained zonotope; None if the fast path does not apply."},
+     "A hybrid zonotope's Minkowski sum or generalised intersection with a hybrid or "
+     "constrained zonotope; None if the fast path does not apply."},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef moduledef = {PyModuleDef_HEAD_INIT, "_setops",
@@ -1162,11 +1232,5 @@ PyMODINIT_FUNC PyInit__setops(void) {
     import_array();
     lp_key = PyUnicode_InternFromString("lp");
     if (lp_key == NULL) return NULL;
-    if (!(s_P = PyUnicode_InternFromString("_P")) || !(s_R = PyUnicode_InternFromString("_R")) ||
-        !(s_binary = PyUnicode_InternFromString("_binary")) ||
-        !(s_i = PyUnicode_InternFromString("i")) || !(s_j = PyUnicode_InternFromString("j")) ||
-        !(s_v = PyUnicode_InternFromString("v")) || !(s_b = PyUnicode_InternFromString("b")) ||
-        !(s_berr = PyUnicode_InternFromString("berr")))
-        return NULL;
     return PyModule_Create(&moduledef);
 }

@@ -261,14 +261,6 @@ class _Rows:
         self._dense, self._csc = dense, None
 
     @staticmethod
-    def frozen(i, j, v, nf: int, b, berr) -> _Rows:
-        """The rows of a compiled operation's fresh read-only arrays, taken as they are."""
-        self = object.__new__(_Rows)
-        self.i, self.j, self.v, self.m, self.nf = i, j, v, b.size, nf
-        self.b, self.berr, self._dense, self._csc = b, berr, None, None
-        return self
-
-    @staticmethod
     def from_dense(A, b, berr) -> _Rows:
         """The rows of a dense ``A`` (kept as the dense form)."""
         i, j = np.nonzero(A)
@@ -490,9 +482,9 @@ class HybridZonotope:
         """
         ops = list(sets)
         if len(ops) > 1 and compiled_ops is not None:
-            out = compiled_ops.hybrid_union(ops, HybridZonotope)
+            out = compiled_ops.hybrid_union(ops)
             if out is not None:  # (else the checks below, then the NumPy construction)
-                return _from_data(out)
+                return out
         if not ops:
             raise ArgumentError("from_union needs at least one set")
         for i, S in enumerate(ops):
@@ -627,9 +619,9 @@ class HybridZonotope:
         """
         if isinstance(other, HybridZonotope | ConstrainedZonotope):
             if compiled_ops is not None:
-                out = compiled_ops.hybrid_combine(0, self, other, None, HybridZonotope)
+                out = compiled_ops.hybrid_combine(0, self, other, None)
                 if out is not None:
-                    return _from_data(out)
+                    return out
             o = _as_hybrid(other, "minkowski_sum")
             return HybridZonotope._make(self._P + o._P, self._R.block_diag(o._R),
                                         self._joined(o))
@@ -660,9 +652,9 @@ class HybridZonotope:
             The map (default the identity).
         """
         if compiled_ops is not None:
-            out = compiled_ops.hybrid_combine(1, self, other, R, HybridZonotope)
+            out = compiled_ops.hybrid_combine(1, self, other, R)
             if out is not None:
-                return _from_data(out)
+                return out
         o = _as_hybrid(other, "intersect")
         J = self._P.intersect(o._P, R)  # (without rows of their own: only the new rows)
         P = _zonotope_part(J.G, J.c, J.c_err, J.h, J.unbounded_radius,
@@ -1153,13 +1145,6 @@ def _fixed(P: ConstrainedZonotope, A, b, berr, cols: NDArray[np.int64],
         e += berr
     e *= 1.0 + gamma(k + 2)
     return Mc @ vc, cerr, bn, _err(e)
-
-
-def _from_data(out: tuple) -> HybridZonotope:
-    """The hybrid zonotope of a compiled operation's ``(P, i, j, v, b, b_err, binary)``
-    (fresh read-only arrays: taken as they are)."""
-    P, i, j, v, b, berr, binary = out
-    return HybridZonotope._make(P, _Rows.frozen(i, j, v, P.n_gen, b, berr), binary)
 
 
 def _as_hybrid(S: Any, what: str) -> HybridZonotope:
@@ -1743,3 +1728,12 @@ def pwa_reachable_sets(modes: Sequence[tuple[ConstrainedZonotope, ArrayLike, Arr
             X = X + disturbance
         out.append(X)
     return out
+
+
+if compiled_ops is not None:  # (the compiled union, sum and intersection build these classes)
+    try:
+        compiled_ops.bind_hybrid(HybridZonotope, _Rows)
+    except TypeError as exc:  # pragma: no cover - a stale build
+        warnings.warn(f"compiled hybrid set operations disabled: {exc}", RuntimeWarning,
+                      stacklevel=1)
+        compiled_ops = None
