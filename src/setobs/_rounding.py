@@ -148,10 +148,8 @@ def pow2_inverse(v: NDArray[np.float64]) -> NDArray[np.float64]:
     ndarray
         The scale factors.
     """
-    out = np.ones(v.size)
-    pos = v > 0
-    out[pos] = np.ldexp(1.0, -np.frexp(v[pos])[1])
-    return out
+    # (frexp gives the exponent 0 at zero, so that entry's factor is 2^0 = 1)
+    return np.ldexp(1.0, -np.frexp(np.ravel(v))[1])
 
 
 def _split(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -332,6 +332,49 @@ static PyObject *min_radius(const Set *s, const Set *t) {
     } while (0)
 
 /* ------------------------------------------------------------------ Minkowski sum */
+/* The centre c = c_Z + c_W of a Minkowski sum, written into c, and its bound
+   sum_err(c, add_err(cerr_Z, cerr_W)) (read-only, or None: exact); NULL on a memory error. */
+static PyObject *sum_center(const Set *s, const Set *t, PyArrayObject *c) {
+    double *cd = DATA(c);
+    npy_intp n = s->n;
+    PyObject *cerr;
+    int nonzero = 0;
+    for (npy_intp i = 0; i < n; i++) {
+        cd[i] = VAT(s->vc, i) + VAT(t->vc, i);
+        nonzero |= cd[i] != 0.0;
+    }
+    /* sum_err(c, add_err(cerr_Z, cerr_W)) */
+    const double widen = 1.0 + 2.0 * U, g2 = gamma_k(2.0);
+    if (nonzero || (s->vcerr.p && t->vcerr.p)) {
+        PyArrayObject *e = new_vec(n);
+        if (e == NULL) return NULL;
+        double *ed = DATA(e);
+        for (npy_intp i = 0; i < n; i++) {
+            int have = 1;
+            double carried = 0.0;
+            if (s->vcerr.p && t->vcerr.p)
+                carried = (VAT(s->vcerr, i) + VAT(t->vcerr, i)) * widen;
+            else if (s->vcerr.p)
+                carried = VAT(s->vcerr, i);
+            else if (t->vcerr.p)
+                carried = VAT(t->vcerr, i);
+            else
+                have = 0;
+            if (!nonzero)
+                ed[i] = carried;
+            else if (have)
+                ed[i] = (carried + fabs(cd[i]) * g2) * widen;
+            else
+                ed[i] = fabs(cd[i]) * g2;
+        }
+        cerr = (PyObject *)e;
+    } else {
+        cerr = new_ref(s->vcerr.p ? s->cerr : t->cerr); /* one carried bound, or None */
+    }
+    return freeze_err(cerr);
+}
+
+
 static PyObject *minkowski_sum(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
     Set s, t;
     if (nargs != 2) {
@@ -352,41 +395,7 @@ static PyObject *minkowski_sum(PyObject *mod, PyObject *const *args, Py_ssize_t 
     put_vec(DATA(b) + s.nc, &t.vb);
     put_vec(DATA(h), &s.vh);
     put_vec(DATA(h) + s.ng, &t.vh);
-    double *cd = DATA(c);
-    int nonzero = 0;
-    for (npy_intp i = 0; i < n; i++) {
-        cd[i] = VAT(s.vc, i) + VAT(t.vc, i);
-        nonzero |= cd[i] != 0.0;
-    }
-    /* sum_err(c, add_err(cerr_Z, cerr_W)) */
-    const double widen = 1.0 + 2.0 * U, g2 = gamma_k(2.0);
-    if (nonzero || (s.vcerr.p && t.vcerr.p)) {
-        PyArrayObject *e = new_vec(n);
-        FAIL_IF(e == NULL);
-        double *ed = DATA(e);
-        for (npy_intp i = 0; i < n; i++) {
-            int have = 1;
-            double carried = 0.0;
-            if (s.vcerr.p && t.vcerr.p)
-                carried = (VAT(s.vcerr, i) + VAT(t.vcerr, i)) * widen;
-            else if (s.vcerr.p)
-                carried = VAT(s.vcerr, i);
-            else if (t.vcerr.p)
-                carried = VAT(t.vcerr, i);
-            else
-                have = 0;
-            if (!nonzero)
-                ed[i] = carried;
-            else if (have)
-                ed[i] = (carried + fabs(cd[i]) * g2) * widen;
-            else
-                ed[i] = fabs(cd[i]) * g2;
-        }
-        cerr = (PyObject *)e;
-    } else {
-        cerr = new_ref(s.vcerr.p ? s.cerr : t.cerr); /* one carried bound, or None */
-    }
-    cerr = freeze_err(cerr);
+    cerr = sum_center(&s, &t, c);
     FAIL_IF(cerr == NULL);
     berr = cat_err(&s.vberr, &t.vberr);
     FAIL_IF(berr == NULL);
@@ -989,10 +998,10 @@ static void put_dense_triplets(const Mat *A, npy_intp r0, npy_intp c0, npy_int64
 
 /* hybrid_combine(kind, H, W, R): the HybridZonotope H + W (kind 0, R None) or
    {z in H : R z in W} (kind 1, R None for the identity), H a hybrid zonotope and W a
-   hybrid or constrained zonotope: the zonotope parts combined by
-   minkowski_sum or intersect above (for a constrained zonotope W, W itself, whose rows
-   come out of it beside zero columns), the rows stacked block-diagonally, the new ones
-   last. None if the fast path does not apply (the NumPy code then runs). */
+   hybrid or constrained zonotope: the zonotope parts summed here (the centre as
+   minkowski_sum's) or intersected by intersect above, the rows stacked
+   block-diagonally, the new ones last. None if the fast path does not apply (the NumPy
+   code then runs). */
 static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t nargs) {
     if (nargs != 4 || !PyLong_Check(args[0])) {
         PyErr_SetString(PyExc_TypeError, "hybrid_combine(kind, H, W, R)");
@@ -1005,27 +1014,76 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
     PyObject *result = NULL, *S = NULL;
     PyArrayObject *Ti = NULL, *Tj = NULL, *Tv = NULL, *b = NULL, *be = NULL, *bin = NULL,
                   *A0 = NULL, *b0 = NULL;
+    PyObject *P = NULL;
     if (!ra || !rw || a.dense) goto fallback;
-    PyObject *pair[3] = {a.P, w.P, args[3]};
-    S = kind == 0 ? minkowski_sum(mod, pair, 2) : intersect(mod, pair, 3);
-    if (S == NULL) goto error;
-    Set s;
-    if (S == Py_None || !read_set(S, &s)) goto fallback;
-    npy_intp mw = w.dense ? 0 : w.m, m = a.m + mw + s.nc, f = a.f + w.f;
-    if (s.ng != f) goto fallback;
+    /* The zonotope part P and the new dense rows X (xr; columns from xoff; xb, xbe): for
+       the sum, P's data written here and X a constrained zonotope W's own rows (beside
+       H's factors); for the intersection, intersect() of the zonotope parts (a
+       constrained zonotope W itself), X its rows (W's, then the new ones). */
+    Mat xr = {NULL, 0, 0, 0, 0};
+    Vec xb = {NULL, 0, 0}, xbe = {NULL, 0, 0};
+    npy_intp xoff = 0, f = a.f + w.f;
+    if (kind == 0) {
+        if (a.s.n != w.s.n) goto fallback;
+        npy_intp n = a.s.n;
+        PyArrayObject *G = new_mat(n, f, 0), *c = new_vec(n), *h = new_vec(f);
+        PyArrayObject *Az = new_mat(0, f, 1), *bz = new_vec(0);
+        PyObject *cerr = (G && c && h && Az && bz) ? sum_center(&a.s, &w.s, c) : NULL;
+        if (cerr == NULL || !finite_within(DATA(c), n) ||
+            (cerr != Py_None && !finite_within(DATA((PyArrayObject *)cerr), n))) {
+            Py_XDECREF(G);
+            Py_XDECREF(c);
+            Py_XDECREF(h);
+            Py_XDECREF(Az);
+            Py_XDECREF(bz);
+            if (cerr == NULL) goto error;
+            Py_DECREF(cerr);
+            goto fallback;
+        }
+        put(G, 0, 0, &a.s.mG, 1.0);
+        put(G, 0, a.f, &w.s.mG, 1.0);
+        put_vec(DATA(h), &a.s.vh);
+        put_vec(DATA(h) + a.f, &w.s.vh);
+        Set *lo = PyFloat_AS_DOUBLE(w.s.r) < PyFloat_AS_DOUBLE(a.s.r) ? &w.s : &a.s;
+        P = make(freeze(G), freeze(c), freeze(Az), freeze(bz), freeze(h), new_ref(lo->r),
+                 cerr, new_ref(Py_None));
+        if (P == NULL) goto error;
+        if (w.dense) {
+            xr = w.s.mA;
+            xb = w.vb;
+            xbe = w.vberr;
+            xoff = a.f;
+        }
+    } else {
+        PyObject *pair[3] = {a.P, w.P, args[3]};
+        S = intersect(mod, pair, 3);
+        if (S == NULL) goto error;
+        Set s;
+        if (S == Py_None || !read_set(S, &s) || s.ng != f) goto fallback;
+        xr = s.mA;
+        xb = s.vb;
+        xbe = s.vberr;
+        if (!(A0 = new_mat(0, f, 1)) || !(b0 = new_vec(0))) goto error;
+        P = make(new_ref(s.G), new_ref(s.c), freeze(A0), freeze(b0), new_ref(s.h),
+                 new_ref(s.r), new_ref(s.cerr), new_ref(Py_None));
+        A0 = b0 = NULL;
+        if (P == NULL) goto error;
+    }
+    npy_intp mw = w.dense ? 0 : w.m, m = a.m + mw + xr.r;
     npy_intp nnz = a.nnz + (w.dense ? 0 : w.nnz);
-    for (npy_intp i = 0; i < s.nc; i++)
-        for (npy_intp j = 0; j < s.ng; j++) nnz += AT(s.mA, i, j) != 0.0;
+    for (npy_intp i = 0; i < xr.r; i++)
+        for (npy_intp j = 0; j < xr.c; j++) nnz += AT(xr, i, j) != 0.0;
     if (!(Ti = new_ivec(nnz)) || !(Tj = new_ivec(nnz)) || !(Tv = new_vec(nnz)) ||
-        !(b = new_vec(m)) || !(be = new_vec(m)) || !(A0 = new_mat(0, f, 1)) ||
-        !(b0 = new_vec(0)))
+        !(b = new_vec(m)))
         goto error;
+    int exact = a.vberr.p == NULL && (w.dense || w.vberr.p == NULL) && xbe.p == NULL;
+    if (!exact && !(be = new_vec(m))) goto error;
     {
         npy_intp db[1] = {f};
         if (!(bin = (PyArrayObject *)PyArray_ZEROS(1, db, NPY_BOOL, 0))) goto error;
     }
     npy_int64 *id = (npy_int64 *)PyArray_DATA(Ti), *jd = (npy_int64 *)PyArray_DATA(Tj);
-    double *vd = DATA(Tv), *bd = DATA(b), *bed = DATA(be);
+    double *vd = DATA(Tv), *bd = DATA(b), *bed = exact ? NULL : DATA(be);
     npy_intp e = 0;
     for (npy_intp k = 0; k < a.nnz; k++) {
         id[e] = IAT(a.vi, k);
@@ -1038,19 +1096,14 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
             jd[e] = IAT(w.vj, k) + a.f;
             vd[e++] = VAT(w.vv, k);
         }
-    put_dense_triplets(&s.mA, a.m + mw, 0, id, jd, vd, &e);
-    int exact = a.vberr.p == NULL && (w.dense || w.vberr.p == NULL) && s.vberr.p == NULL;
-    for (npy_intp i = 0; i < a.m; i++) {
-        bd[i] = VAT(a.vb, i);
-        bed[i] = a.vberr.p ? VAT(a.vberr, i) : 0.0;
-    }
-    for (npy_intp i = 0; i < mw; i++) {
-        bd[a.m + i] = VAT(w.vb, i);
-        bed[a.m + i] = w.vberr.p ? VAT(w.vberr, i) : 0.0;
-    }
-    for (npy_intp i = 0; i < s.nc; i++) {
-        bd[a.m + mw + i] = VAT(s.vb, i);
-        bed[a.m + mw + i] = s.vberr.p ? VAT(s.vberr, i) : 0.0;
+    put_dense_triplets(&xr, a.m + mw, xoff, id, jd, vd, &e);
+    for (npy_intp i = 0; i < a.m; i++) bd[i] = VAT(a.vb, i);
+    for (npy_intp i = 0; i < mw; i++) bd[a.m + i] = VAT(w.vb, i);
+    for (npy_intp i = 0; i < xr.r; i++) bd[a.m + mw + i] = VAT(xb, i);
+    if (!exact) {
+        for (npy_intp i = 0; i < a.m; i++) bed[i] = a.vberr.p ? VAT(a.vberr, i) : 0.0;
+        for (npy_intp i = 0; i < mw; i++) bed[a.m + i] = w.vberr.p ? VAT(w.vberr, i) : 0.0;
+        for (npy_intp i = 0; i < xr.r; i++) bed[a.m + mw + i] = xbe.p ? VAT(xbe, i) : 0.0;
     }
     npy_bool *bn = (npy_bool *)PyArray_DATA(bin);
     for (npy_intp j = 0; j < a.f; j++) bn[j] = *(const npy_bool *)(a.bin + j * a.bin_s);
@@ -1067,24 +1120,17 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
         Py_XDECREF(t3);
         if (t3 == NULL) goto error;
     }
-    PyObject *P = make(new_ref(s.G), new_ref(s.c), freeze(A0), freeze(b0), new_ref(s.h),
-                       new_ref(s.r), new_ref(s.cerr), new_ref(Py_None));
-    A0 = b0 = NULL;
-    if (P == NULL) goto error;
     PyObject *berr;
     if (exact) {
-        Py_DECREF(be);
         berr = new_ref(Py_None);
     } else {
         berr = freeze_err((PyObject *)be);
     }
     be = NULL;
-    if (berr == NULL) {
-        Py_DECREF(P);
-        goto error;
-    }
+    if (berr == NULL) goto error;
     result = new_hybrid(P, (PyObject *)Ti, (PyObject *)Tj, (PyObject *)Tv, f, freeze(b), berr,
                         freeze(bin));
+    P = NULL;
     Ti = Tj = Tv = b = bin = NULL;
     goto done;
 fallback:
@@ -1093,6 +1139,7 @@ fallback:
 error:
     result = NULL;
 done:
+    Py_XDECREF(P);
     Py_XDECREF(S);
     Py_XDECREF(Ti);
     Py_XDECREF(Tj);

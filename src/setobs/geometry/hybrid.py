@@ -633,7 +633,13 @@ class HybridZonotope:
         return readonly(np.concatenate([self._binary, o._binary]))
 
     def __add__(self, other: Any) -> HybridZonotope:
-        if isinstance(other, HybridZonotope | ConstrainedZonotope) or np.ndim(other) == 1:
+        if isinstance(other, HybridZonotope | ConstrainedZonotope):
+            if compiled_ops is not None:  # (minkowski_sum's compiled path, called directly)
+                out = compiled_ops.hybrid_combine(0, self, other, None)
+                if out is not None:
+                    return out
+            return self.minkowski_sum(other)
+        if np.ndim(other) == 1:
             return self.minkowski_sum(other)
         return NotImplemented
 
@@ -1293,7 +1299,13 @@ class _NodeLP:
         self.compiled = m <= NODE_COMPILED_MAX_ROWS
         if self.compiled:
             self.A = np.ascontiguousarray(R.dense())
-            self.lp = FixedStructureLP.bounded(self.A, self.w[None, :])
+            # (the structure of the rows, built once per set; each search's objective on it)
+            base = H._cache.get("nodes")
+            if base is None:
+                base = H._cache["nodes"] = FixedStructureLP.bounded(self.A, self.w[None, :])
+                self.lp = base
+            else:
+                self.lp = base.with_objectives(self.w[None, :])
             self.state = self.lp.new_state()
             self.ok = self.lp.usable
             self.hext = np.concatenate([Z.h, np.zeros(m)])
