@@ -332,6 +332,19 @@ static PyObject *min_radius(const Set *s, const Set *t) {
     } while (0)
 
 /* ------------------------------------------------------------------ Minkowski sum */
+/* A new reference to one read-only empty vector (the right-hand side of every zonotope
+   part built here); NULL on a memory error. */
+static PyArrayObject *empty_vec(void) {
+    static PyArrayObject *e = NULL;
+    if (e == NULL) {
+        e = new_vec(0);
+        if (e == NULL) return NULL;
+        PyArray_CLEARFLAGS(e, NPY_ARRAY_WRITEABLE);
+    }
+    Py_INCREF(e);
+    return e;
+}
+
 /* The centre c = c_Z + c_W of a Minkowski sum, written into c, and its bound
    sum_err(c, add_err(cerr_Z, cerr_W)) (read-only, or None: exact); NULL on a memory error. */
 static PyObject *sum_center(const Set *s, const Set *t, PyArrayObject *c) {
@@ -1027,7 +1040,7 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
         if (a.s.n != w.s.n) goto fallback;
         npy_intp n = a.s.n;
         PyArrayObject *G = new_mat(n, f, 0), *c = new_vec(n), *h = new_vec(f);
-        PyArrayObject *Az = new_mat(0, f, 1), *bz = new_vec(0);
+        PyArrayObject *Az = new_mat(0, f, 1), *bz = empty_vec();
         PyObject *cerr = (G && c && h && Az && bz) ? sum_center(&a.s, &w.s, c) : NULL;
         if (cerr == NULL || !finite_within(DATA(c), n) ||
             (cerr != Py_None && !finite_within(DATA((PyArrayObject *)cerr), n))) {

@@ -633,11 +633,11 @@ class HybridZonotope:
         return readonly(np.concatenate([self._binary, o._binary]))
 
     def __add__(self, other: Any) -> HybridZonotope:
+        if compiled_ops is not None:  # (minkowski_sum's compiled path, called directly; it
+            out = compiled_ops.hybrid_combine(0, self, other, None)  # refuses other types)
+            if out is not None:
+                return out
         if isinstance(other, HybridZonotope | ConstrainedZonotope):
-            if compiled_ops is not None:  # (minkowski_sum's compiled path, called directly)
-                out = compiled_ops.hybrid_combine(0, self, other, None)
-                if out is not None:
-                    return out
             return self.minkowski_sum(other)
         if np.ndim(other) == 1:
             return self.minkowski_sum(other)
