@@ -1123,16 +1123,7 @@ static PyObject *hybrid_combine(PyObject *mod, PyObject *const *args, Py_ssize_t
     if (w.bin)
         for (npy_intp j = 0; j < w.f; j++)
             bn[a.f + j] = *(const npy_bool *)(w.bin + j * w.bin_s);
-    if (e != nnz) { /* (not reached: nnz counts the entries written) */
-        PyArray_Dims nd = {&e, 1};
-        PyObject *t1 = PyArray_Resize(Ti, &nd, 0, NPY_CORDER);
-        PyObject *t2 = t1 ? PyArray_Resize(Tj, &nd, 0, NPY_CORDER) : NULL;
-        PyObject *t3 = t2 ? PyArray_Resize(Tv, &nd, 0, NPY_CORDER) : NULL;
-        Py_XDECREF(t1);
-        Py_XDECREF(t2);
-        Py_XDECREF(t3);
-        if (t3 == NULL) goto error;
-    }
+    /* (nnz counted exactly the entries written: e == nnz) */
     PyObject *berr;
     if (exact) {
         berr = new_ref(Py_None);
